@@ -1,0 +1,1 @@
+"""Subcommand modules of the ``relightnet`` CLI (see :mod:`relightnet.cli`)."""

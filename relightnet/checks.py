@@ -1,0 +1,146 @@
+"""Input validation with typed, one-line errors.
+
+Every public function validates its tensors here, so a user sees
+``ShapeError: light: expected (B, K, 3), got (2, 16)`` instead of a broadcast
+failure three calls deeper.
+
+Dimension specs are lists of entries:
+
+- an ``int`` (or a digit string such as ``"3"``) must match exactly;
+- a name (``"B"``, ``"K"``, ...) matches any size, and the same name must have
+  the same size everywhere within one call (pass ``dims={"K": 9}`` to pin it);
+- ``"..."`` (at most once) matches any number of leading/middle dimensions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable, Mapping, Sequence
+
+import torch
+
+__all__ = [
+    "RelightError",
+    "ShapeError",
+    "InputError",
+    "check_shape",
+    "check_finite",
+    "check_unit",
+    "check_dtype",
+    "check_sh_count",
+    "sh_order_from_count",
+]
+
+
+class RelightError(Exception):
+    """Base class of every error relightnet raises on bad input."""
+
+
+class ShapeError(RelightError, ValueError):
+    """A tensor or array has the wrong shape."""
+
+
+class InputError(RelightError, ValueError):
+    """A value is not acceptable: NaN, out of range, unreadable file, ..."""
+
+
+def _fmt(spec: Sequence) -> str:
+    return "(" + ", ".join(str(s) for s in spec) + ")"
+
+
+def check_shape(
+    x: torch.Tensor,
+    spec: Sequence,
+    name: str = "tensor",
+    dims: Mapping[str, int] | None = None,
+) -> dict[str, int]:
+    """Check ``x.shape`` against ``spec`` and return the sizes bound to names.
+
+    Args:
+        x: tensor (or numpy array) to check.
+        spec: e.g. ``["B", "K", 3]`` or ``["...", 3]``.
+        name: what the user calls this input; starts the error message.
+        dims: sizes already fixed for some names.
+
+    Returns:
+        ``{name: size}`` for every named dimension in ``spec``.
+
+    Raises:
+        ShapeError: ``"{name}: expected (B, K, 3), got (2, 16)"``.
+    """
+    shape = tuple(x.shape)
+    bound: dict[str, int] = dict(dims or {})
+    spec = [str(s) for s in spec]
+    expected = _fmt(
+        [f"{s}={bound[s]}" if s in bound and not s.isdigit() else s for s in spec]
+    )
+    err = ShapeError(f"{name}: expected {expected}, got {_fmt(shape)}")
+    if spec.count("...") > 1:
+        raise ValueError("check_shape: at most one '...' in a spec")
+    if "..." in spec:
+        i = spec.index("...")
+        head, tail = spec[:i], spec[i + 1 :]
+        if len(shape) < len(head) + len(tail):
+            raise err
+        pairs = list(zip(head, shape[: len(head)])) + list(
+            zip(tail, shape[len(shape) - len(tail) :])
+        )
+    else:
+        if len(shape) != len(spec):
+            raise err
+        pairs = list(zip(spec, shape))
+    for s, n in pairs:
+        if s.isdigit():
+            if int(s) != n:
+                raise err
+        elif s in bound:
+            if bound[s] != n:
+                raise err
+        else:
+            bound[s] = n
+    return bound
+
+
+def check_finite(x: torch.Tensor, name: str = "tensor") -> None:
+    """Raise :class:`InputError` if ``x`` holds NaN or Inf."""
+    if not bool(torch.isfinite(torch.as_tensor(x)).all()):
+        raise InputError(f"{name}: contains NaN or Inf values")
+
+
+def check_unit(x: torch.Tensor, name: str = "dirs", atol: float = 1e-3) -> None:
+    """Raise :class:`InputError` unless every vector on the last axis has unit length.
+
+    Args:
+        x: (..., 3) directions.
+    """
+    check_finite(x, name)
+    if x.numel() == 0:
+        return
+    err = (x.norm(dim=-1) - 1).abs().max().item()
+    if err > atol:
+        raise InputError(
+            f"{name}: expected unit vectors on the last axis, |norm - 1| reaches {err:.3g}"
+        )
+
+
+def check_dtype(x: torch.Tensor, allowed: Iterable[torch.dtype], name: str = "tensor") -> None:
+    """Raise :class:`InputError` unless ``x.dtype`` is one of ``allowed``."""
+    allowed = tuple(allowed)
+    if x.dtype not in allowed:
+        names = ", ".join(str(a).replace("torch.", "") for a in allowed)
+        raise InputError(f"{name}: expected dtype in ({names}), got {str(x.dtype).replace('torch.', '')}")
+
+
+def sh_order_from_count(k: int, name: str = "sh") -> int:
+    """Return lmax for K = (lmax+1)² coefficients, or raise :class:`ShapeError`."""
+    lmax = math.isqrt(int(k)) - 1
+    if k < 1 or (lmax + 1) ** 2 != k:
+        raise ShapeError(f"{name}: expected K = (lmax+1)^2 coefficients (1, 4, 9, 16, ...), got {k}")
+    return lmax
+
+
+def check_sh_count(x: torch.Tensor, name: str = "sh", axis: int = -2) -> int:
+    """Check that axis ``axis`` of ``x`` holds a valid SH count and return lmax."""
+    if x.dim() == 0 or x.dim() < abs(axis):
+        raise ShapeError(f"{name}: expected an SH axis at position {axis}, got shape {tuple(x.shape)}")
+    return sh_order_from_count(x.shape[axis], name)

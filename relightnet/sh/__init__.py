@@ -1,0 +1,35 @@
+"""Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O.
+
+Conventions are those of DESIGN.md: real orthonormal SH without the
+Condon–Shortley phase, k = l(l+1)+m, directions in the light frame.
+"""
+
+from .basis import SHBasis, sh_basis, sh_count, sh_degrees, sh_index
+from .directions import (
+    directions_to_latlong,
+    fibonacci_hemisphere,
+    fibonacci_sphere,
+    latlong_directions,
+    random_fibonacci_sphere,
+)
+from .frames import (
+    WORLD_TO_LIGHT,
+    camera_normals_to_light,
+    light_to_world,
+    rotation_world_to_light,
+    world_to_light,
+)
+from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
+from .projection import project, project_envmap, radiance, sh_to_envmap
+from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
+
+__all__ = [
+    "SHBasis", "sh_basis", "sh_count", "sh_degrees", "sh_index",
+    "directions_to_latlong", "fibonacci_hemisphere", "fibonacci_sphere", "latlong_directions",
+    "random_fibonacci_sphere",
+    "WORLD_TO_LIGHT", "camera_normals_to_light", "light_to_world", "rotation_world_to_light",
+    "world_to_light",
+    "Irradiance", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
+    "project", "project_envmap", "radiance", "sh_to_envmap",
+    "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
+]

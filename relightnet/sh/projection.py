@@ -1,0 +1,86 @@
+"""Projection of spherical functions onto SH, and reconstruction.
+
+Environment maps are lat-long images in the world frame (see
+:mod:`relightnet.sh.directions`); SH coefficients are in the light frame.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from ..checks import InputError, check_finite, check_shape, check_sh_count
+from .basis import sh_basis
+from .directions import latlong_directions
+from .frames import world_to_light
+
+__all__ = ["project", "project_envmap", "radiance", "sh_to_envmap"]
+
+
+def project(values: torch.Tensor, basis: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """Project sampled values on a shared direction set: one matmul.
+
+    Args:
+        values: (..., D, C) function values at the D directions.
+        basis: (D, K) ``sh_basis`` of those directions.
+        weights: (D,) quadrature weights (solid angles).
+
+    Returns:
+        (..., K, C) coefficients ``Σ_d w_d Y_k(d) f(d)``.
+    """
+    check_shape(basis, ["D", "K"], name="basis")
+    check_shape(weights, ["D"], name="weights", dims={"D": basis.shape[0]})
+    check_shape(values, ["...", "D", "C"], name="values", dims={"D": basis.shape[0]})
+    return (basis * weights[:, None]).T @ values
+
+
+def project_envmap(env: torch.Tensor, lmax: int = 2) -> torch.Tensor:
+    """Project a lat-long environment map (world frame) to SH in the light frame.
+
+    Args:
+        env: (H, W, 3) linear radiance; negative values are clamped to 0.
+        lmax: SH order.
+
+    Returns:
+        (K, 3) coefficients, dtype of ``env`` (float64 accumulation).
+    """
+    check_shape(env, ["H", "W", 3], name="env")
+    if not env.is_floating_point():
+        raise InputError(f"env: expected a floating-point radiance map, got {env.dtype}")
+    check_finite(env, "env")
+    h, w = env.shape[:2]
+    dirs, sa = latlong_directions(h, w, dtype=torch.float64, device=env.device)
+    Y = sh_basis(world_to_light(dirs), lmax, check=False)  # (H, W, K)
+    f = env.clamp_min(0).to(torch.float64) * sa[..., None]
+    return torch.einsum("hwk,hwc->kc", Y, f).to(env.dtype)
+
+
+def radiance(sh: torch.Tensor, dirs: torch.Tensor, check: bool = True) -> torch.Tensor:
+    """Radiance of an SH light in given directions.
+
+    Args:
+        sh: (K, 3) light (light frame).
+        dirs: (..., 3) unit directions in the light frame.
+
+    Returns:
+        (..., 3) ``Σ_k L_k Y_k(d)``.
+    """
+    if check:
+        check_shape(sh, ["K", 3], name="sh")
+        check_finite(sh, "sh")
+    lmax = check_sh_count(sh, "sh")
+    return sh_basis(dirs, lmax, check=check) @ sh
+
+
+def sh_to_envmap(sh: torch.Tensor, h: int = 64, w: int | None = None) -> torch.Tensor:
+    """Reconstruct a lat-long image (world frame) from SH coefficients, for viewing.
+
+    Args:
+        sh: (K, 3) light (light frame).
+        h, w: output size (w defaults to 2h).
+
+    Returns:
+        (H, W, 3) radiance (may be negative where the band limit rings).
+    """
+    w = 2 * h if w is None else w
+    dirs, _ = latlong_directions(h, w, dtype=sh.dtype, device=sh.device)
+    return radiance(sh, world_to_light(dirs), check=True)
