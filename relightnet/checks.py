@@ -15,7 +15,7 @@ Dimension specs are lists of entries:
 from __future__ import annotations
 
 import math
-from typing import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import torch
 
@@ -82,13 +82,13 @@ def check_shape(
         head, tail = spec[:i], spec[i + 1 :]
         if len(shape) < len(head) + len(tail):
             raise err
-        pairs = list(zip(head, shape[: len(head)])) + list(
-            zip(tail, shape[len(shape) - len(tail) :])
+        pairs = list(zip(head, shape[: len(head)], strict=True)) + list(
+            zip(tail, shape[len(shape) - len(tail) :], strict=True)
         )
     else:
         if len(shape) != len(spec):
             raise err
-        pairs = list(zip(spec, shape))
+        pairs = list(zip(spec, shape, strict=True))
     for s, n in pairs:
         if s.isdigit():
             if int(s) != n:

@@ -79,7 +79,7 @@ def sh_basis(dirs: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
     out: list[torch.Tensor | None] = [None] * sh_count(lmax)
     # C_m, S_m: real and imaginary parts of (x + i y)^m.
     cs = [(torch.ones_like(x), torch.zeros_like(x))]
-    for m in range(1, lmax + 1):
+    for _ in range(lmax):
         c, s = cs[-1]
         cs.append((c * x - s * y, s * x + c * y))
     for m in range(lmax + 1):

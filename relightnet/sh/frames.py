@@ -81,7 +81,9 @@ def camera_normals_to_light(normals_world: torch.Tensor, cam_R: torch.Tensor) ->
     else:
         b = cam_R.shape[0]
         if normals_world.shape[0] != b:
-            raise ValueError(f"normals_world: expected leading batch {b} to match cam_R, got {tuple(normals_world.shape)}")
+            raise ValueError(
+                f"normals_world: expected leading batch {b} to match cam_R, got {tuple(normals_world.shape)}"
+            )
         flat = normals_world.reshape(b, -1, 3)
         n_view = (flat @ cam_R.transpose(-1, -2).to(flat)).reshape(normals_world.shape)
     return world_to_light(n_view)

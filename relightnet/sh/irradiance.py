@@ -7,7 +7,7 @@ import math
 import torch
 from torch import nn
 
-from ..checks import check_finite, check_shape, check_sh_count
+from ..checks import check_finite, check_sh_count, check_shape
 from .basis import sh_basis, sh_degrees
 
 __all__ = ["cosine_lobe", "cosine_lobe_per_coeff", "irradiance", "Irradiance"]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import torch
 
-from ..checks import InputError, check_finite, check_shape, check_sh_count
+from ..checks import InputError, check_finite, check_sh_count, check_shape
 from .basis import sh_basis
 from .directions import latlong_directions
 from .frames import world_to_light

@@ -10,11 +10,10 @@ solve is done in float64 and off-band entries are zeroed.
 
 from __future__ import annotations
 
-
 import torch
 from torch import nn
 
-from ..checks import check_finite, check_shape, check_sh_count
+from ..checks import check_finite, check_sh_count, check_shape
 from .basis import sh_basis, sh_count, sh_degrees
 from .directions import fibonacci_sphere
 
