@@ -19,9 +19,19 @@ from .frames import (
     rotation_world_to_light,
     world_to_light,
 )
+from .io import LIGHT_SUFFIXES, load_light, resize_sh, save_light
 from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
+from .presets import (
+    ambient_light,
+    directional_light,
+    preset_envmap,
+    preset_light,
+    preset_names,
+    preset_path,
+)
 from .projection import project, project_envmap, radiance, sh_to_envmap
 from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
+from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
 
 __all__ = [
     "SHBasis", "sh_basis", "sh_count", "sh_degrees", "sh_index",
@@ -32,4 +42,7 @@ __all__ = [
     "Irradiance", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
     "project", "project_envmap", "radiance", "sh_to_envmap",
     "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
+    "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light",
+    "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",
+    "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
 ]

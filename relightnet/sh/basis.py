@@ -76,35 +76,35 @@ def sh_basis(dirs: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
     if not dirs.is_floating_point():
         raise TypeError(f"dirs: expected a floating dtype, got {dirs.dtype}")
     x, y, z = dirs.unbind(-1)
-    out: list[torch.Tensor | None] = [None] * sh_count(lmax)
-    # C_m, S_m: real and imaginary parts of (x + i y)^m.
-    cs = [(torch.ones_like(x), torch.zeros_like(x))]
-    for _ in range(lmax):
+    out: list[torch.Tensor | float] = [0.0] * sh_count(lmax)
+    # C_m, S_m: real and imaginary parts of (x + i y)^m (C_0 = 1, S_0 = 0).
+    cs: list[tuple] = [(1.0, 0.0), (x, y)]
+    for _ in range(2, lmax + 1):
         c, s = cs[-1]
         cs.append((c * x - s * y, s * x + c * y))
     for m in range(lmax + 1):
-        # Q_l^m(z) for l = m..lmax: Q_m^m = (2m-1)!!, Q_{m+1}^m = (2m+1) z Q_m^m,
+        # Q_l^m(z) for l = m..lmax: Q_m^m = (2m-1)!! (a constant), Q_{m+1}^m = (2m+1) z Q_m^m,
         # (l-m) Q_l^m = (2l-1) z Q_{l-1}^m - (l+m-1) Q_{l-2}^m.
-        dfact = math.prod(range(1, 2 * m, 2)) if m else 1
-        q_prev2 = None
-        q_prev = torch.full_like(z, float(dfact))
+        q_prev2: torch.Tensor | float = 0.0
+        q_prev: torch.Tensor | float = float(math.prod(range(1, 2 * m, 2)))
         for l in range(m, lmax + 1):
             if l == m:
                 q = q_prev
-            elif l == m + 1:
-                q = (2 * m + 1) * z * q_prev
             else:
-                q = ((2 * l - 1) * z * q_prev - (l + m - 1) * q_prev2) / (l - m)
-            if l > m:
+                q = ((2 * l - 1) * q_prev) * z
+                if l > m + 1:
+                    q = (q - (l + m - 1) * q_prev2) / (l - m)
                 q_prev2, q_prev = q_prev, q
             n = _norm(l, m)
             if m == 0:
                 out[sh_index(l, 0)] = n * q
             else:
                 c, s = cs[m]
-                out[sh_index(l, m)] = n * q * c
-                out[sh_index(l, -m)] = n * q * s
-    return torch.stack(out, dim=-1)
+                out[sh_index(l, m)] = (n * q) * c
+                out[sh_index(l, -m)] = (n * q) * s
+    # Constant entries (l = 0 and the m = l = 1 band's scalar factors) become full tensors.
+    cols = [o if isinstance(o, torch.Tensor) else torch.full_like(x, o) for o in out]
+    return torch.stack(cols, dim=-1)
 
 
 class SHBasis(nn.Module):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import torch
 
 from ..checks import InputError, check_finite, check_sh_count, check_shape
-from .basis import sh_basis
+from .basis import sh_basis, sh_index
 from .directions import latlong_directions
 from .frames import world_to_light
 
@@ -48,10 +48,38 @@ def project_envmap(env: torch.Tensor, lmax: int = 2) -> torch.Tensor:
         raise InputError(f"env: expected a floating-point radiance map, got {env.dtype}")
     check_finite(env, "env")
     h, w = env.shape[:2]
-    dirs, sa = latlong_directions(h, w, dtype=torch.float64, device=env.device)
-    Y = sh_basis(world_to_light(dirs), lmax, check=False)  # (H, W, K)
-    f = env.clamp_min(0).to(torch.float64) * sa[..., None]
-    return torch.einsum("hwk,hwc->kc", Y, f).to(env.dtype)
+    P, Phi, sa = _latlong_separable_basis(h, w, lmax, env.device)
+    # Σ_w Φ_k(ψ_w) env[h, w, c]: one batched matmul over rows, then Σ_h P_k(θ_h) Ω_h.
+    rows = env.clamp_min(0).to(torch.float64).transpose(1, 2) @ Phi  # (H, 3, K)
+    return torch.einsum("hck,hk->kc", rows, P * sa[:, None]).to(env.dtype)
+
+
+def _latlong_separable_basis(h: int, w: int, lmax: int, device) -> tuple[torch.Tensor, ...]:
+    """Factor the SH basis over a lat-long grid: Y_k(θ_i, ψ_j) = P_k(θ_i) Φ_k(ψ_j).
+
+    The lat-long poles are the world up axis, which is z_light, so θ is the light
+    frame's polar angle and the light-frame azimuth is ψ = π − φ (see
+    :mod:`relightnet.sh.directions`). ``P`` is the basis on the meridian ψ = 0
+    (for m < 0 the same Legendre factor as +|m|), ``Φ`` is 1, cos(mψ) or sin(|m|ψ).
+
+    Returns:
+        P: (H, K), Phi: (W, K), solid angle per pixel of each row: (H,). float64.
+    """
+    f64 = torch.float64
+    theta = torch.pi * (torch.arange(h, dtype=f64, device=device) + 0.5) / h
+    meridian = torch.stack([torch.sin(theta), torch.zeros_like(theta), torch.cos(theta)], -1)
+    P = sh_basis(meridian, lmax, check=False)
+    psi = torch.pi - (2 * torch.pi * (torch.arange(w, dtype=f64, device=device) + 0.5) / w - torch.pi)
+    Phi = torch.empty(w, P.shape[1], dtype=f64, device=device)
+    for l in range(lmax + 1):
+        for m in range(-l, l + 1):
+            k = sh_index(l, m)
+            if m < 0:
+                P[:, k] = P[:, sh_index(l, -m)]
+            Phi[:, k] = 1.0 if m == 0 else torch.cos(m * psi) if m > 0 else torch.sin(-m * psi)
+    edges = torch.cos(torch.pi * torch.arange(h + 1, dtype=f64, device=device) / h)
+    sa = (edges[:-1] - edges[1:]) * (2 * torch.pi / w)
+    return P, Phi, sa
 
 
 def radiance(sh: torch.Tensor, dirs: torch.Tensor, check: bool = True) -> torch.Tensor:

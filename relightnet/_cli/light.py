@@ -1,0 +1,155 @@
+"""``relightnet light show|convert``: look at a light, convert between light formats."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+
+from .common import add_command
+
+logger = logging.getLogger("relightnet.light")
+
+_LIGHT_HELP = (
+    "a light: .npz/.json (relightnet), .npy (Kanamori-Endo, BGR), .exr/.hdr environment map, "
+    "or a preset name (city, courtyard, forest, interior, night, studio, sunrise, sunset)"
+)
+
+
+def _exposure(text: str):
+    if text == "auto":
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}") from None
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}")
+    return v
+
+
+def _nonneg_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return v
+
+
+def _pos_int(text: str) -> int:
+    v = _nonneg_int(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def _envmap_of(light: str):
+    """The original environment map behind a light argument, if it has one."""
+    from ..io.envmap import ENVMAP_SUFFIXES, read_envmap
+    from ..sh.presets import preset_envmap, preset_names
+
+    p = Path(light)
+    if p.suffix.lower() in ENVMAP_SUFFIXES and p.is_file():
+        return read_envmap(p)
+    if light in preset_names():
+        return preset_envmap(light)
+    return None
+
+
+def _mkparent(path: Path) -> None:
+    if not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+
+
+def run_show(args: argparse.Namespace) -> int:
+    from ..io.image import write_image
+    from ..sh.io import load_light
+    from ..sh.visualize import light_preview
+
+    sh = load_light(args.light, lmax=args.lmax)
+    env = _envmap_of(args.light) if sh.dim() == 2 else None
+    img = light_preview(sh, size=args.size, env=env, exposure=args.exposure)
+    out = Path(args.out)
+    _mkparent(out)
+    write_image(out, img)
+    what = f"{tuple(sh.shape)} light" if sh.dim() == 2 else f"sequence of {sh.shape[0]} lights"
+    logger.info("wrote %s (%dx%d) for %s %s", out, img.shape[1], img.shape[0], what, args.light)
+    return 0
+
+
+def run_convert(args: argparse.Namespace) -> int:
+    from ..checks import InputError
+    from ..sh.io import LIGHT_SUFFIXES, load_light, save_light
+
+    out = Path(args.output)
+    if out.suffix.lower() not in LIGHT_SUFFIXES:
+        raise InputError(f"{out}: unsupported output type; expected one of {', '.join(LIGHT_SUFFIXES)}")
+    sh = load_light(args.input, lmax=args.lmax)
+    _mkparent(out)
+    save_light(out, sh)
+    logger.info("wrote %s: %s light from %s", out, tuple(sh.shape), args.input)
+    return 0
+
+
+def _no_subcommand(parser: argparse.ArgumentParser):
+    def run(args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 2
+
+    return run
+
+
+def register(sub) -> None:
+    light = add_command(
+        sub,
+        "light",
+        "Show a spherical-harmonics light as a picture, or convert it between file formats.",
+        "  relightnet light show studio --out studio.png\n"
+        "  relightnet light show my_light.npz --out my_light.png --exposure 2\n"
+        "  relightnet light convert relightnet/data/envmaps/sunset.exr sunset.npz --lmax 3\n"
+        "  relightnet light convert kanamori_light.npy light.json\n",
+    )
+    light.set_defaults(func=_no_subcommand(light))
+    lsub = light.add_subparsers(dest="light_command", metavar="{show,convert}")
+
+    show = add_command(
+        lsub,
+        "show",
+        "Write a PNG preview of a light: a white diffuse sphere seen from the front and from the back, "
+        "the light's lat-long reconstruction, and the original environment map when there is one.",
+        "  relightnet light show sunset --out sunset.png\n"
+        "  relightnet light show light.npy --out light.png --size 128\n"
+        "  relightnet light show lights_over_time.npz --out seq.png   # up to 8 frames as spheres\n",
+    )
+    show.add_argument("light", help=_LIGHT_HELP)
+    show.add_argument("--out", default="light.png", help="output .png (default: light.png)")
+    show.add_argument(
+        "--lmax", type=_nonneg_int, default=None,
+        help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
+    )
+    show.add_argument(
+        "--exposure", type=_exposure, default="auto",
+        help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: auto)",
+    )
+    show.add_argument("--size", type=_pos_int, default=256, help="sphere size in pixels (default: 256)")
+    show.set_defaults(func=run_show)
+
+    conv = add_command(
+        lsub,
+        "convert",
+        "Convert a light between formats, chosen by the output extension: .npz or .json (relightnet, "
+        "any order, sequences too) or .npy (Kanamori-Endo, one order-2 light, BGR columns).",
+        "  relightnet light convert studio studio.npz\n"
+        "  relightnet light convert kanamori_light.npy light.npz\n"
+        "  relightnet light convert light.npz kanamori_light.npy\n"
+        "  relightnet light convert scene.exr scene.json --lmax 4\n",
+    )
+    conv.add_argument("input", metavar="IN", help=_LIGHT_HELP)
+    conv.add_argument("output", metavar="OUT", help="output file: .npz, .json or .npy")
+    conv.add_argument(
+        "--lmax", type=_nonneg_int, default=None,
+        help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
+    )
+    conv.set_defaults(func=run_convert)

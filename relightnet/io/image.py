@@ -1,0 +1,175 @@
+"""8-bit images: sRGB transfer functions, PNG writing and image reading.
+
+Images are channels-last ``(H, W, C)`` tensors. Linear float images are
+gamma-encoded (exact piecewise sRGB) only when written to 8-bit files.
+Encoding and decoding use PyAV (FFmpeg's ``png`` encoder and its decoders), so
+the project needs no other image library; files are written atomically.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import av
+import numpy as np
+import torch
+
+from ..checks import InputError, ShapeError, check_finite
+from .atomic import atomic_write
+
+__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image"]
+
+
+def linear_to_srgb(x: torch.Tensor) -> torch.Tensor:
+    """Exact piecewise sRGB encoding (IEC 61966-2-1) of linear values.
+
+    ``12.92 x`` for ``x ≤ 0.0031308``, else ``1.055 x^(1/2.4) − 0.055``.
+
+    Args:
+        x: (...) linear values (not clamped; values above 1 stay above 1).
+
+    Returns:
+        (...) encoded values, same dtype.
+    """
+    x = torch.as_tensor(x)
+    hi = 1.055 * x.clamp_min(0.0031308) ** (1 / 2.4) - 0.055
+    return torch.where(x <= 0.0031308, 12.92 * x, hi)
+
+
+def srgb_to_linear(x: torch.Tensor) -> torch.Tensor:
+    """Exact inverse of :func:`linear_to_srgb`.
+
+    ``c / 12.92`` for ``c ≤ 0.04045``, else ``((c + 0.055)/1.055)^2.4``.
+
+    Args:
+        x: (...) sRGB-encoded values in [0, 1].
+
+    Returns:
+        (...) linear values, same dtype.
+    """
+    x = torch.as_tensor(x)
+    hi = ((x.clamp_min(0.04045) + 0.055) / 1.055) ** 2.4
+    return torch.where(x <= 0.04045, x / 12.92, hi)
+
+
+def _as_hwc(img, name: str) -> torch.Tensor:
+    img = torch.as_tensor(np.ascontiguousarray(img) if isinstance(img, np.ndarray) else img)
+    if img.dim() == 2:
+        img = img[..., None]
+    if img.dim() != 3 or img.shape[-1] not in (1, 3):
+        raise ShapeError(f"{name}: expected (H, W, 3) or (H, W, 1), got {tuple(img.shape)}")
+    if img.shape[0] < 1 or img.shape[1] < 1:
+        raise ShapeError(f"{name}: expected a non-empty image, got {tuple(img.shape)}")
+    return img
+
+
+def to_uint8(img, srgb: bool = True) -> torch.Tensor:
+    """Quantise an image to 8 bits.
+
+    Args:
+        img: (H, W, C) float linear values (encoded with sRGB when ``srgb``,
+            clamped to [0, 1], rounded) or uint8 (returned unchanged).
+        srgb: apply :func:`linear_to_srgb` to float input.
+
+    Returns:
+        (H, W, C) uint8.
+    """
+    img = torch.as_tensor(img)
+    if img.dtype == torch.uint8:
+        return img
+    if not img.is_floating_point():
+        raise InputError(f"image: expected float (linear) or uint8 values, got {img.dtype}")
+    check_finite(img, "image")
+    x = img.float()
+    if srgb:
+        x = linear_to_srgb(x)
+    return (x.clamp(0, 1) * 255).round().to(torch.uint8)
+
+
+def _encode(codec: str, frame: av.VideoFrame) -> bytes:
+    """Encode one frame with an FFmpeg image codec and return the file bytes."""
+    ctx = av.CodecContext.create(codec, "w")
+    ctx.width, ctx.height, ctx.pix_fmt = frame.width, frame.height, frame.format.name
+    packets = list(ctx.encode(frame)) + list(ctx.encode(None))
+    return b"".join(bytes(p) for p in packets)
+
+
+def _is_float_format(name: str) -> bool:
+    """True for FFmpeg float pixel formats (``gbrpf32le``, ``grayf32le``, ``rgbaf16le``, ...)."""
+    return re.search(r"f(16|32)(le|be)?$", name) is not None
+
+
+def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
+    """Decode the first video frame of ``path``; :class:`InputError` naming the file on failure."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file")
+    if not path.is_file():
+        raise InputError(f"{path}: is a folder or special file, not a file")
+    try:
+        with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise InputError(f"{path}: not {what} (no image stream)")
+            for frame in container.decode(video=0):
+                return frame
+    except InputError:
+        raise
+    except (av.FFmpegError, OSError, ValueError) as e:
+        raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e})") from None
+    raise InputError(f"{path}: not {what} (no frame decoded)")
+
+
+def write_image(path: str | os.PathLike, img, srgb: bool = True) -> Path:
+    """Write an 8-bit PNG atomically.
+
+    Args:
+        path: destination ``.png``.
+        img: (H, W, 3) or (H, W, 1) tensor or array; float values are linear
+            radiance/reflectance (sRGB-encoded when ``srgb``, clamped to
+            [0, 1]); uint8 values are written unchanged.
+        srgb: gamma-encode float input with :func:`linear_to_srgb`.
+
+    Returns:
+        The path written.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise InputError(f"{path}: expected a .png output file")
+    img = to_uint8(_as_hwc(img, "image"), srgb)
+    arr = np.ascontiguousarray(img.cpu().numpy())
+    if arr.shape[-1] == 1:
+        frame = av.VideoFrame.from_ndarray(arr[..., 0], format="gray")
+    else:
+        frame = av.VideoFrame.from_ndarray(arr, format="rgb24")
+    data = _encode("png", frame)
+    with atomic_write(path) as f:
+        f.write(data)
+    return path
+
+
+def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
+    """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats.
+
+    Gray images are repeated to three channels; alpha is dropped.
+
+    Args:
+        path: image file.
+        linear: decode sRGB to linear with :func:`srgb_to_linear`.
+
+    Returns:
+        (H, W, 3) float32 in [0, 1].
+
+    Raises:
+        InputError: missing, unreadable, or a floating-point (HDR) image
+            (read those with :func:`relightnet.io.read_envmap`).
+    """
+    frame = _decode_frame(path, "an image")
+    fmt = frame.format
+    if _is_float_format(fmt.name):
+        raise InputError(f"{path}: is a floating-point (HDR) image; read it with read_envmap")
+    deep = max(c.bits for c in fmt.components) > 8
+    arr = frame.to_ndarray(format="rgb48le" if deep else "rgb24")
+    x = torch.from_numpy(arr.astype(np.float32) / (65535.0 if deep else 255.0))
+    return srgb_to_linear(x) if linear else x

@@ -1,0 +1,226 @@
+"""Light files: save and load SH lights (DESIGN.md "Contracts").
+
+Formats, chosen by the file extension:
+
+- ``.npz`` (ours): ``sh`` (K, 3) float32, or a sequence (T, K, 3); ``lmax`` (int);
+  ``frame = "light"``; ``units = "linear radiance"``. Columns are linear RGB.
+- ``.json`` (ours): ``{"sh": [[r, g, b], ...] (or T such lists), "lmax", "frame", "units"}``.
+- ``.npy``: a Kanamori–Endo (2018) light, exactly (9, 3) with **BGR** columns;
+  converted to/from RGB here. Only single order-2 lights fit this format.
+- ``.exr`` / ``.hdr`` (load only): a lat-long environment map, projected to SH.
+- a preset name (``studio``, ``sunset``, ...; see :func:`relightnet.sh.preset_names`).
+
+Every loaded light is validated (finite values, K = (lmax+1)²) and returned as a
+float32 RGB tensor; errors name the file.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError, ShapeError, sh_order_from_count
+from .basis import sh_count
+from .presets import preset_light, preset_names
+
+__all__ = ["LIGHT_SUFFIXES", "save_light", "load_light", "resize_sh"]
+
+logger = logging.getLogger(__name__)
+
+#: Suffixes :func:`save_light` writes; :func:`load_light` also reads ``.exr`` and ``.hdr``.
+LIGHT_SUFFIXES = (".npz", ".json", ".npy")
+_ENVMAP_SUFFIXES = (".exr", ".hdr")
+_FRAME, _UNITS = "light", "linear radiance"
+
+
+def resize_sh(sh: torch.Tensor, lmax: int) -> torch.Tensor:
+    """Change the SH order of lights: drop higher bands or pad them with zeros.
+
+    Dropping bands is the L2-best band-limited approximation; padding keeps the
+    same function.
+
+    Args:
+        sh: (..., K, 3) coefficients.
+        lmax: target order.
+
+    Returns:
+        (..., K', 3) with K' = (lmax+1)².
+    """
+    k_new = sh_count(lmax)
+    k = sh.shape[-2]
+    if k_new <= k:
+        return sh[..., :k_new, :].clone()
+    pad = sh.new_zeros(*sh.shape[:-2], k_new - k, sh.shape[-1])
+    return torch.cat([sh, pad], dim=-2)
+
+
+def _validate(sh, where: str) -> torch.Tensor:
+    """Shape (K,3)|(T,K,3), valid K, finite; returns float32. Errors start with ``where``."""
+    sh = torch.as_tensor(np.asarray(sh) if not isinstance(sh, torch.Tensor) else sh)
+    if sh.dim() not in (2, 3) or sh.shape[-1] != 3:
+        raise ShapeError(f"{where}: expected a light (K, 3) or a sequence (T, K, 3), got {tuple(sh.shape)}")
+    sh_order_from_count(sh.shape[-2], where)
+    if not (sh.is_floating_point() or sh.dtype in (torch.int32, torch.int64)):
+        raise InputError(f"{where}: expected real coefficients, got dtype {sh.dtype}")
+    sh = sh.detach().to(device="cpu", dtype=torch.float32)
+    if not bool(torch.isfinite(sh).all()):
+        raise InputError(f"{where}: coefficients contain NaN or Inf")
+    return sh
+
+
+def save_light(path: str | os.PathLike, sh) -> Path:
+    """Write a light or light sequence atomically; format by extension.
+
+    Args:
+        path: ``.npz`` or ``.json`` (any K, single or sequence), or ``.npy``
+            (Kanamori–Endo: one order-2 light, written as (9, 3) BGR).
+        sh: (K, 3) or (T, K, 3) linear RGB coefficients in the light frame.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ShapeError: bad shape, or a ``.npy`` that is not a single (9, 3) light.
+        InputError: NaN/Inf values or an unsupported extension.
+    """
+    from ..io.atomic import atomic_write
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in LIGHT_SUFFIXES:
+        raise InputError(f"{path}: unsupported light file type; expected one of {', '.join(LIGHT_SUFFIXES)}")
+    sh = _validate(sh, "sh")
+    lmax = sh_order_from_count(sh.shape[-2])
+    arr = sh.numpy()
+    if suffix == ".npy":
+        if tuple(arr.shape) != (9, 3):
+            raise ShapeError(
+                f"{path}: a Kanamori-Endo .npy holds one order-2 light (9, 3); got {tuple(arr.shape)}; "
+                "use .npz or .json"
+            )
+        with atomic_write(path) as f:
+            np.save(f, np.ascontiguousarray(arr[:, ::-1]))
+    elif suffix == ".npz":
+        with atomic_write(path) as f:
+            np.savez(f, sh=arr, lmax=np.int64(lmax), frame=np.str_(_FRAME), units=np.str_(_UNITS))
+    else:
+        # One coefficient row (or one frame) per line: readable and diff-friendly.
+        rows = ",\n  ".join(json.dumps(r) for r in arr.tolist())
+        head = json.dumps({"lmax": lmax, "frame": _FRAME, "units": _UNITS})[:-1]
+        with atomic_write(path, "w") as f:
+            f.write(f'{head}, "sh": [\n  {rows}\n]}}\n')
+    return path
+
+
+def _check_meta(path: Path, lmax_stored, frame, units, k: int) -> None:
+    if lmax_stored is not None:
+        try:
+            lm = int(lmax_stored)
+        except (TypeError, ValueError):
+            raise InputError(f"{path}: 'lmax' must be an integer, got {lmax_stored!r}") from None
+        if sh_count(max(lm, 0)) != k or lm < 0:
+            raise ShapeError(f"{path}: 'lmax' = {lm} needs K = {(lm + 1) ** 2} coefficients, file has {k}")
+    if frame is not None and str(frame) != _FRAME:
+        raise InputError(f"{path}: light is in frame {str(frame)!r}; expected {_FRAME!r}")
+    if units is not None and str(units) != _UNITS:
+        raise InputError(f"{path}: light units are {str(units)!r}; expected {_UNITS!r}")
+
+
+def _read_npz(path: Path) -> torch.Tensor:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "sh" not in z.files:
+                raise InputError(f"{path}: no 'sh' array in the .npz (has {', '.join(z.files) or 'nothing'})")
+            sh = z["sh"]
+            meta = {k: (z[k].item() if k in z.files else None) for k in ("lmax", "frame", "units")}
+    except InputError:
+        raise
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise InputError(f"{path}: cannot read light .npz ({type(e).__name__}: {e})") from None
+    sh = _validate(sh, str(path))
+    _check_meta(path, meta["lmax"], meta["frame"], meta["units"], sh.shape[-2])
+    return sh
+
+
+def _read_json(path: Path) -> torch.Tensor:
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        raise InputError(f"{path}: cannot read light .json ({type(e).__name__}: {e})") from None
+    if not isinstance(doc, dict) or "sh" not in doc:
+        raise InputError(f"{path}: expected a JSON object with an 'sh' list")
+    try:
+        arr = np.asarray(doc["sh"], dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ShapeError(f"{path}: 'sh' must be a K×3 (or T×K×3) list of numbers") from None
+    sh = _validate(arr, str(path))
+    _check_meta(path, doc.get("lmax"), doc.get("frame"), doc.get("units"), sh.shape[-2])
+    return sh
+
+
+def _read_npy(path: Path) -> torch.Tensor:
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as e:
+        raise InputError(f"{path}: cannot read Kanamori-Endo light .npy ({type(e).__name__}: {e})") from None
+    if not isinstance(arr, np.ndarray) or tuple(arr.shape) != (9, 3):
+        raise ShapeError(f"{path}: a Kanamori-Endo light .npy must be (9, 3) BGR, got {tuple(arr.shape)}")
+    if not np.issubdtype(arr.dtype, np.number):
+        raise InputError(f"{path}: expected numeric coefficients, got dtype {arr.dtype}")
+    return _validate(np.ascontiguousarray(arr[:, ::-1]).astype(np.float64), str(path))
+
+
+def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
+    """Load a light from a file, a preset name, or an array.
+
+    Args:
+        path_or_name: ``.npz`` / ``.json`` (ours), ``.npy`` (Kanamori–Endo,
+            BGR), ``.exr`` / ``.hdr`` environment map, a preset name, or an
+            in-memory (K, 3) / (T, K, 3) tensor or array (validated and copied).
+        lmax: SH order of the result. Environment maps and presets are
+            projected at this order (default 2). Stored coefficients are
+            returned as stored when None, else truncated or zero-padded to it.
+
+    Returns:
+        (K, 3) or (T, K, 3) float32 linear RGB coefficients in the light frame.
+
+    Raises:
+        InputError: missing/unreadable file, NaN/Inf values, unknown preset
+            (the message lists the presets); the message names the file.
+        ShapeError: wrong number of coefficients or columns.
+    """
+    if lmax is not None:
+        sh_count(lmax)
+    if isinstance(path_or_name, (torch.Tensor, np.ndarray)):
+        sh = _validate(path_or_name, "light").clone()
+        return sh if lmax is None else resize_sh(sh, lmax)
+    if not isinstance(path_or_name, (str, os.PathLike)):
+        raise InputError(f"light: expected a path, preset name or array, got {type(path_or_name).__name__}")
+    path = Path(path_or_name)
+    suffix = path.suffix.lower()
+    known = LIGHT_SUFFIXES + _ENVMAP_SUFFIXES
+    # A bare word (no suffix, no folder) is a preset name; presets win over same-named files.
+    bare = isinstance(path_or_name, str) and not suffix and len(path.parts) == 1
+    if bare and (not path.exists() or path_or_name in preset_names()):
+        return preset_light(path_or_name, 2 if lmax is None else lmax)
+    if not path.exists():
+        raise InputError(f"{path}: no such light file")
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a light file")
+    if suffix in _ENVMAP_SUFFIXES:
+        from ..io.envmap import read_envmap
+        from .projection import project_envmap
+
+        return project_envmap(read_envmap(path), 2 if lmax is None else lmax).float()
+    readers = {".npz": _read_npz, ".json": _read_json, ".npy": _read_npy}
+    if suffix not in readers:
+        raise InputError(f"{path}: unsupported light file type; expected one of {', '.join(known)} or a preset")
+    sh = readers[suffix](path)
+    logger.debug("loaded light %s: %s", path, tuple(sh.shape))
+    return sh if lmax is None else resize_sh(sh, lmax)

@@ -1,0 +1,194 @@
+"""Light files: formats, round trips, KE18 BGR columns, env-map projection, errors naming the file."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from relightnet.checks import InputError, ShapeError
+from relightnet.io import write_envmap
+from relightnet.sh import load_light, preset_names, project_envmap, resize_sh, save_light, sh_to_envmap
+
+
+def _light(*shape, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return torch.randn(*shape, generator=g)
+
+
+def test_ke18_npy_is_bgr_and_round_trips(tmp_path):
+    sh = _light(9, 3)
+    path = save_light(tmp_path / "ke.npy", sh)
+    raw = np.load(path)
+    assert raw.shape == (9, 3)
+    np.testing.assert_array_equal(raw[:, 0], sh[:, 2].numpy())  # column 0 is blue
+    np.testing.assert_array_equal(raw[:, 2], sh[:, 0].numpy())
+    back = load_light(path)
+    assert back.dtype == torch.float32
+    torch.testing.assert_close(back, sh, rtol=0, atol=0)
+
+
+def test_ke18_file_written_elsewhere_loads_as_rgb(tmp_path):
+    bgr = np.zeros((9, 3), np.float64)
+    bgr[0] = [0.1, 0.2, 0.9]  # B, G, R: a red light
+    np.save(tmp_path / "red.npy", bgr)
+    sh = load_light(tmp_path / "red.npy")
+    torch.testing.assert_close(sh[0], torch.tensor([0.9, 0.2, 0.1]))
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".json"])
+@pytest.mark.parametrize("shape", [(9, 3), (16, 3), (1, 3), (5, 9, 3), (2, 25, 3)])
+def test_ours_round_trip(tmp_path, suffix, shape):
+    sh = _light(*shape, seed=len(shape))
+    path = save_light(tmp_path / f"l{suffix}", sh)
+    back = load_light(path)
+    assert back.shape == shape and back.dtype == torch.float32
+    torch.testing.assert_close(back, sh, rtol=0, atol=0)
+
+
+def test_npz_and_json_metadata(tmp_path):
+    sh = _light(4, 16, 3)
+    with np.load(save_light(tmp_path / "l.npz", sh)) as z:
+        assert z["sh"].dtype == np.float32 and z["sh"].shape == (4, 16, 3)
+        assert int(z["lmax"]) == 3 and str(z["frame"]) == "light" and str(z["units"]) == "linear radiance"
+    doc = json.loads(save_light(tmp_path / "l.json", sh[0]).read_text())
+    assert doc["lmax"] == 3 and doc["frame"] == "light" and doc["units"] == "linear radiance"
+    assert np.asarray(doc["sh"]).shape == (16, 3)
+
+
+def test_lmax_truncates_or_pads_stored_lights(tmp_path):
+    sh = _light(16, 3)
+    path = save_light(tmp_path / "l.npz", sh)
+    torch.testing.assert_close(load_light(path, lmax=1), sh[:4])
+    padded = load_light(path, lmax=4)
+    assert padded.shape == (25, 3)
+    torch.testing.assert_close(padded[:16], sh)
+    assert (padded[16:] == 0).all()
+    torch.testing.assert_close(resize_sh(_light(3, 9, 3), 1), _light(3, 9, 3)[:, :4])
+
+
+def test_arrays_pass_through_validated():
+    sh = _light(9, 3)
+    out = load_light(sh.double().numpy())
+    torch.testing.assert_close(out, sh)
+    with pytest.raises(ShapeError):
+        load_light(torch.zeros(8, 3))
+    with pytest.raises(InputError, match="NaN"):
+        load_light(torch.full((9, 3), float("inf")))
+
+
+def _positive_light(seed=0):
+    sh = _light(9, 3, seed=seed) * 0.3
+    sh[0] = torch.tensor([3.0, 2.5, 2.0])
+    return sh
+
+
+def test_envmap_projection_recovers_known_coefficients(tmp_path):
+    sh = _positive_light()
+    env = sh_to_envmap(sh, 64)
+    assert env.min() > 0  # nothing for the loader's clamp to change
+    torch.testing.assert_close(project_envmap(env, 2), sh, rtol=0, atol=2e-3)
+    exr = write_envmap(tmp_path / "syn.exr", env)
+    torch.testing.assert_close(load_light(exr), sh, rtol=0, atol=2e-3)
+    hdr = write_envmap(tmp_path / "syn.hdr", env)
+    torch.testing.assert_close(load_light(hdr), sh, rtol=0, atol=3e-2)
+    # A higher-order projection keeps the order-2 part and finds (almost) nothing above it.
+    sh4 = load_light(exr, lmax=4)
+    assert sh4.shape == (25, 3)
+    torch.testing.assert_close(sh4[:9], sh, rtol=0, atol=2e-3)
+    assert sh4[9:].abs().max() < 5e-3
+
+
+def test_preset_names_load():
+    sh = load_light("studio")
+    assert sh.shape == (9, 3) and (sh[0] > 0).all()
+    assert load_light("night", lmax=1).shape == (4, 3)
+
+
+# --- bad inputs: the right error type, the file in the message -------------------------------
+
+
+def test_wrong_npy_shape(tmp_path):
+    p = tmp_path / "bad_shape.npy"
+    np.save(p, np.zeros((4, 3)))
+    with pytest.raises(ShapeError, match="bad_shape.npy"):
+        load_light(p)
+    np.save(p, np.zeros((9, 3, 1)))
+    with pytest.raises(ShapeError, match="bad_shape.npy"):
+        load_light(p)
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".json", ".npy"])
+def test_nan_coefficients(tmp_path, suffix):
+    bad = np.zeros((9, 3), np.float32)
+    bad[3, 1] = np.nan
+    p = tmp_path / f"nan_light{suffix}"
+    if suffix == ".npz":
+        np.savez(p, sh=bad, lmax=2)
+    elif suffix == ".npy":
+        np.save(p, bad)
+    else:
+        p.write_text('{"sh": ' + json.dumps(bad.tolist()) + "}")
+    with pytest.raises(InputError, match=f"nan_light\\{suffix}.*NaN"):
+        load_light(p)
+
+
+def test_wrong_coefficient_count(tmp_path):
+    p = tmp_path / "k10.npz"
+    np.savez(p, sh=np.zeros((10, 3), np.float32))
+    with pytest.raises(ShapeError, match="k10.npz"):
+        load_light(p)
+    np.savez(p, sh=np.zeros((9, 4), np.float32))
+    with pytest.raises(ShapeError, match="k10.npz"):
+        load_light(p)
+    np.savez(p, sh=np.zeros((9, 3), np.float32), lmax=3)
+    with pytest.raises(ShapeError, match="k10.npz.*lmax"):
+        load_light(p)
+    p2 = tmp_path / "k.json"
+    p2.write_text('{"sh": [[1, 2, 3], [4, 5]]}')
+    with pytest.raises(ShapeError, match="k.json"):
+        load_light(p2)
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".json", ".npy", ".exr", ".hdr"])
+def test_garbage_files(tmp_path, suffix):
+    p = tmp_path / f"garbage{suffix}"
+    p.write_bytes(b"\x00\x01not a light at all\xff" * 20)
+    with pytest.raises(InputError, match=f"garbage\\{suffix}"):
+        load_light(p)
+
+
+def test_missing_file_unknown_preset_and_other_inputs(tmp_path):
+    with pytest.raises(InputError, match="missing.npz"):
+        load_light(tmp_path / "missing.npz")
+    with pytest.raises(InputError, match="missing.json"):
+        load_light(str(tmp_path / "missing.json"))
+    with pytest.raises(InputError, match="sunnyday") as e:
+        load_light("sunnyday")
+    for name in preset_names():
+        assert name in str(e.value)
+    p = tmp_path / "light.txt"
+    p.write_text("1 2 3")
+    with pytest.raises(InputError, match="light.txt.*unsupported"):
+        load_light(p)
+    p = tmp_path / "other.npz"
+    np.savez(p, coeffs=np.zeros((9, 3)))
+    with pytest.raises(InputError, match="other.npz.*'sh'"):
+        load_light(p)
+    np.savez(p, sh=np.zeros((9, 3)), frame="world")
+    with pytest.raises(InputError, match="other.npz.*frame"):
+        load_light(p)
+
+
+def test_save_errors_leave_nothing(tmp_path):
+    with pytest.raises(ShapeError, match="Kanamori"):
+        save_light(tmp_path / "x.npy", _light(16, 3))
+    with pytest.raises(ShapeError, match="Kanamori"):
+        save_light(tmp_path / "x.npy", _light(2, 9, 3))
+    with pytest.raises(InputError, match="NaN"):
+        save_light(tmp_path / "x.npz", torch.full((9, 3), float("nan")))
+    with pytest.raises(InputError, match="x.txt"):
+        save_light(tmp_path / "x.txt", _light(9, 3))
+    with pytest.raises(ShapeError):
+        save_light(tmp_path / "x.npz", _light(9, 2))
+    assert list(tmp_path.iterdir()) == []
