@@ -16,8 +16,8 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.sh import project_envmap, rotate_sh, sh_basis  # noqa: E402
 from relightnet.io.envmap import read_envmap  # noqa: E402
+from relightnet.sh import project_envmap, rotate_sh, sh_basis  # noqa: E402
 
 
 def copy_gbps() -> float:
