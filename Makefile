@@ -13,9 +13,9 @@ export MPLBACKEND = Agg
 PY  := $(VENV)/bin/python
 PIP := $(VENV)/bin/python -m pip
 
-.PHONY: demo test lint bench setup clean-venv system-deps
+.PHONY: demo test lint bench bench-deps setup clean-venv system-deps
 
-setup: $(VENV)/.installed $(ANNY_CACHE_DIR)/.filled
+setup: $(CACHE_DIR)/.sysdeps $(VENV)/.installed $(ANNY_CACHE_DIR)/.filled
 
 demo: setup
 	$(VENV)/bin/relightnet demo --out out/demo
@@ -27,12 +27,28 @@ test: setup
 lint: setup
 	$(VENV)/bin/ruff check .
 
-bench: setup
+bench: setup bench-deps
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
 
-# System packages (none required for the core today; kept as the one place to add them).
-system-deps:
-	@true
+# System packages. The core needs none; Mitsuba 3 (the path-tracing reference and an
+# optional ray engine) needs LLVM 19 (with LLVM 15 it crashes). Installed once, with apt.
+LLVM_LIB := /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
+export DRJIT_LIBLLVM_PATH ?= $(LLVM_LIB)
+system-deps: $(CACHE_DIR)/.sysdeps
+
+$(CACHE_DIR)/.sysdeps:
+	mkdir -p $(CACHE_DIR)
+	if [ ! -e $(LLVM_LIB) ]; then \
+	  SUDO=$$( [ "$$(id -u)" -eq 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -q && $$SUDO apt-get install -y -q libllvm19; \
+	fi
+	touch $@
+
+# Peers of the benchmarks (not needed by the library or the tests).
+bench-deps: $(VENV)/.installed
+	SUDO=$$( [ "$$(id -u)" -eq 0 ] || echo sudo ); \
+	$$SUDO apt-get update -q && $$SUDO apt-get install -y -q libegl1 libegl-mesa0 libgl1-mesa-dri libgles2
+	$(PIP) install -q moderngl==5.13.0
 
 $(VENV)/.installed: pyproject.toml requirements.lock
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
