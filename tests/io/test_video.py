@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.io import VideoWriter, read_video, video_info
+
+
+def _frames(n, h=32, w=48):
+    g = np.random.default_rng(0)
+    return [g.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(n)]
+
+
+def test_lossless_mkv_round_trip(tmp_path):
+    frames = _frames(6)
+    with VideoWriter(tmp_path / "a.mkv", fps=25) as w:
+        for f in frames:
+            w.write(f)
+    back = list(read_video(tmp_path / "a.mkv"))
+    assert len(back) == 6
+    for a, b in zip(frames, back, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert video_info(tmp_path / "a.mkv").fps == pytest.approx(25)
+
+
+def test_mp4_frame_count_size_and_float_frames(tmp_path):
+    with VideoWriter(tmp_path / "a.mp4", fps=30) as w:
+        for i in range(4):
+            w.write(torch.full((32, 48, 3), i / 4.0))  # float linear -> sRGB 8-bit
+    info = video_info(tmp_path / "a.mp4")
+    assert info.n_frames == 4 and info.size == (32, 48)
+    back = list(read_video(tmp_path / "a.mp4"))
+    assert len(back) == 4 and back[0].shape == (32, 48, 3)
+    assert back[3].mean() > back[1].mean() > back[0].mean()
+
+
+def test_failure_leaves_nothing(tmp_path):
+    with pytest.raises(RuntimeError), VideoWriter(tmp_path / "b.mp4") as w:
+        w.write(_frames(1)[0])
+        raise RuntimeError("interrupted")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_inputs(tmp_path):
+    with pytest.raises(InputError, match="even frame sizes"):
+        VideoWriter(tmp_path / "c.mp4").write(np.zeros((31, 48, 3), np.uint8))
+    w = VideoWriter(tmp_path / "d.mkv")
+    w.write(np.zeros((8, 8, 3), np.uint8))
+    with pytest.raises(InputError, match="frame 1 is 9x8, expected 8x8"):
+        w.write(np.zeros((9, 8, 3), np.uint8))
+    w.abort()
+    with pytest.raises(InputError, match="expected a video suffix"):
+        VideoWriter(tmp_path / "e.avi")
+    with pytest.raises(InputError, match="video file not found"):
+        list(read_video(tmp_path / "missing.mp4"))
+    (tmp_path / "junk.mp4").write_bytes(b"not a video")
+    with pytest.raises(InputError, match="junk.mp4"):
+        list(read_video(tmp_path / "junk.mp4"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.mp4"]
