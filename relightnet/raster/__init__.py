@@ -1,0 +1,34 @@
+"""Pure-torch rasterization: cameras, ``rasterize`` → ``Fragments``, ``interpolate``, ``texture``.
+
+Conventions (OpenGL; details in :mod:`relightnet.raster.camera`): the camera looks
+along −z with +y up, pixel (0, 0) is the top-left pixel and pixel centres sit at
++0.5. Rasterizer outputs are channels-last (B, H, W, C); :func:`to_channels_first`
+and :func:`to_channels_last` convert to and from the CNN layout (B, C, H, W).
+Texture coordinates have v = 0 at the bottom of the image (:mod:`.texture`).
+"""
+
+from .antialias import antialias
+from .camera import (
+    Camera,
+    default_camera,
+    fov_projection,
+    look_at,
+    ndc_to_pixel,
+    orthographic_camera,
+    orthographic_projection,
+    perspective_camera,
+    perspective_projection,
+    pixel_to_ndc,
+)
+from .fragments import Fragments
+from .interpolate import Interpolate, interpolate, interpolate_pixels, to_channels_first, to_channels_last
+from .rasterize import rasterize
+from .texture import texture
+
+__all__ = [
+    "Camera", "default_camera", "fov_projection", "look_at", "ndc_to_pixel", "orthographic_camera",
+    "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
+    "Fragments", "rasterize",
+    "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
+    "texture", "antialias",
+]

@@ -1,0 +1,110 @@
+"""``Fragments``: what the rasterizer hands to interpolation and shading."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import torch
+
+from ..checks import ShapeError, check_shape
+
+__all__ = ["Fragments"]
+
+
+@dataclass(frozen=True, eq=False)
+class Fragments:
+    """Per-pixel result of :func:`relightnet.raster.rasterize` (channels-last, B×H×W).
+
+    Stored compactly, for the N covered pixels only (consumers such as
+    :func:`relightnet.raster.interpolate` touch nothing else):
+
+    Attributes:
+        pix: (N,) int64 flat indices of covered pixels into the B·H·W pixels (each once,
+            in no particular order).
+        pix_face: (N,) int64 index into ``faces`` of the nearest triangle at each.
+        pix_bary: (N, 3) perspective-correct barycentric weights of that triangle's three
+            vertices (in the order of ``faces[face]``), summing to 1.
+        pix_depth: (N,) NDC depth ``z_clip / w_clip`` in [−1, 1] (−1 on the near plane;
+            :meth:`relightnet.raster.Camera.depth_to_view` converts to a distance).
+        shape: (B, H, W).
+
+    Dense views, built on first access and cached:
+
+    - ``face_id`` (B, H, W) int64, −1 on background;
+    - ``bary`` (B, H, W, 3), 0 on background;
+    - ``depth`` (B, H, W), +inf on background;
+    - ``mask`` (B, H, W) bool.
+    """
+
+    pix: torch.Tensor
+    pix_face: torch.Tensor
+    pix_bary: torch.Tensor
+    pix_depth: torch.Tensor
+    shape: tuple[int, int, int]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "shape", tuple(int(s) for s in self.shape))
+        if len(self.shape) != 3:
+            raise ShapeError(f"shape: expected (B, H, W), got {self.shape}")
+        dims = check_shape(self.pix, ["N"], name="pix")
+        check_shape(self.pix_face, ["N"], name="pix_face", dims=dims)
+        check_shape(self.pix_bary, ["N", 3], name="pix_bary", dims=dims)
+        check_shape(self.pix_depth, ["N"], name="pix_depth", dims=dims)
+
+    @classmethod
+    def from_dense(cls, face_id: torch.Tensor, bary: torch.Tensor, depth: torch.Tensor) -> Fragments:
+        """Build Fragments from dense fields (−1 in ``face_id`` marks background).
+
+        Args:
+            face_id: (B, H, W) int64.
+            bary: (B, H, W, 3).
+            depth: (B, H, W).
+        """
+        dims = check_shape(face_id, ["B", "H", "W"], name="face_id")
+        check_shape(bary, ["B", "H", "W", 3], name="bary", dims=dims)
+        check_shape(depth, ["B", "H", "W"], name="depth", dims=dims)
+        pix = torch.nonzero(face_id.reshape(-1) >= 0).squeeze(1)
+        return cls(pix, face_id.reshape(-1).index_select(0, pix), bary.reshape(-1, 3).index_select(0, pix),
+                   depth.reshape(-1).index_select(0, pix), tuple(face_id.shape))
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(H, W)."""
+        return self.shape[1], self.shape[2]
+
+    @property
+    def batch_size(self) -> int:
+        return self.shape[0]
+
+    @property
+    def pix_batch(self) -> torch.Tensor:
+        """(N,) int64 batch index of every covered pixel."""
+        return torch.div(self.pix, self.shape[1] * self.shape[2], rounding_mode="floor")
+
+    def _dense(self, values: torch.Tensor, fill) -> torch.Tensor:
+        n = self.shape[0] * self.shape[1] * self.shape[2]
+        out = torch.full((n, *values.shape[1:]), fill, dtype=values.dtype, device=values.device)
+        return out.index_copy_(0, self.pix, values).view(*self.shape, *values.shape[1:])
+
+    @cached_property
+    def face_id(self) -> torch.Tensor:
+        """(B, H, W) int64 nearest triangle per pixel, −1 on background."""
+        return self._dense(self.pix_face, -1)
+
+    @cached_property
+    def bary(self) -> torch.Tensor:
+        """(B, H, W, 3) perspective-correct barycentrics, 0 on background."""
+        return self._dense(self.pix_bary, 0)
+
+    @cached_property
+    def depth(self) -> torch.Tensor:
+        """(B, H, W) NDC depth, +inf on background."""
+        return self._dense(self.pix_depth, float("inf"))
+
+    @cached_property
+    def mask(self) -> torch.Tensor:
+        """(B, H, W) bool: pixels covered by a triangle."""
+        n = self.shape[0] * self.shape[1] * self.shape[2]
+        out = torch.zeros(n, dtype=torch.bool, device=self.pix.device)
+        return out.index_fill_(0, self.pix, True).view(self.shape)

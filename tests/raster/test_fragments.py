@@ -1,0 +1,30 @@
+import math
+
+import pytest
+import torch
+
+from relightnet.checks import ShapeError
+from relightnet.raster import Fragments
+
+
+def test_lazy_dense_fields():
+    pix = torch.tensor([5, 0, 13])
+    frags = Fragments(pix, torch.tensor([2, 0, 1]), torch.tensor([[1.0, 0, 0], [0, 1, 0], [0.2, 0.3, 0.5]]),
+                      torch.tensor([0.1, -0.5, 0.9]), (2, 2, 4))
+    assert frags.face_id.shape == (2, 2, 4) and frags.bary.shape == (2, 2, 4, 3)
+    assert frags.face_id.view(-1)[5] == 2 and frags.face_id.view(-1)[1] == -1
+    assert frags.depth.view(-1)[13] == pytest.approx(0.9) and math.isinf(frags.depth.view(-1)[2])
+    assert frags.mask.sum() == 3 and frags.mask.view(-1)[13]
+    assert frags.pix_batch.tolist() == [0, 0, 1]
+    assert frags.face_id is frags.face_id  # cached
+    again = Fragments.from_dense(frags.face_id, frags.bary, frags.depth)
+    assert torch.equal(again.face_id, frags.face_id) and torch.equal(again.bary, frags.bary)
+
+
+def test_shape_checks():
+    with pytest.raises(ShapeError):
+        Fragments(torch.zeros(2, dtype=torch.long), torch.zeros(3, dtype=torch.long), torch.zeros(2, 3),
+                  torch.zeros(2), (1, 2, 2))
+    with pytest.raises(ShapeError):
+        Fragments(torch.zeros(0, dtype=torch.long), torch.zeros(0, dtype=torch.long), torch.zeros(0, 3),
+                  torch.zeros(0), (2, 2))
