@@ -7,8 +7,8 @@ from relightnet.checks import (
     ShapeError,
     check_dtype,
     check_finite,
-    check_shape,
     check_sh_count,
+    check_shape,
     check_unit,
     sh_order_from_count,
 )

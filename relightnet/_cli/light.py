@@ -6,44 +6,9 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command
+from .common import LIGHT_HELP, add_command, exposure_arg, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.light")
-
-_LIGHT_HELP = (
-    "a light: .npz/.json (relightnet), .npy (Kanamori-Endo, BGR), .exr/.hdr environment map, "
-    "or a preset name (city, courtyard, forest, interior, night, studio, sunrise, sunset)"
-)
-
-
-def _exposure(text: str):
-    if text == "auto":
-        return text
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}")
-    return v
-
-
-def _nonneg_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
-    return v
-
-
-def _pos_int(text: str) -> int:
-    v = _nonneg_int(text)
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return v
-
 
 def _envmap_of(light: str):
     """The original environment map behind a light argument, if it has one."""
@@ -123,17 +88,17 @@ def register(sub) -> None:
         "  relightnet light show light.npy --out light.png --size 128\n"
         "  relightnet light show lights_over_time.npz --out seq.png   # up to 8 frames as spheres\n",
     )
-    show.add_argument("light", help=_LIGHT_HELP)
+    show.add_argument("light", help=LIGHT_HELP)
     show.add_argument("--out", default="light.png", help="output .png (default: light.png)")
     show.add_argument(
-        "--lmax", type=_nonneg_int, default=None,
+        "--lmax", type=nonneg_int, default=None,
         help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
     )
     show.add_argument(
-        "--exposure", type=_exposure, default="auto",
+        "--exposure", type=exposure_arg, default="auto",
         help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: auto)",
     )
-    show.add_argument("--size", type=_pos_int, default=256, help="sphere size in pixels (default: 256)")
+    show.add_argument("--size", type=pos_int, default=256, help="sphere size in pixels (default: 256)")
     show.set_defaults(func=run_show)
 
     conv = add_command(
@@ -146,10 +111,10 @@ def register(sub) -> None:
         "  relightnet light convert light.npz kanamori_light.npy\n"
         "  relightnet light convert scene.exr scene.json --lmax 4\n",
     )
-    conv.add_argument("input", metavar="IN", help=_LIGHT_HELP)
+    conv.add_argument("input", metavar="IN", help=LIGHT_HELP)
     conv.add_argument("output", metavar="OUT", help="output file: .npz, .json or .npy")
     conv.add_argument(
-        "--lmax", type=_nonneg_int, default=None,
+        "--lmax", type=nonneg_int, default=None,
         help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
     )
     conv.set_defaults(func=run_convert)

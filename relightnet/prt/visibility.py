@@ -311,19 +311,19 @@ def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, 
     """
     if not (offset >= 0 and np.isfinite(offset)):
         raise InputError(f"offset: expected a finite value >= 0, got {offset!r}")
-    v = verts.numpy()
-    n = normals.numpy()
-    d = np.ascontiguousarray(dirs.detach().cpu().to(torch.float32).numpy())
-    cos = n @ d.T  # (V, D)
-    vi, di = np.nonzero(cos > 0)
-    org = v + np.float32(offset * mesh_scale(verts)) * n
+    # torch: its gathers and nonzero are about twice as fast as numpy's fancy indexing here.
+    d = dirs.detach().cpu().to(torch.float32).contiguous()
+    cos = normals @ d.T  # (V, D)
+    up = cos > 0
+    vi, di = up.nonzero(as_tuple=True)
+    org = verts + float(offset * mesh_scale(verts)) * normals
     return VertexRays(
-        vertex=vi,
-        direction=di,
-        origins=np.ascontiguousarray(org[vi]),
-        dirs=np.ascontiguousarray(d[di]),
-        cosine=cos[vi, di],
-        n_verts=v.shape[0],
+        vertex=vi.numpy(),
+        direction=di.numpy(),
+        origins=org.index_select(0, vi).numpy(),
+        dirs=d.index_select(0, di).numpy(),
+        cosine=cos[up].numpy(),
+        n_verts=verts.shape[0],
         n_dirs=d.shape[0],
     )
 

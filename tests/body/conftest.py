@@ -1,25 +1,14 @@
-"""Shared fixtures: one Anny model per session, a synthetic SMPL-format file."""
+"""Body-test fixtures: a synthetic SMPL-format file (the Anny model is in tests/conftest.py)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[2] / ".cache" / "anny"))
-
 #: SMPL's kinematic tree (parent of each of the 24 joints).
 SMPL_PARENTS = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21]
-
-
-@pytest.fixture(scope="session")
-def anny_body():
-    """The default AnnyBody (float32, feet on y = 0), built once per test session."""
-    from relightnet.body import AnnyBody
-
-    return AnnyBody()
 
 
 def make_smpl_arrays(n_verts: int = 6890, seed: int = 0) -> dict[str, np.ndarray]:

@@ -1,0 +1,77 @@
+import numpy as np
+import pytest
+import torch
+import trimesh
+
+from relightnet.body import default_albedo, make_motion
+from relightnet.checks import InputError
+from relightnet.render.frame import TexturedAlbedo
+from relightnet.render.jobs import fit_camera, load_mesh, render_body_frames, render_mesh_file
+from relightnet.sh import ambient_light, directional_light
+
+
+def sphere_over_plane(path, n=31):
+    """A sphere floating above a tessellated ground plane (per-vertex PRT needs vertices in the shadow)."""
+    s = trimesh.creation.icosphere(3, 0.3)
+    g = np.linspace(-1, 1, n)
+    X, Z = np.meshgrid(g, g)
+    V = np.stack([X.ravel(), np.full(X.size, -0.32), Z.ravel()], 1)
+    F = [[i * n + j, (i + 1) * n + j, i * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    F += [[i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    (s + trimesh.Trimesh(V, np.array(F), process=False)).export(path)
+    return path
+
+
+def test_load_mesh_and_vertex_colours(tmp_path):
+    m = trimesh.creation.box()
+    m.visual.vertex_colors = np.tile([255, 0, 0, 255], (len(m.vertices), 1))
+    m.export(tmp_path / "box.ply")
+    mesh = load_mesh(tmp_path / "box.ply")
+    assert mesh.faces.shape == (12, 3) and mesh.verts.shape == (8, 3)
+    torch.testing.assert_close(mesh.albedo[0], torch.tensor([1.0, 0.0, 0.0]))
+    torch.testing.assert_close(mesh.normals.norm(dim=-1), torch.ones(8))
+    with pytest.raises(InputError, match="not found"):
+        load_mesh(tmp_path / "nope.obj")
+    (tmp_path / "junk.ply").write_bytes(b"ply\nformat nonsense\n")
+    with pytest.raises(InputError, match="junk.ply"):
+        load_mesh(tmp_path / "junk.ply")
+
+
+def test_fit_camera_frames_the_mesh():
+    v = torch.randn(200, 3) * torch.tensor([3.0, 1.0, 0.5]) + 10
+    uv = fit_camera(v, (64, 96)).project(v)[0]
+    assert (uv[:, 0] > 0).all() and (uv[:, 0] < 96).all() and (uv[:, 1] > 0).all() and (uv[:, 1] < 64).all()
+
+
+def test_shadow_under_the_sphere(tmp_path):
+    path = sphere_over_plane(tmp_path / "sp.ply")
+    up = directional_light([0.0, 0.0, 1.0], 1.0, sharpness=20.0) + ambient_light(0.05)
+    occ = render_mesh_file(path, up, size=96, n_dirs=128)
+    flat = render_mesh_file(path, up, size=96, n_dirs=128, occlusion=False)
+    # Ground pixels: normals pointing up. Under the sphere (image centre column) occlusion darkens them.
+    ground = (occ.normals[0][..., 1] > 0.99) & (occ.alpha[0] > 0)
+    dark = (occ.image[0].mean(-1) < 0.5 * flat.image[0].mean(-1)) & ground
+    assert dark.sum() > 20 and dark.sum() < 0.5 * ground.sum()
+    # Ground far to the sides of the sphere sees almost the whole sky either way.
+    cols = torch.arange(96)
+    far = ground & ((cols - 48).abs() > 22)[None, :]
+    assert far.sum() > 20
+    assert (occ.image[0][far] - flat.image[0][far]).abs().mean() < 0.05 * flat.image[0][far].mean()
+    bounced = render_mesh_file(path, up, size=96, n_dirs=128, bounces=1)
+    assert bounced.image[0][ground].mean() > occ.image[0][ground].mean()
+
+
+def test_render_body_frames_streams_a_motion(anny_body):
+    motion = make_motion("walk", 3, seed=1)
+    alb = default_albedo(anny_body, texture_size=64)
+    frames = list(render_body_frames(anny_body, motion, ambient_light(1.0) + directional_light([1.0, 0.0, 0.0]),
+                                     TexturedAlbedo(alb.texture, anny_body.uv, anny_body.uv_faces), size=64,
+                                     n_dirs=16, maps=True, vertex_albedo=alb.vertex))
+    assert [f.index for f in frames] == [0, 1, 2]
+    for f in frames:
+        assert f.render.image.shape == (1, 64, 64, 3) and f.transport.shape == (anny_body.num_verts, 9)
+        assert 0.02 < f.render.alpha.mean() < 0.5
+    assert not torch.equal(frames[0].render.image, frames[2].render.image)
+    seq = torch.stack([ambient_light(1.0)] * 2)
+    with pytest.raises(InputError, match="2 frames but the motion has 3"):
+        list(render_body_frames(anny_body, motion, seq, alb.vertex, size=32, n_dirs=8))

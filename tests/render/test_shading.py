@@ -1,0 +1,68 @@
+import pytest
+import torch
+
+from relightnet.checks import InputError, ShapeError
+from relightnet.render.shading import Shade, composite, shade, shading
+from relightnet.sh import irradiance, sh_basis
+
+
+def _normals(n, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return torch.nn.functional.normalize(torch.randn(n, 3, generator=g, dtype=torch.float64), dim=-1)
+
+
+def test_unoccluded_closed_form_shading_equals_irradiance():
+    # T_k = A_l Y_k(n) makes T.L the irradiance (DESIGN.md closed form).
+    n = _normals(37)
+    a = torch.tensor([3.141592653589793] + [2.0943951023931953] * 3 + [0.7853981633974483] * 5, dtype=n.dtype)
+    T = sh_basis(n, 2) * a
+    L = torch.randn(9, 3, dtype=n.dtype)
+    torch.testing.assert_close(shading(T, L), irradiance(L, n))
+    alb = torch.rand(37, 3, dtype=n.dtype)
+    torch.testing.assert_close(shade(alb, T, L), alb * irradiance(L, n))
+
+
+@pytest.mark.parametrize("n", [1, 4, 7, 4096 + 3])
+def test_grouped_gemm_matches_plain_matmul(n):
+    T = torch.randn(n, 9)
+    L = torch.randn(9, 3)
+    torch.testing.assert_close(shading(T, L), T @ L, atol=1e-5, rtol=1e-5)
+
+
+def test_image_batch_light_and_per_channel_transport():
+    T = torch.randn(2, 5, 6, 9)
+    A = torch.rand(2, 5, 6, 3)
+    L = torch.randn(2, 9, 3)
+    out = shade(A, T, L)
+    torch.testing.assert_close(out[1], A[1] * (T[1] @ L[1]), atol=1e-5, rtol=1e-5)
+    Tc = torch.randn(4, 9, 3)
+    torch.testing.assert_close(shading(Tc, L[0]), torch.einsum("vkc,kc->vc", Tc, L[0]))
+    torch.testing.assert_close(Shade(L[0])(A[0], T[0]), shade(A[0], T[0], L[0]))
+
+
+def test_gradients_flow():
+    T = torch.randn(3, 9, requires_grad=True)
+    A = torch.rand(3, 3, requires_grad=True)
+    L = torch.randn(9, 3, requires_grad=True)
+    shade(A, T, L).sum().backward()
+    assert T.grad is not None and A.grad is not None and L.grad is not None
+
+
+def test_composite():
+    fg = torch.ones(1, 2, 2, 3)
+    bg = torch.zeros(2, 2, 3)
+    alpha = torch.tensor([[[1.0, 0.0], [0.5, 0.0]]])
+    out = composite(fg, alpha, bg)
+    assert out[0, 0, 0].tolist() == [1, 1, 1] and out[0, 0, 1].tolist() == [0, 0, 0]
+    assert out[0, 1, 0].tolist() == [0.5, 0.5, 0.5]
+
+
+def test_bad_inputs():
+    with pytest.raises(ShapeError, match="light: expected K"):
+        shading(torch.randn(4, 8), torch.randn(8, 3))
+    with pytest.raises(ShapeError, match="transport: expected"):
+        shading(torch.randn(4, 4), torch.randn(9, 3))
+    with pytest.raises(InputError, match="light: contains NaN"):
+        shade(torch.rand(4, 3), torch.randn(4, 9), torch.full((9, 3), float("nan")))
+    with pytest.raises(ShapeError, match="alpha"):
+        composite(torch.ones(1, 2, 2, 3), torch.ones(1, 3, 2), torch.zeros(2, 2, 3))
