@@ -1,0 +1,136 @@
+"""Synthetic data generator throughput: samples/s at 256² with 1 and 2 worker processes.
+
+Run: ``.venv/bin/python benchmarks/bench_synth.py [--n 16] [--res 256]`` (ANNY_CACHE_DIR set by make).
+
+1. Where a sample's time goes (one process, one torch thread, as a worker runs): body
+   model, PRT (``vertex_transport`` with and without occlusion), raster (``render_mesh``,
+   ``interpolate``, ``antialias``), the rest of the generator (lights, textures,
+   backgrounds, framing), and the shard write (stack + deflate + sha256). The phases are
+   timed by wrapping those functions for this run only. Medians over samples.
+2. Throughput of ``run_synth``'s pool (W workers, each generating and writing whole shards),
+   steady state from the moment every worker has made its first sample to the last shard
+   written, W = 1 and 2 side by side, and the ratio. Goal: ≥ 2 samples/s with 2 workers on 2 cores.
+3. One whole ``run_synth`` call with 2 workers (pool start-up, manifest, checksums included).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import torch
+
+sys.path.insert(0, os.path.dirname(__file__))
+from common import table  # noqa: E402
+
+from relightnet.body import AnnyBody  # noqa: E402
+from relightnet.data import SynthConfig, synth  # noqa: E402
+from relightnet.data import render_sample as rs  # noqa: E402
+from relightnet.data.generate import generate_sample, prepare_assets  # noqa: E402
+from relightnet.data.shards import stack_samples, write_shard  # noqa: E402
+
+_PHASES = {"PRT": ("vertex_transport",), "raster": ("render_mesh", "interpolate", "antialias")}
+
+
+def _timed(fn, bucket: list):
+    def wrapper(*a, **k):
+        t0 = time.perf_counter()
+        try:
+            return fn(*a, **k)
+        finally:
+            bucket[0] += time.perf_counter() - t0
+    return wrapper
+
+
+def bench_phases(cfg: SynthConfig, n: int) -> list:
+    """Per-phase medians (ms/sample) of n samples generated in this process, one thread."""
+    torch.set_num_threads(1)
+    assets = prepare_assets()
+    buckets = {name: [0.0] for name in ("body", *_PHASES)}
+    saved = {f: getattr(rs, f) for fs in _PHASES.values() for f in fs}
+    forward = AnnyBody.forward
+    for phase, fs in _PHASES.items():
+        for f in fs:
+            setattr(rs, f, _timed(saved[f], buckets[phase]))
+    AnnyBody.forward = _timed(forward, buckets["body"])
+    per = defaultdict(list)
+    samples = []
+    try:
+        generate_sample(cfg, "train", 10_000, assets)  # warm-up: env maps, region labels
+        for i in range(n):
+            for b in buckets.values():
+                b[0] = 0.0
+            t0 = time.perf_counter()
+            samples.append(generate_sample(cfg, "train", i, assets))
+            total = time.perf_counter() - t0
+            for k, b in buckets.items():
+                per[k].append(b[0])
+            per["other generator work"].append(total - sum(b[0] for b in buckets.values()))
+            per["generate (total)"].append(total)
+    finally:
+        for f, fn in saved.items():
+            setattr(rs, f, fn)
+        AnnyBody.forward = forward
+    with tempfile.TemporaryDirectory() as d:
+        t0 = time.perf_counter()
+        arrays = stack_samples(samples)
+        info = write_shard(Path(d) / "train-00000.npz", arrays)
+        per["write (stack + deflate + sha256)"] = [(time.perf_counter() - t0) / n]
+    med = {k: statistics.median(v) * 1e3 for k, v in per.items()}
+    total = med["generate (total)"] + med["write (stack + deflate + sha256)"]
+    rows = [[k, med[k], f"{100 * med[k] / total:.0f}%"] for k in
+            ("body", "PRT", "raster", "other generator work", "write (stack + deflate + sha256)")]
+    rows.append(["total", total, "100%"])
+    return rows, info["bytes"] / n / 1e6
+
+
+def bench_pool(cfg: SynthConfig, workers: int, n: int) -> tuple[float, float]:
+    """Steady-state samples/s of run_synth's pool (workers generate and write whole shards), and start-up s."""
+    stamps = []
+    with tempfile.TemporaryDirectory() as d:
+        tasks = [(cfg.to_dict(), "train", i, d, "deflate") for i in range(n // cfg.shard_size)]
+        t_start = time.perf_counter()
+        synth.run_pool(tasks, workers, on_result=lambda r: None, on_tick=lambda: stamps.append(time.perf_counter()))
+        t_end = time.perf_counter()
+    first = sorted(stamps)[workers - 1]  # every worker has made its first sample
+    return (len(stamps) - workers) / (t_end - first), first - t_start
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=16, help="samples per measurement (default: 16)")
+    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--repeat", type=int, default=3, help="pool runs per worker count (default: 3)")
+    args = ap.parse_args()
+    cfg = SynthConfig(res=args.res, shard_size=8)
+    print(f"## Synthetic data: {args.res}², K = {cfg.n_coeffs}, {cfg.n_dirs} PRT directions, "
+          f"{os.cpu_count()} CPUs, torch {torch.__version__}\n")
+    rows, mb = bench_phases(cfg, max(4, args.n // 2))
+    print(table(["phase (1 process, 1 thread)", "ms / sample (median)", "share"], rows))
+    print(f"\nshard size: {mb:.2f} MB per sample (deflate)\n")
+    runs = {1: [], 2: []}
+    for _ in range(args.repeat):  # interleaved, so both see the same machine noise
+        for w in runs:
+            runs[w].append(bench_pool(cfg, w, args.n))
+    res = {w: (statistics.median(r for r, _ in v), statistics.median(s for _, s in v)) for w, v in runs.items()}
+    print(table(["workers", "samples/s (steady, median)", "pool start-up s", "vs 1 worker", "vs goal 2/s"],
+                [[w, r, s, f"{r / res[1][0]:.2f}x", f"{r / 2.0:.2f}x"] for w, (r, s) in res.items()]))
+    print(f"\n(medians of {args.repeat} runs of {args.n} samples in shards of {cfg.shard_size}; start-up = until "
+          "every worker has made its first sample, with the forkserver already running)")
+    with tempfile.TemporaryDirectory() as d:
+        c = cfg.replace(counts={"train": args.n, "val": 0, "test": 0})
+        t0 = time.perf_counter()
+        synth.run_synth(Path(d) / "ds", c, workers=2, progress=False)
+        wall = time.perf_counter() - t0
+    print(f"\nrun_synth end to end, 2 workers, {args.n} samples: {wall:.1f} s = {args.n / wall:.2f} samples/s "
+          "(pool start-up, manifest and checksums included)")
+
+
+if __name__ == "__main__":
+    main()

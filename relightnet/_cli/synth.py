@@ -1,0 +1,142 @@
+"""``relightnet synth``: make, verify or preview a synthetic dataset folder."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import sys
+from pathlib import Path
+
+from .common import add_command
+
+logger = logging.getLogger("relightnet.synth")
+
+_DESCRIPTION = """\
+Make a synthetic training set of people (Anny bodies, clothes, env-map and procedural lights)
+with ground truth albedo, SH transport and light, as shards + manifest.json in --out.
+
+Settings: SynthConfig defaults, then --config FILE, then the flags given. --count N sets the
+train count; val and test keep the config's proportions to train (defaults 64:8:16, so
+N/8 and N/4, rounded up) unless --split-count sets them. Running the same command again
+resumes: finished shards are checked (sha256) and kept; other settings are an error.
+--sequence T makes clips of T frames instead (shard_size clips per shard, a frame axis
+after the sample axis)."""
+
+
+def _split_count(text: str):
+    from ..data import SPLITS
+
+    k, sep, v = text.partition("=")
+    if not sep or k not in SPLITS:
+        raise argparse.ArgumentTypeError(f"expected SPLIT=N with SPLIT in {', '.join(SPLITS)}, got {text!r}")
+    try:
+        return k, int(v)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer after '{k}=', got {v!r}") from None
+
+
+def build_config(args: argparse.Namespace):
+    """The SynthConfig the arguments ask for (config file, then flags)."""
+    from ..checks import InputError
+    from ..data import SynthConfig, load_config
+
+    cfg = load_config(args.config) if args.config else SynthConfig()
+    changes = {k: v for k, v in (("res", args.res), ("seed", args.seed), ("n_dirs", args.n_dirs),
+                                 ("shard_size", args.shard_size), ("lmax", args.lmax),
+                                 ("sequence_frames", args.sequence)) if v is not None}
+    counts = dict(cfg.counts)
+    if args.count is not None:
+        if args.count < 0:
+            raise InputError(f"--count: expected an integer >= 0, got {args.count}")
+        base = max(1, counts.get("train", 0))
+        for s in ("val", "test"):
+            counts[s] = math.ceil(args.count * counts.get(s, 0) / base) if counts.get("train", 0) else counts.get(s, 0)
+        counts["train"] = args.count
+    for s, n in args.split_count or []:
+        if n < 0:
+            raise InputError(f"--split-count {s}: expected an integer >= 0, got {n}")
+        counts[s] = n
+    return cfg.replace(counts=counts, **changes)
+
+
+def _verify(root: str) -> int:
+    from ..data.shards import verify_dataset
+
+    report = verify_dataset(root)
+    if report.problems:
+        for p in report.problems:
+            sys.stderr.write(f"{p}\n")
+        return 1
+    counts = ", ".join(f"{s} {n}" for s, n in report.counts.items() if n)
+    print(f"{root}: ok ({report.n_shards} shards; {counts or 'no'} samples)")
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..checks import InputError
+
+    if args.verify:
+        return _verify(args.verify)
+    if args.preview:
+        from ..data.preview import preview
+
+        path = preview(args.preview, args.out, n=args.n, split=args.split)
+        logger.info("wrote %s", path)
+        return 0
+    if not args.out:
+        raise InputError("--out: a dataset folder is required (or use --verify DIR / --preview DIR)")
+    from ..data import SPLITS
+    from ..data.synth import default_workers, run_synth
+
+    cfg = build_config(args)
+    workers = default_workers() if args.workers is None else args.workers
+    if workers < 0:
+        raise InputError(f"--workers: expected an integer >= 0, got {workers}")
+    splits = None if not args.splits else [s.strip() for s in args.splits.split(",") if s.strip()]
+    try:
+        m = run_synth(Path(args.out), cfg, workers=workers, splits=splits, progress=not args.quiet,
+                      compression=args.compression)
+    except KeyboardInterrupt:
+        sys.stderr.write(f"relightnet synth: interrupted; run the same command again to resume {args.out}\n")
+        return 130
+    made = ", ".join(f"{s} {sum(e['count'] for e in v['shards'])}/{v['count']}"
+                     for s, v in sorted(m["splits"].items(), key=lambda kv: SPLITS.index(kv[0])) if v["count"])
+    logger.info("%s: %s (%s)", args.out, "complete" if m["complete"] else "partial", made)
+    return 0
+
+
+def register(sub) -> None:
+    p = add_command(
+        sub, "synth", "Make, verify or preview a synthetic dataset (shards + manifest.json).",
+        "  relightnet synth --out data/synth --count 1000 --res 256 --seed 0 --workers 2\n"
+        "  relightnet synth --out data/tiny --count 8 --res 64 --n-dirs 32 --split-count test=0\n"
+        "  relightnet synth --out data/big --config synth.yaml --splits train\n"
+        "  relightnet synth --out data/clips --sequence 16 --count 32 --res 128\n"
+        "  relightnet synth --verify data/synth\n"
+        "  relightnet synth --preview data/synth --out sheet.png --n 8\n",
+    )
+    p.description = _DESCRIPTION
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--verify", metavar="DIR", help="check a dataset folder (checksums, shapes, counts); "
+                      "prints one line per problem and exits 1 if any")
+    mode.add_argument("--preview", metavar="DIR", help="write a contact sheet PNG of a dataset folder (rows: samples; "
+                      "columns: image, composite, albedo, shading, mask, normals, transport bands, occlusion)")
+    p.add_argument("--out", help="dataset folder to make or resume; with --preview the PNG (default DIR/preview.png)")
+    p.add_argument("--count", type=int, help="train samples (or clips); val/test follow the config's proportions")
+    p.add_argument("--split-count", type=_split_count, action="append", metavar="SPLIT=N",
+                   help="exact count of one split, e.g. val=50 or test=0; repeatable")
+    p.add_argument("--splits", help="comma-separated splits to make now (default: all with a count)")
+    p.add_argument("--res", type=int, help="image side in pixels, a multiple of 16 (default: 256)")
+    p.add_argument("--seed", type=int, help="master seed (default: 0)")
+    p.add_argument("--n-dirs", type=int, help="PRT directions of the ground-truth transport (default: 128)")
+    p.add_argument("--shard-size", type=int, help="samples per shard file (default: 16)")
+    p.add_argument("--lmax", type=int, help="SH order of lights and transports (default: 2, K = 9)")
+    p.add_argument("--sequence", type=int, metavar="T", help="make clips of T frames instead of still samples")
+    p.add_argument("--config", help="a .yaml/.json SynthConfig file (flags override its values)")
+    p.add_argument("--workers", type=int, help="generator processes (default: the CPUs available; 0: in-process)")
+    p.add_argument("--compression", choices=("deflate", "store"), default="deflate",
+                   help="shard compression (default: deflate)")
+    p.add_argument("--n", type=int, default=8, help="--preview: samples (rows) in the sheet (default: 8)")
+    p.add_argument("--split", help="--preview: split to show (default: the first with shards)")
+    p.set_defaults(func=run)

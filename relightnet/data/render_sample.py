@@ -1,0 +1,267 @@
+"""The core of the generator: draw every axis, place, frame, compute PRT, render (one still or a clip).
+
+See :mod:`relightnet.data.generate` for the public functions and what the arrays hold.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+
+from ..io.image import to_uint8
+from ..prt import vertex_transport
+from ..raster import antialias, interpolate, perspective_camera
+from ..render.frame import TexturedAlbedo, render_mesh
+from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
+from .backgrounds import envmap_background, procedural_background
+from .config import SynthConfig
+from .framing import camera_intrinsics, crop_camera
+from .lights import LUMA, LightDraw, light_at, sample_light
+from .poses import sample_phenotype, sample_pose, sample_yaw
+from .sample import GENERATOR_VERSION, Sample, SynthAssets
+from .textures import paint_albedo, sample_outfit, vertex_albedo
+
+__all__ = ["CLIP_KEY", "STREAMS", "render_clip"]
+
+#: Random streams, one child of the sample's seed sequence each (in this order).
+STREAMS = ("body", "pose", "view", "albedo", "light", "background", "prt", "noise")
+#: Clips draw from child ``CLIP_KEY`` of the sample's seed sequence.
+CLIP_KEY = 100
+_SWITCH_PROB = 0.3
+
+
+def _streams(ss: np.random.SeedSequence) -> dict[str, np.random.Generator]:
+    kids = np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key).spawn(len(STREAMS))
+    return {n: np.random.default_rng(k) for n, k in zip(STREAMS, kids, strict=True)}
+
+
+def _rot_x(a: float) -> torch.Tensor:
+    c, s = math.cos(a), math.sin(a)
+    return torch.tensor([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]], dtype=torch.float64)
+
+
+def _rot_y(a: float) -> torch.Tensor:
+    c, s = math.cos(a), math.sin(a)
+    return torch.tensor([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]], dtype=torch.float64)
+
+
+def _view(rng: np.random.Generator, cfg: SynthConfig) -> dict:
+    """Camera placement and crop mode (all draws in a fixed order)."""
+    partial = bool(rng.uniform() < cfg.partial_crop_prob)
+    mode = ("upper", "head")[int(rng.integers(2))] if partial else "full"
+    return {
+        "mode": mode,
+        "distance": float(rng.uniform(1.3, 3.0) if partial else rng.uniform(2.5, 6.0)),
+        "height": float(rng.uniform(0.6, 1.9)),
+        "lateral": float(rng.uniform(-0.4, 0.4)),
+        "pitch_noise": float(rng.normal(0.0, math.radians(3))),
+    }
+
+
+def _place(verts, normals, joints, view: dict, yaw: float):
+    """World (T, V, 3) → camera frame: yaw about the pelvis, camera at distance/height, pitched.
+
+    Returns v_cam, n_cam (T, V, 3) float32, R (3, 3) pitch rotation, pitch, world→camera (4, 4).
+    """
+    v = verts.double()
+    root = joints[0, 0].double()
+    pivot = torch.tensor([float(root[0]), 0.0, float(root[2])], dtype=torch.float64)
+    Ry = _rot_y(yaw)
+    v = (v - pivot) @ Ry.T + pivot
+    n = normals.double() @ Ry.T
+    y0, y1 = float(v[..., 1].min()), float(v[..., 1].max())
+    target = {"full": (y0 + y1) / 2, "upper": y1 - 0.25 * (y1 - y0), "head": y1 - 0.1 * (y1 - y0)}[view["mode"]]
+    eye = pivot + torch.tensor([view["lateral"], view["height"], view["distance"]], dtype=torch.float64)
+    pitch = math.atan2(view["height"] - target, view["distance"]) + view["pitch_noise"]
+    R = _rot_x(pitch)
+    w2c = torch.eye(4, dtype=torch.float64)  # world (before yaw) → camera
+    w2c[:3, :3] = R @ Ry
+    w2c[:3, 3] = R @ (pivot - Ry @ pivot - eye)
+    n_cam = n @ R.T
+    n_cam = n_cam / n_cam.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    return ((v - eye) @ R.T).float(), n_cam.float(), R, pitch, w2c
+
+
+def _base_camera():
+    return perspective_camera(torch.eye(4)[None], (1024, 1024), intrinsics=(1000.0, 1000.0, 512.0, 512.0),
+                              near=0.05)
+
+
+def _light_to_env(draw: LightDraw, angle: float, tilt: torch.Tensor) -> torch.Tensor:
+    """Q with L(ω) = base(Q ω): mirror · R_upᵀ · tiltᵀ."""
+    M = torch.diag(torch.tensor([1.0, -1.0 if draw.mirror else 1.0, 1.0], dtype=torch.float64))
+    return M @ rotation_about_up(angle, dtype=torch.float64).T @ tilt.double().T
+
+
+def _light_schedule(rng, cfg: SynthConfig, split: str, n: int | None) -> tuple[list, list, list]:
+    """Draws and per-frame (draw index, angle, level) for a still (n None) or a clip of n frames."""
+    a = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob)
+    if n is None:
+        return [a], [(0, a.angle, a.level)], []
+    b = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob)
+    rates = [(0.0 if rng.uniform() < 0.25 else math.radians(rng.uniform(-60, 60)), rng.uniform(-0.4, 0.4))
+             for _ in range(2)]
+    switch = int(rng.integers(1, n)) if n > 1 and rng.uniform() < _SWITCH_PROB else None
+    frames = []
+    for t in range(n):
+        i = 0 if switch is None or t < switch else 1
+        dt = (t - (0 if i == 0 else switch)) / 30.0
+        d = (a, b)[i]
+        frames.append((i, d.angle + rates[i][0] * dt, d.level * math.exp(rates[i][1] * dt)))
+    draws = [a, b] if switch is not None else [a]
+    return draws, frames, ([switch] if switch is not None else [])
+
+
+def _silhouette(m: torch.Tensor) -> torch.Tensor:
+    """(H, W) bool: pixels with a 4-neighbour on the other side of the mask boundary.
+
+    Only these take the antialiased composite: between two triangles that share no edge,
+    ``antialias`` also blends inside the mask (at pixel-sized triangles, nearly everywhere).
+    """
+    p = torch.nn.functional.pad(m[None, None].float(), (1, 1, 1, 1), mode="replicate")[0, 0]
+    nb = torch.stack([p[:-2, 1:-1], p[2:, 1:-1], p[1:-1, :-2], p[1:-1, 2:]])
+    return (nb != m.float()).any(0)
+
+
+def _light_meta(d: LightDraw) -> dict:
+    return {**d.info, "rotation_deg": math.degrees(d.angle), "mirror": d.mirror, "level": d.level}
+
+
+def _background(rng, cfg, split, assets: SynthAssets, draw: LightDraw, angle, tilt, intr, subject: float):
+    use_light_env = draw.source == "hdri" and rng.uniform() < 0.6
+    use_env = rng.uniform() < 0.3
+    hdris = cfg.hdris(split)
+    name = hdris[int(rng.integers(len(hdris)))]
+    r_angle, r_mirror = float(rng.uniform(0, 2 * math.pi)), bool(rng.uniform() < 0.5)
+    blur = float(rng.uniform(0.002, 0.02) * cfg.res)
+    factor = float(math.exp(rng.uniform(math.log(0.35), math.log(2.5))))
+    sub = np.random.default_rng(int(rng.integers(2**31 - 1)))
+    if use_light_env:
+        gains = torch.tensor(draw.info["white_balance"], dtype=torch.float32)
+        gain = math.pi * draw.info["scale"] * draw.level * gains
+        img = envmap_background(assets.envmap(draw.hdri), intr, cfg.res, _light_to_env(draw, angle, tilt),
+                                gain, blur)
+        return img, {"kind": "envmap", "hdri": draw.hdri, "matches_light": True, "blur_px": blur}
+    if use_env:
+        q = torch.diag(torch.tensor([1.0, -1.0 if r_mirror else 1.0, 1.0], dtype=torch.float64))
+        q = q @ rotation_about_up(r_angle, dtype=torch.float64).T
+        img = envmap_background(assets.envmap(name), intr, cfg.res, q, 1.0, blur)
+        mean = float((img @ torch.tensor(LUMA)).mean())
+        img = img * (factor * subject / max(mean, 1e-6))
+        return img, {"kind": "envmap", "hdri": name, "matches_light": False, "rotation_deg": math.degrees(r_angle),
+                     "mirror": r_mirror, "blur_px": blur, "level": factor * subject}
+    return procedural_background(sub, cfg.res, factor * subject)
+
+
+def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
+                n_frames: int | None) -> Sample:
+    """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames."""
+    T = 1 if n_frames is None else n_frames
+    r = _streams(ss)
+    body = assets.body
+    phen = sample_phenotype(r["body"], cfg.ages)
+    params, pose_desc = sample_pose(r["pose"], n_frames=T)
+    yaw = sample_yaw(r["pose"])
+    view = _view(r["view"], cfg)
+    outfit = sample_outfit(r["albedo"])
+    draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
+    dir_seed = int(r["prt"].integers(2**31 - 1))
+    bounce = bool(r["prt"].uniform() < cfg.bounce_prob)
+
+    with torch.no_grad():
+        out = body(pose=params["pose"], trans=params["trans"], phenotype=phen)
+    v_cam, n_cam, R, pitch, w2c = _place(out.verts, out.normals, out.joints, view, yaw)
+    cam, box = crop_camera(v_cam.reshape(-1, 3), _base_camera(), cfg.res, cfg.pad, cfg.jitter, r["view"],
+                           view["mode"])
+    intr = camera_intrinsics(cam)
+    regions = assets.region_field(outfit["sleeves"], outfit["legs"], "none" if outfit["hair"] is None else "short")
+    tex = paint_albedo(assets.atlas, regions, outfit)
+    talb = TexturedAlbedo(tex, body.uv, body.uv_faces)
+    grey = vertex_albedo(assets.atlas, tex).mean(1) if bounce else None
+    tilt = rotation_world_to_light(R).float()
+    faces = body.faces
+    field = torch.as_tensor(regions)
+    threads = torch.get_num_threads()
+
+    keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")
+    acc = {k: [] for k in keys}
+    clips, frs = [], []
+    for t in range(T):
+        i, angle, level = frames[t]
+        light = light_at(draws[i], angle, level, tilt)
+        kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=dir_seed, threads=threads)
+        Tv = vertex_transport(v_cam[t], faces, n_cam[t], occlusion=True, bounces=int(bounce), albedo=grey, **kw)
+        Tu = vertex_transport(v_cam[t], faces, n_cam[t], occlusion=False, **kw)
+        rend = render_mesh(v_cam[t], faces, Tv, talb, light, cam, normals=n_cam[t], maps=True)
+        fr = rend.frags
+        reg = torch.einsum("nk,nkr->nr", fr.pix_bary.float(), field[faces[fr.pix_face]]).argmax(1)
+        parts = torch.zeros(cfg.res * cfg.res, dtype=torch.uint8)
+        parts.index_copy_(0, fr.pix, (reg + 1).to(torch.uint8))
+        acc["image"].append(rend.image[0])
+        acc["mask"].append(rend.alpha[0])
+        acc["albedo"].append(rend.albedo[0])
+        acc["transport"].append(rend.transport[0])
+        acc["transport_unoccluded"].append(interpolate(Tu, fr, faces)[0])
+        acc["light"].append(light)
+        acc["normals"].append(world_to_light(rend.normals[0]))
+        acc["depth"].append(torch.nan_to_num(rend.depth[0], posinf=0.0))
+        acc["parts"].append(parts.view(cfg.res, cfg.res))
+        clips.append(cam.transform(v_cam[t]))
+        frs.append(fr)
+
+    m0 = acc["mask"][0] > 0
+    lum0 = acc["image"][0] @ torch.tensor(LUMA)
+    subject = float(lum0[m0].mean()) if bool(m0.any()) else 0.2
+    i0, a0, _ = frames[0]
+    bg, bg_desc = _background(r["background"], cfg, split, assets, draws[i0], a0, tilt, intr, subject)
+    sigma = float(cfg.noise_std)
+    srgb, comp = [], []
+    for t in range(T):
+        mask = acc["mask"][t][..., None]
+        lin = acc["image"][t] * mask + bg * (1 - mask)
+        aa = antialias(lin[None], frs[t], clips[t], faces)[0]
+        lin = torch.where(_silhouette(mask[..., 0] > 0)[..., None], aa, lin)
+        if sigma > 0:
+            noise = torch.from_numpy(r["noise"].normal(0.0, sigma, (cfg.res, cfg.res, 3)).astype(np.float32))
+            acc["image"][t] = acc["image"][t] + noise * mask
+            lin = lin + noise
+        srgb.append(to_uint8(acc["image"][t]))
+        comp.append(to_uint8(lin))
+
+    arrays = {k: torch.stack(v) for k, v in acc.items()}
+    arrays["image_srgb"] = torch.stack(srgb)
+    arrays["image_composite"] = torch.stack(comp)
+    arrays["background"] = bg[None].expand(T, -1, -1, -1)
+    out_arrays = {}
+    for k, v in arrays.items():
+        a = v.detach().cpu().numpy()
+        a = a if a.dtype in (np.uint8,) else a.astype(np.float32)
+        out_arrays[k] = np.ascontiguousarray(a[0] if n_frames is None else a)
+
+    meta = {
+        "generator_version": GENERATOR_VERSION,
+        "kind": "still" if n_frames is None else "sequence",
+        "seed": {"seed": cfg.seed, "split": split, "index": index},
+        "phenotype": phen,
+        "pose": {**pose_desc, "yaw_deg": math.degrees(yaw)},
+        "outfit": {"skin_tone": outfit["skin_tone"], "hair": outfit["hair"] is not None, "sleeves": outfit["sleeves"],
+                   "legs": outfit["legs"], **{g: outfit[g]["pattern"] for g in ("top", "bottom", "shoes")}},
+        "camera": {"intrinsics": list(intr), "res": cfg.res, "view": torch.eye(4).tolist(),
+                   "world_to_camera": w2c.tolist(), "pitch_deg": math.degrees(pitch), "distance": view["distance"],
+                   "height": view["height"], "lateral": view["lateral"], "crop_box": box.as_list(),
+                   "crop_mode": box.mode, "base_intrinsics": [1000.0, 1000.0, 512.0, 512.0]},
+        "light": {**_light_meta(draws[0]), "tilt_deg": math.degrees(pitch)},
+        "background": bg_desc,
+        "flags": {"bounce": bounce, "noise_std": sigma},
+        "prt": {"lmax": cfg.lmax, "n_dirs": cfg.n_dirs, "direction_seed": dir_seed},
+    }
+    if n_frames is not None:
+        meta["lights"] = [_light_meta(d) for d in draws]
+        meta["frames"] = [{"light": i, "rotation_deg": math.degrees(a), "level": lv} for i, a, lv in frames]
+        meta["switch_frames"] = switches
+        meta["n_frames"] = n_frames
+        meta["fps"] = 30.0
+    return Sample(out_arrays, meta)
+

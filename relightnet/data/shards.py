@@ -1,0 +1,301 @@
+"""Dataset shards: deterministic ``.npz`` files of stacked samples, their layout, the manifest, verification.
+
+A shard holds ``n`` consecutive samples of one split. Every sample field is stacked on
+axis 0 (``image`` (n, H, W, 3), ``transport`` (n, H, W, K), ``light`` (n, K, 3), ...;
+clips of a sequence dataset add a frame axis: (n, T, H, W, 3)), channels-last as the
+generator makes them. The per-sample metadata is the ``meta`` entry: an (n,) unicode
+array of JSON objects (``np.load`` reads it without pickle).
+
+Shards are byte-for-byte reproducible: :func:`write_shard` writes the zip itself with
+fixed entry dates (1980-01-01), fixed permissions, sorted entry order and one
+compression setting, so the same arrays always give the same file and sha256. Files are
+written atomically (temporary file + rename).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..checks import InputError
+from ..io import atomic_write
+from .config import SPLITS, SynthConfig
+
+__all__ = [
+    "MANIFEST_NAME",
+    "FORMAT",
+    "load_manifest",
+    "dataset_config",
+    "VerifyReport",
+    "verify_dataset",
+    "SAMPLE_FIELDS",
+    "shard_name",
+    "shard_plan",
+    "expected_fields",
+    "write_shard",
+    "read_shard",
+    "read_shard_meta",
+    "stack_samples",
+    "file_sha256",
+]
+
+#: Per-sample fields the generator makes: name → (shape, dtype). ``H``/``W`` are
+#: ``cfg.res``, ``K`` is ``cfg.n_coeffs``; sequence datasets add ``T`` after the sample axis.
+SAMPLE_FIELDS = {
+    "image": (("H", "W", 3), "float32"),
+    "image_srgb": (("H", "W", 3), "uint8"),
+    "mask": (("H", "W"), "float32"),
+    "albedo": (("H", "W", 3), "float32"),
+    "transport": (("H", "W", "K"), "float32"),
+    "transport_unoccluded": (("H", "W", "K"), "float32"),
+    "light": (("K", 3), "float32"),
+    "normals": (("H", "W", 3), "float32"),
+    "depth": (("H", "W"), "float32"),
+    "parts": (("H", "W"), "uint8"),
+    "background": (("H", "W", 3), "float32"),
+    "image_composite": (("H", "W", 3), "uint8"),
+}
+
+MANIFEST_NAME = "manifest.json"
+FORMAT = "relightnet-synth/1"
+_DATE = (1980, 1, 1, 0, 0, 0)
+_COMPRESSION = {"deflate": (zipfile.ZIP_DEFLATED, 1), "store": (zipfile.ZIP_STORED, None)}
+
+
+def shard_name(split: str, index: int) -> str:
+    """File name of shard ``index`` of ``split``: ``train-00003.npz``."""
+    if split not in SPLITS:
+        raise InputError(f"split: expected one of {SPLITS}, got {split!r}")
+    return f"{split}-{int(index):05d}.npz"
+
+
+def shard_plan(cfg: SynthConfig, split: str) -> list[tuple[int, int, int]]:
+    """The shards of a split: ``[(shard_index, first_sample, n_samples), ...]``.
+
+    Shard ``i`` holds samples ``i·shard_size ..`` up to the split's count (the last one may be short).
+    """
+    if split not in SPLITS:
+        raise InputError(f"split: expected one of {SPLITS}, got {split!r}")
+    n, size = int(cfg.counts.get(split, 0)), cfg.shard_size
+    return [(i, s, min(size, n - s)) for i, s in enumerate(range(0, n, size))]
+
+
+def expected_fields(cfg: SynthConfig) -> dict[str, tuple[tuple[int, ...], str]]:
+    """Per-sample shape (without the stacking axis; with T for sequences) and dtype of every field."""
+    sizes = {"H": cfg.res, "W": cfg.res, "K": cfg.n_coeffs}
+    lead = (cfg.sequence_frames,) if cfg.sequence_frames else ()
+    return {
+        name: (lead + tuple(sizes.get(d, d) for d in shape), dtype)
+        for name, (shape, dtype) in SAMPLE_FIELDS.items()
+    }
+
+
+def stack_samples(samples: list) -> dict[str, np.ndarray]:
+    """Stack generator samples (objects with ``arrays`` and ``meta``) into shard arrays.
+
+    Returns:
+        {field: (n, ...) array} plus ``meta``: (n,) unicode JSON strings.
+    """
+    if not samples:
+        raise InputError("stack_samples: expected at least one sample")
+    names = list(samples[0].arrays)
+    for s in samples[1:]:
+        if list(s.arrays) != names:
+            raise InputError(f"stack_samples: samples have different fields: {names} vs {list(s.arrays)}")
+    out = {k: np.stack([np.asarray(s.arrays[k]) for s in samples]) for k in names}
+    if "meta" in out:
+        raise InputError("stack_samples: 'meta' is reserved for the sample metadata")
+    out["meta"] = np.array([json.dumps(s.meta, sort_keys=True, separators=(",", ":")) for s in samples])
+    return out
+
+
+def _npy_bytes(arr: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.lib.format.write_array(buf, np.ascontiguousarray(arr), allow_pickle=False)
+    return buf.getvalue()
+
+
+def write_shard(path, arrays: dict[str, np.ndarray], compression: str = "deflate") -> dict:
+    """Write arrays as a reproducible ``.npz`` (readable by ``np.load``), atomically.
+
+    Args:
+        path: destination ``.npz``; its folder must exist.
+        arrays: {name: array}; no object arrays. Entries are written in sorted name order.
+        compression: ``"deflate"`` (zlib level 1) or ``"store"``.
+
+    Returns:
+        ``{"sha256": hex digest, "bytes": file size}`` of the written file.
+    """
+    if compression not in _COMPRESSION:
+        raise InputError(f"compression: expected one of {sorted(_COMPRESSION)}, got {compression!r}")
+    method, level = _COMPRESSION[compression]
+    path = Path(path)
+    with atomic_write(path) as f:
+        with zipfile.ZipFile(f, "w", compression=method, compresslevel=level, allowZip64=True) as zf:
+            for name in sorted(arrays):
+                arr = np.asarray(arrays[name])
+                if arr.dtype.hasobject:
+                    raise InputError(f"{name}: object arrays cannot go in a shard")
+                info = zipfile.ZipInfo(f"{name}.npy", date_time=_DATE)
+                info.compress_type, info.create_system = method, 3
+                info.external_attr = 0o644 << 16
+                zf.writestr(info, _npy_bytes(arr), compresslevel=level)
+    return {"sha256": file_sha256(path), "bytes": path.stat().st_size}
+
+
+def read_shard(path, fields=None) -> dict[str, np.ndarray]:
+    """Load a shard's arrays (all, or only ``fields``; ``meta`` comes back as a list of dicts).
+
+    Raises:
+        InputError: missing or unreadable file, or a requested field it lacks.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: shard not found")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            names = list(z.files) if fields is None else list(fields)
+            missing = [n for n in names if n not in z.files]
+            if missing:
+                raise InputError(f"{path}: shard has no field(s) {missing}; it has {sorted(z.files)}")
+            out = {n: z[n] for n in names}
+    except InputError:
+        raise
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise InputError(f"{path}: unreadable shard ({type(e).__name__}: {e})") from None
+    if "meta" in out:
+        try:
+            out["meta"] = [json.loads(str(m)) for m in out["meta"]]
+        except ValueError as e:
+            raise InputError(f"{path}: meta is not JSON ({e})") from None
+    return out
+
+
+def read_shard_meta(path) -> list[dict]:
+    """The per-sample metadata of a shard (a list of dicts)."""
+    return read_shard(path, ["meta"])["meta"]
+
+
+def file_sha256(path, chunk: int = 1 << 22) -> str:
+    """sha256 hex digest of a file."""
+    h = hashlib.sha256()
+    with open(os.fspath(path), "rb") as f:
+        while block := f.read(chunk):
+            h.update(block)
+    return h.hexdigest()
+
+
+def load_manifest(out_dir) -> dict:
+    """Read ``out_dir/manifest.json``.
+
+    Raises:
+        InputError: the folder or manifest is missing or not a relightnet dataset manifest.
+    """
+    out_dir = Path(out_dir)
+    if not out_dir.is_dir():
+        raise InputError(f"{out_dir}: dataset folder not found")
+    path = out_dir / MANIFEST_NAME
+    if not path.is_file():
+        raise InputError(f"{path}: no manifest (not a dataset folder made by 'relightnet synth')")
+    try:
+        m = json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise InputError(f"{path}: unreadable manifest ({e})") from None
+    if not isinstance(m, dict) or m.get("format") != FORMAT:
+        raise InputError(f"{path}: expected a manifest of format {FORMAT!r}")
+    return m
+
+
+def dataset_config(manifest: dict) -> SynthConfig:
+    """The :class:`SynthConfig` a manifest records."""
+    return SynthConfig.from_dict(manifest["config"])
+
+
+@dataclass(frozen=True)
+class VerifyReport:
+    """What :func:`verify_dataset` found: ``problems`` (one line each; empty when all is well)."""
+
+    problems: tuple
+    n_shards: int
+    counts: dict
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+def verify_dataset(out_dir) -> VerifyReport:
+    """Check a dataset folder against its manifest and config.
+
+    Every shard listed must exist with its size and sha256; every planned shard must be
+    listed; every field must have shape (n, *per-sample shape from the config: res, K, T)
+    and the expected dtype; the ``meta`` entry must hold n JSON objects; the samples must
+    add up to the split counts; no unlisted shard files.
+
+    Returns:
+        A :class:`VerifyReport`; a missing or unreadable manifest is reported as a problem.
+    """
+    out_dir = Path(out_dir)
+    problems: list[str] = []
+    try:
+        manifest = load_manifest(out_dir)
+        cfg = dataset_config(manifest)
+    except (InputError, KeyError, TypeError) as e:
+        return VerifyReport((str(e) if isinstance(e, InputError) else f"{out_dir}: bad manifest ({e})",), 0, {})
+    expected = expected_fields(cfg)
+    listed, n_shards, counts = set(), 0, {}
+    for split in SPLITS:
+        info = manifest.get("splits", {}).get(split, {})
+        entries = {e.get("index"): e for e in info.get("shards", [])}
+        counts[split] = 0
+        for index, start, count in shard_plan(cfg, split):
+            name = shard_name(split, index)
+            listed.add(name)
+            e = entries.get(index)
+            path = out_dir / name
+            if e is None:
+                problems.append(f"{path}: not made yet (run 'relightnet synth' again with the same settings)")
+                continue
+            if (e.get("start"), e.get("count")) != (start, count):
+                problems.append(f"{path}: manifest says samples {e.get('start')}+{e.get('count')}, "
+                                f"config says {start}+{count}")
+                continue
+            if not path.is_file():
+                problems.append(f"{path}: missing")
+                continue
+            if path.stat().st_size != e.get("bytes"):
+                problems.append(f"{path}: {path.stat().st_size} bytes, manifest says {e.get('bytes')}")
+                continue
+            if file_sha256(path) != e.get("sha256"):
+                problems.append(f"{path}: sha256 mismatch (corrupted or changed)")
+                continue
+            try:
+                arrays = read_shard(path)
+            except InputError as err:
+                problems.append(str(err))
+                continue
+            for field, (shape, dtype) in expected.items():
+                a = arrays.get(field)
+                if a is None:
+                    problems.append(f"{path}: field {field!r} missing")
+                elif a.shape != (count, *shape) or str(a.dtype) != dtype:
+                    problems.append(f"{path}: {field} is {a.dtype}{list(a.shape)}, expected {dtype}{[count, *shape]}")
+            for field, a in arrays.items():
+                if field not in expected and len(a) != count:
+                    problems.append(f"{path}: {field} has {len(a)} entries, expected {count}")
+            n_shards += 1
+            counts[split] += count
+        said = info.get("count", 0)
+        if said != cfg.counts.get(split, 0):
+            problems.append(f"{out_dir / MANIFEST_NAME}: {split} count {said}, config says {cfg.counts.get(split, 0)}")
+    for path in sorted(out_dir.glob("*.npz")):
+        if path.name not in listed:
+            problems.append(f"{path}: shard file not in the manifest")
+    return VerifyReport(tuple(problems), n_shards, counts)

@@ -1,0 +1,373 @@
+"""Make a synthetic dataset folder: shards written by a process pool, a manifest, resumable.
+
+A dataset folder holds ``{split}-{i:05d}.npz`` shards (:mod:`relightnet.data.shards`)
+and ``manifest.json``::
+
+    {"format": "relightnet-synth/1", "generator_version": "...", "config": {...},
+     "complete": true, "fields": {"image": {"shape": [256, 256, 3], "dtype": "float32"}, ...},
+     "splits": {"train": {"count": 64, "n_shards": 4,
+                          "shards": [{"file": "train-00000.npz", "index": 0, "start": 0, "count": 16,
+                                      "sha256": "...", "bytes": 123456}, ...]}, ...}}
+
+The manifest is rewritten (atomically) after every finished shard and has no
+timestamps, so an interrupted run that is run again ends with the same manifest and
+the same shard bytes as an uninterrupted one — whatever the number of workers: every
+sample is seeded by (seed, split, index) and generated with one torch thread.
+
+With ``cfg.sequence_frames = T > 0`` every item is a clip from ``generate_sequence``:
+a shard holds ``shard_size`` clips, each field gaining a frame axis (n, T, H, W, C).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import multiprocessing as mp
+import os
+import queue
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from ..checks import InputError
+from ..io import atomic_write
+from .config import SPLITS, SynthConfig
+from .shards import (
+    FORMAT,
+    MANIFEST_NAME,
+    expected_fields,
+    file_sha256,
+    load_manifest,
+    read_shard,
+    shard_name,
+    shard_plan,
+    stack_samples,
+    write_shard,
+)
+
+__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_pool", "run_synth", "default_workers"]
+
+logger = logging.getLogger("relightnet.data.synth")
+
+
+def _write_manifest(out_dir: Path, manifest: dict) -> None:
+    with atomic_write(out_dir / MANIFEST_NAME, "w") as f:
+        f.write(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+
+
+def _new_manifest(cfg: SynthConfig, version: str) -> dict:
+    splits = {s: {"count": int(cfg.counts.get(s, 0)), "n_shards": len(shard_plan(cfg, s)), "shards": []}
+              for s in SPLITS}
+    return {"format": FORMAT, "generator_version": version, "config": cfg.to_dict(), "complete": False,
+            "fields": {}, "splits": splits}
+
+
+def _merge_existing(out_dir: Path, cfg: SynthConfig, version: str) -> dict:
+    """A fresh manifest for ``cfg`` keeping the still-valid shard entries of an existing one.
+
+    Raises:
+        InputError: the existing dataset was made with another config or generator version,
+            or ``cfg`` would shrink one of its splits.
+    """
+    new = _new_manifest(cfg, version)
+    if not (out_dir / MANIFEST_NAME).exists():
+        return new
+    old = load_manifest(out_dir)
+    a, b = dict(old.get("config", {})), cfg.to_dict()
+    diffs = [f"{k}: {a.get(k)!r} there, {b.get(k)!r} now" for k in sorted(set(a) | set(b))
+             if k != "counts" and a.get(k) != b.get(k)]
+    if old.get("generator_version") != version:
+        diffs.insert(0, f"generator_version: {old.get('generator_version')!r} there, {version!r} now")
+    if diffs:
+        raise InputError(f"{out_dir}: the dataset there was made with other settings ({'; '.join(diffs)}); "
+                         "use another --out folder or the same settings to resume")
+    for s in SPLITS:
+        have = int(old["splits"].get(s, {}).get("count", 0))
+        if have > new["splits"][s]["count"]:
+            raise InputError(f"{out_dir}: {s} has {have} samples there; count {new['splits'][s]['count']} "
+                             "would shrink it (counts may only grow); use another --out folder")
+        plan = {(i, st, n) for i, st, n in shard_plan(cfg, s)}
+        new["splits"][s]["shards"] = [e for e in old["splits"].get(s, {}).get("shards", [])
+                                      if (e["index"], e["start"], e["count"]) in plan]
+    new["fields"] = old.get("fields", {})
+    return new
+
+
+def _fields_of(arrays: dict) -> dict:
+    return {k: {"shape": list(a.shape[1:]), "dtype": str(a.dtype)} for k, a in sorted(arrays.items()) if k != "meta"}
+
+
+def _shard_ok(path: Path, cfg: SynthConfig, start: int, count: int) -> dict | None:
+    """Load an unlisted shard file and return its fields if it is a complete, well-formed shard."""
+    try:
+        arrays = read_shard(path)
+    except InputError:
+        return None
+    for name, (shape, dtype) in expected_fields(cfg).items():
+        a = arrays.get(name)
+        if a is None or a.shape != (count, *shape) or str(a.dtype) != dtype:
+            return None
+    meta = arrays.get("meta", [])
+    if len(meta) != count or any(m.get("seed", {}).get("index", start + j) != start + j
+                                 for j, m in enumerate(meta) if isinstance(m, dict)):
+        return None
+    return _fields_of({k: v for k, v in arrays.items() if k != "meta"})
+
+
+def _finished(out_dir: Path, manifest: dict, cfg: SynthConfig, split: str, index: int, start: int,
+              count: int) -> bool:
+    """Whether shard ``index`` is done (checksum verified), recovering unlisted complete files."""
+    entries = manifest["splits"][split]["shards"]
+    path = out_dir / shard_name(split, index)
+    entry = next((e for e in entries if e["index"] == index), None)
+    if entry is not None:
+        if path.is_file() and path.stat().st_size == entry["bytes"] and file_sha256(path) == entry["sha256"]:
+            return True
+        logger.warning("%s: missing or checksum mismatch; making it again", path)
+        entries.remove(entry)
+        return False
+    if path.is_file():
+        fields = _shard_ok(path, cfg, start, count)
+        if fields is not None:
+            logger.info("%s: complete file not in the manifest; adding it", path)
+            _add_entry(manifest, {"split": split, "index": index, "start": start, "count": count,
+                                  "sha256": file_sha256(path), "bytes": path.stat().st_size, "fields": fields})
+            return True
+    return False
+
+
+def _add_entry(manifest: dict, r: dict) -> None:
+    """Record a finished shard ``r`` (split, index, start, count, sha256, bytes, fields)."""
+    entries = manifest["splits"][r["split"]]["shards"]
+    entries[:] = [e for e in entries if e["index"] != r["index"]]
+    entries.append({"file": shard_name(r["split"], r["index"]), **{k: r[k] for k in
+                    ("index", "start", "count", "sha256", "bytes")}})
+    entries.sort(key=lambda e: e["index"])
+    manifest["fields"] = r["fields"]
+    manifest["complete"] = all(len(v["shards"]) == v["n_shards"] for v in manifest["splits"].values())
+
+
+@contextlib.contextmanager
+def _one_thread():
+    """Run torch single-threaded (reductions then do not depend on the machine's core count)."""
+    import torch
+
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(n)
+
+
+def _generate(cfg: SynthConfig, split: str, index: int, body):
+    from .generate import generate_sample, generate_sequence
+
+    if cfg.sequence_frames:
+        return generate_sequence(cfg, split, index, cfg.sequence_frames, body=body)
+    return generate_sample(cfg, split, index, body=body)
+
+
+def make_items(cfg: SynthConfig, split: str, indices, body=None) -> list:
+    """Generate samples (or clips) in this process, single-threaded as the workers do.
+
+    ``body``: None, an AnnyBody or the generator's ``SynthAssets`` (reused across samples).
+    """
+    from .generate import prepare_assets
+
+    body = body if body is not None else prepare_assets()
+    with _one_thread():
+        return [_generate(cfg, split, int(i), body) for i in indices]
+
+
+def make_shard(cfg: SynthConfig, split: str, index: int, body=None) -> dict[str, np.ndarray]:
+    """The arrays of shard ``index`` of ``split`` (as written by :func:`run_synth`)."""
+    plan = shard_plan(cfg, split)
+    if not 0 <= index < len(plan):
+        raise InputError(f"shard index: {split} has {len(plan)} shards, got {index}")
+    _, start, count = plan[index]
+    return stack_samples(make_items(cfg, split, range(start, start + count), body))
+
+
+def make_and_write_shard(cfg: SynthConfig, split: str, index: int, out_dir, compression: str = "deflate",
+                         body=None, tick=None) -> dict:
+    """Generate shard ``index`` of ``split`` and write it to ``out_dir`` (atomically).
+
+    Args:
+        tick: optional callable, called after every sample (progress).
+
+    Returns:
+        ``{"split", "index", "start", "count", "sha256", "bytes", "fields"}``.
+    """
+    from .generate import prepare_assets
+
+    _, start, count = shard_plan(cfg, split)[index]
+    body = body if body is not None else prepare_assets()
+    samples = []
+    with _one_thread():
+        for j in range(count):
+            samples.append(_generate(cfg, split, start + j, body))
+            if tick is not None:
+                tick()
+    arrays = stack_samples(samples)
+    del samples
+    info = write_shard(Path(out_dir) / shard_name(split, index), arrays, compression=compression)
+    return {"split": split, "index": index, "start": start, "count": count, **info, "fields": _fields_of(arrays)}
+
+
+# --- worker processes --------------------------------------------------------------------------------
+_WORKER: dict = {}
+
+
+def _worker_init(ticks) -> None:
+    import torch
+
+    torch.set_num_threads(1)
+    with contextlib.suppress(RuntimeError):
+        torch.set_num_interop_threads(1)
+    from .generate import prepare_assets
+
+    _WORKER["body"], _WORKER["ticks"] = prepare_assets(), ticks
+
+
+def _worker_task(task) -> dict:
+    cfg_dict, split, index, out_dir, compression = task
+    ticks = _WORKER["ticks"]
+    return make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,
+                                _WORKER["body"], lambda: ticks.put(1))
+
+
+def run_pool(tasks: list, workers: int, on_result, on_tick) -> None:
+    """Run ``(cfg_dict, split, index, out_dir, compression)`` shard tasks on a process pool.
+
+    Workers start with forkserver (the generator preloaded; never a fork of a threaded
+    process), else spawn; each builds its body assets once and runs torch single-threaded.
+    ``on_result(result)`` gets every finished shard (any order), ``on_tick()`` every sample.
+    """
+    if "forkserver" in mp.get_all_start_methods():
+        ctx = mp.get_context("forkserver")
+        ctx.set_forkserver_preload(["relightnet.data.generate"])
+    else:  # pragma: no cover - not POSIX
+        ctx = mp.get_context("spawn")
+    ticks = ctx.Queue()
+    stop = threading.Event()
+
+    def drain() -> None:
+        while True:
+            try:
+                ticks.get(timeout=0.05)
+            except queue.Empty:
+                if stop.is_set():
+                    return
+                continue
+            on_tick()
+
+    pool = ctx.Pool(min(workers, len(tasks)), initializer=_worker_init, initargs=(ticks,))
+    thread = threading.Thread(target=drain, daemon=True)
+    thread.start()
+    try:
+        for result in pool.imap_unordered(_worker_task, tasks, chunksize=1):
+            on_result(result)
+    finally:
+        pool.terminate()
+        pool.join()
+        stop.set()
+        thread.join()
+
+
+def _cleanup_temp(out_dir: Path) -> None:
+    """Remove temporary files a killed run left behind (atomic writes never leave half files in place)."""
+    for p in out_dir.glob(".*.tmp"):
+        if p.name.startswith(f".{MANIFEST_NAME}.") or any(p.name.startswith(f".{s}-") for s in SPLITS):
+            with contextlib.suppress(OSError):
+                p.unlink()
+
+
+def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress: bool = True,
+              compression: str = "deflate", body=None) -> dict:
+    """Make every missing shard of a dataset folder, and its manifest.
+
+    Args:
+        out_dir: dataset folder (created if needed; its parent must exist).
+        cfg: generator config (counts, res, seed, shard size, ...).
+        workers: generator processes, one shard per task (forkserver/spawn; each builds its body
+            assets once and writes its shards); 0 runs in this process. The bytes written do not
+            depend on it.
+        splits: which splits to make now (default: all with a non-zero count).
+        progress: show a tqdm bar (samples/s).
+        compression: shard compression, ``"deflate"`` or ``"store"``.
+        body: with ``workers=0``, a prebuilt AnnyBody or ``SynthAssets`` to reuse (built if None).
+
+    Returns:
+        The manifest (also in ``out_dir/manifest.json``).
+
+    Raises:
+        InputError: bad arguments, or ``out_dir`` holds a dataset made with another config.
+    """
+    from .generate import GENERATOR_VERSION
+
+    if not isinstance(cfg, SynthConfig):
+        raise InputError(f"cfg: expected a SynthConfig, got {type(cfg).__name__}")
+    if int(workers) != workers or workers < 0:
+        raise InputError(f"workers: expected an integer >= 0, got {workers!r}")
+    splits = [s for s in SPLITS if cfg.counts.get(s, 0)] if splits is None else list(splits)
+    bad = [s for s in splits if s not in SPLITS]
+    if bad:
+        raise InputError(f"splits: expected names from {SPLITS}, got {bad}")
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    if not out_dir.parent.is_dir():
+        raise InputError(f"{out_dir}: parent folder {out_dir.parent} does not exist")
+    manifest = _merge_existing(out_dir, cfg, GENERATOR_VERSION) if out_dir.is_dir() else _new_manifest(
+        cfg, GENERATOR_VERSION)
+    out_dir.mkdir(exist_ok=True)
+    _cleanup_temp(out_dir)
+
+    todo = []  # (split, shard index, start, count)
+    for s in splits:
+        for i, start, count in shard_plan(cfg, s):
+            if not _finished(out_dir, manifest, cfg, s, i, start, count):
+                todo.append((s, i, start, count))
+    manifest["complete"] = all(len(v["shards"]) == v["n_shards"] for v in manifest["splits"].values())
+    _write_manifest(out_dir, manifest)
+    total = sum(cfg.counts.get(s, 0) for s in splits)
+    remaining = sum(t[3] for t in todo)
+    logger.info("%s: %d of %d shards to make (%d samples)", out_dir, len(todo),
+                sum(len(shard_plan(cfg, s)) for s in splits), remaining)
+    if not todo:
+        return manifest
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
+               smoothing=0.1, dynamic_ncols=True)
+
+    def finished(r: dict) -> None:
+        _add_entry(manifest, r)
+        _write_manifest(out_dir, manifest)
+
+    try:
+        if workers == 0:
+            from .generate import prepare_assets
+
+            body = prepare_assets() if body is None else body
+            for s, i, _, _ in todo:
+                finished(make_and_write_shard(cfg, s, i, out_dir, compression, body, lambda: bar.update(1)))
+        else:
+            run_pool([(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo], int(workers),
+                     finished, lambda: bar.update(1))
+    finally:
+        bar.close()
+    logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
+    return manifest
+
+
+def default_workers() -> int:
+    """The CPUs this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
