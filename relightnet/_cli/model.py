@@ -1,0 +1,102 @@
+"""``relightnet train``, ``evaluate`` and ``estimate-light``: the CNN of the 2D path."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+from pathlib import Path
+
+from .common import add_command
+
+logger = logging.getLogger("relightnet.model")
+
+
+def run_train(args: argparse.Namespace) -> int:
+    from ..model.training import load_train_config, train
+
+    cfg = load_train_config(args.config)
+    if not Path(args.data, "manifest.json").is_file():
+        raise ValueError(f"--data {args.data}: expected a dataset folder made by 'relightnet synth' (no manifest.json)")
+    last = train(cfg, args.data, args.out, resume=args.resume, device=args.device)
+    logger.info("training finished: %s", json.dumps({k: round(v, 5) for k, v in last.items()}) if last else "-")
+    return 0
+
+
+def run_evaluate(args: argparse.Namespace) -> int:
+    from ..model.checkpoint import load_model
+    from ..model.evaluate import baseline_from_train, evaluate, format_table, write_report
+
+    model = load_model(args.checkpoint, device=args.device)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    base = baseline_from_train(args.data) if not args.no_baseline else None
+    result = evaluate(model, args.data, split=args.split, baseline=base, sheet=out / "contact_sheet.png")
+    write_report(result, out / "report.md")
+    sys_out = format_table(result)
+    logger.info("evaluated %d %s items:\n%s", result["n"], args.split, sys_out)
+    with open(out / "metrics.json", "w") as f:
+        json.dump(result, f, indent=2)
+    return 0
+
+
+def run_estimate_light(args: argparse.Namespace) -> int:
+    from ..io import read_image
+    from ..model.checkpoint import load_model
+    from ..model.inference import estimate_light
+    from ..sh import save_light
+
+    image = read_image(args.image).permute(2, 0, 1)
+    mask = None
+    if args.mask:
+        m = read_image(args.mask)
+        mask = (m.mean(-1) > 0.5).float()
+        if mask.shape != image.shape[1:]:
+            raise ValueError(f"--mask {args.mask}: size {tuple(mask.shape)} differs from the image's "
+                             f"{tuple(image.shape[1:])}")
+    model = load_model(args.checkpoint, device=args.device)
+    if mask is None:
+        logger.info("no --mask: using the model's mask head to find the person")
+    light = estimate_light(model, image, mask, size=args.size)
+    save_light(args.out, light.cpu())
+    logger.info("wrote %s", args.out)
+    return 0
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+
+
+def register(sub) -> None:
+    p = add_command(sub, "train", "Train the inverse-rendering CNN on a synthetic dataset (resumable; torchrun-ready).",
+                    "  relightnet train --config train/configs/small.yaml --data data/synth --out runs/small\n"
+                    "  relightnet train --config train/configs/small.yaml --data data/synth --out runs/small --resume\n"
+                    "  torchrun --nproc_per_node=2 -m train --config train/configs/small.yaml --data data/synth "
+                    "--out runs/ddp\n")
+    p.add_argument("--config", required=True, help="training config (YAML)")
+    p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
+    p.add_argument("--out", required=True, help="run folder: checkpoints (last.pt), metrics.jsonl, loss.png")
+    p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    p.set_defaults(func=run_train)
+
+    p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines.",
+                    "  relightnet evaluate --data data/synth --out reports/shipped\n"
+                    "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n")
+    _common(p)
+    p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
+    p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
+    p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png")
+    p.add_argument("--no-baseline", action="store_true", help="skip the mean-albedo/transport/light baseline")
+    p.set_defaults(func=run_evaluate)
+
+    p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person.",
+                    "  relightnet estimate-light person.jpg --mask person_mask.png --out light.npz\n"
+                    "  relightnet estimate-light person.png --out light_ke18.npy    # Kanamori-Endo format (BGR)\n")
+    p.add_argument("image", help="image file (PNG/JPEG)")
+    p.add_argument("--mask", help="mask of the person (white = person); default: the model's mask head")
+    p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
+    p.add_argument("--size", type=int, default=256, help="working resolution (multiple of 16, default: 256)")
+    _common(p)
+    p.set_defaults(func=run_estimate_light)

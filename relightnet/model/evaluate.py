@@ -1,0 +1,154 @@
+"""Evaluation of the CNN on a held-out split (unseen bodies and unseen HDRIs) against baselines.
+
+Relighting is measured under a *novel* light: test item i is relit with the ground-truth
+light of item (i + 1) mod n, so a prediction cannot score by echoing its own input.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError
+from ..io import atomic_write, linear_to_srgb, write_image
+from .network import RelightNet, shading_map
+from .training import TrainData, batch_to_input
+
+__all__ = ["evaluate", "baseline_from_train", "format_table"]
+
+
+def _rmse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> float:
+    """Root mean squared error over masked pixels and channels of (B, C, H, W) tensors."""
+    n = (mask.sum() * a.shape[1]).clamp_min(1)
+    return float((((a - b) ** 2) * mask).sum() / n) ** 0.5
+
+
+def _psnr_ssim(pred: torch.Tensor, gt: torch.Tensor, mask: torch.Tensor) -> tuple[float, float]:
+    """PSNR (over masked pixels only) and SSIM (scikit-image, background zeroed in both) of
+    (3, H, W) linear images, in display (sRGB) space."""
+    from skimage.metrics import structural_similarity
+
+    p = (linear_to_srgb(pred.clamp(0, 1)) * mask).permute(1, 2, 0).numpy().astype(np.float64)
+    g = (linear_to_srgb(gt.clamp(0, 1)) * mask).permute(1, 2, 0).numpy().astype(np.float64)
+    mse = float(((p - g) ** 2).sum() / max(float(mask.sum()) * 3, 1))
+    psnr = 10 * math.log10(1 / mse) if mse > 0 else float("inf")
+    ssim = structural_similarity(p, g, channel_axis=2, data_range=1.0)
+    return psnr, float(ssim)
+
+
+def baseline_from_train(data_dir, target: str = "transport") -> dict:
+    """Trivial predictors from the training split: mean albedo, mean transport, mean light."""
+    d = TrainData(data_dir, "train", target)
+    m = d.tensors["mask"]
+    n = m.sum().clamp_min(1)
+    return {
+        "albedo": (d.tensors["albedo"] * m).sum((0, 2, 3)) / n,
+        "transport": (d.tensors["transport"] * m).sum((0, 2, 3)) / n,
+        "light": d.tensors["light"].mean(0),
+    }
+
+
+@torch.no_grad()
+def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "transport", batch: int = 4,
+             baseline: dict | None = None, sheet: str | Path | None = None, concave_threshold: float = 0.1) -> dict:
+    """Masked RMSEs, PSNR and SSIM of the model (and of the baseline, when given) on a split.
+
+    Args:
+        model: network in eval mode.
+        data_dir: dataset folder.
+        split: split to evaluate (``test``: unseen bodies and HDRIs).
+        target: ground-truth transport field.
+        baseline: output of :func:`baseline_from_train` to score alongside.
+        sheet: write a contact sheet PNG (input | albedo | shading | relit, prediction over truth).
+        concave_threshold: "concave" pixels are those where occluded and unoccluded DC transport
+            differ by more than this fraction; relit RMSE is also reported there.
+
+    Returns:
+        ``{"model": {metric: value}, "baseline": {...}}``.
+    """
+    from ..data.dataset import SynthDataset
+
+    fields = ("image", "mask", "albedo", "light", "transport", "transport_unoccluded")
+    ds = SynthDataset(data_dir, split, fields=fields, cache_shards=1)
+    n = len(ds)
+    if n < 2:
+        raise InputError(f"{data_dir}: the {split} split needs at least 2 items to evaluate relighting")
+    items = [ds[i] for i in range(n)]
+    dev = next(model.parameters()).device
+    sums: dict = {"model": {}, "baseline": {}}
+    rows = []
+
+    def add(who, key, value):
+        sums[who].setdefault(key, []).append(value)
+
+    for s in range(0, n, batch):
+        chunk = items[s : s + batch]
+        b = {k: torch.stack([it[k] for it in chunk]).to(dev) for k in fields}
+        novel = torch.stack([items[(s + j + 1) % n]["light"] for j in range(len(chunk))]).to(dev)
+        M = b["mask"]
+        T_gt = b[target]
+        dc = b["transport"][:, :1], b["transport_unoccluded"][:, :1]
+        concave = M * ((dc[0] - dc[1]).abs() > concave_threshold * dc[1].abs().clamp_min(1e-6)).float()
+        gt_s = shading_map(T_gt, b["light"])
+        gt_relit = b["albedo"] * shading_map(T_gt, novel)
+        pred = model(batch_to_input(b))
+        cands = {"model": (pred.albedo, pred.transport, pred.light)}
+        if baseline is not None:
+            B, _, H, W = M.shape
+            cands["baseline"] = (baseline["albedo"].to(dev).view(1, 3, 1, 1).expand(B, 3, H, W),
+                                 baseline["transport"].to(dev).view(1, -1, 1, 1).expand(B, -1, H, W),
+                                 baseline["light"].to(dev).expand(B, -1, 3))
+        for who, (A, T, L) in cands.items():
+            relit = A * shading_map(T, novel)
+            for j in range(len(chunk)):
+                sl = slice(j, j + 1)
+                add(who, "transport_rmse", _rmse(T[sl], T_gt[sl], M[sl]))
+                add(who, "albedo_rmse", _rmse(A[sl], b["albedo"][sl], M[sl]))
+                add(who, "light_rmse", float(((L[sl] - b["light"][sl]) ** 2).mean()) ** 0.5)
+                add(who, "shading_rmse", _rmse(shading_map(T[sl], L[sl]), gt_s[sl], M[sl]))
+                add(who, "relit_rmse", _rmse(relit[sl], gt_relit[sl], M[sl]))
+                if concave[sl].sum() > 0:
+                    add(who, "relit_rmse_concave", _rmse(relit[sl], gt_relit[sl], concave[sl]))
+                psnr, ssim = _psnr_ssim(relit[j].cpu(), gt_relit[j].cpu(), M[j].cpu())
+                add(who, "relit_psnr", psnr)
+                add(who, "relit_ssim", ssim)
+            if who == "model" and sheet is not None and len(rows) < 6:
+                for j in range(min(len(chunk), 6 - len(rows))):
+                    rows.append([b["image"][j], A[j], b["albedo"][j], shading_map(T, L)[j], gt_s[j], relit[j],
+                                 gt_relit[j]])
+    result = {who: {k: float(np.mean(v)) for k, v in d.items()} for who, d in sums.items() if d}
+    result["n"] = n
+    if sheet is not None and rows:
+        _contact_sheet(rows, sheet)
+    return result
+
+
+def _contact_sheet(rows: list, path) -> None:
+    """Rows: input | albedo pred | albedo truth | shading pred | shading truth | relit pred | relit truth."""
+    tiles = []
+    for r in rows:
+        s = max(float(r[4].amax()), 1e-6)
+        e = max(float(r[6].amax()), 1e-6)
+        cols = [r[0], r[1], r[2], r[3] / s, r[4] / s, r[5] / e, r[6] / e]
+        tiles.append(torch.cat([c.clamp(0, 1).cpu().permute(1, 2, 0) for c in cols], 1))
+    write_image(path, torch.cat(tiles, 0))
+
+
+def format_table(result: dict) -> str:
+    """Markdown table of :func:`evaluate`'s result (model vs baseline, lower RMSE is better)."""
+    keys = ["transport_rmse", "albedo_rmse", "light_rmse", "shading_rmse", "relit_rmse", "relit_rmse_concave",
+            "relit_psnr", "relit_ssim"]
+    who = [w for w in ("model", "baseline") if w in result]
+    lines = ["| metric | " + " | ".join(who) + " |", "|---|" + "---|" * len(who)]
+    for k in keys:
+        if all(k in result[w] for w in who):
+            lines.append(f"| {k} | " + " | ".join(f"{result[w][k]:.4f}" for w in who) + " |")
+    return "\n".join(lines)
+
+
+def write_report(result: dict, path) -> None:
+    with atomic_write(path, "w") as f:
+        f.write(f"Evaluated on {result['n']} items.\n\n" + format_table(result) + "\n")

@@ -1,0 +1,123 @@
+"""Running the CNN on real images: KE18-style crop, resize, predict, paste back.
+
+A photo of any size is cropped to the mask's bounding box with padding (made square, as
+the training data is framed), resized to the model's working size, run through the
+network, and the per-pixel maps are resized back into the original frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch.nn import functional as F
+
+from ..checks import InputError, check_shape
+from .network import Prediction, RelightNet, normalize_input
+
+__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light"]
+
+
+@dataclass(frozen=True)
+class CropBox:
+    """A square crop (top, left, size) in pixels of the original image; may extend past its borders."""
+
+    top: int
+    left: int
+    size: int
+
+
+def mask_crop_box(mask: torch.Tensor, pad: float = 0.05) -> CropBox:
+    """Square box around the mask's bounding box, padded by ``pad`` × its larger side.
+
+    Args:
+        mask: (H, W) in [0, 1].
+    """
+    check_shape(mask, ["H", "W"], name="mask")
+    ys, xs = torch.nonzero(mask > 0.5, as_tuple=True)
+    if ys.numel() == 0:
+        raise InputError("mask: empty (no pixel above 0.5): expected a mask of the person")
+    y0, y1, x0, x1 = int(ys.min()), int(ys.max()) + 1, int(xs.min()), int(xs.max()) + 1
+    side = max(y1 - y0, x1 - x0)
+    size = max(16, int(round(side * (1 + 2 * pad))))
+    cy, cx = (y0 + y1) / 2, (x0 + x1) / 2
+    return CropBox(int(round(cy - size / 2)), int(round(cx - size / 2)), size)
+
+
+def _crop(x: torch.Tensor, box: CropBox) -> torch.Tensor:
+    """(B, C, H, W) → (B, C, size, size), zero outside the image."""
+    h, w = x.shape[-2:]
+    t, l, s = box.top, box.left, box.size
+    out = x.new_zeros(*x.shape[:-2], s, s)
+    ys, ye, xs, xe = max(t, 0), min(t + s, h), max(l, 0), min(l + s, w)
+    if ys < ye and xs < xe:
+        out[..., ys - t : ye - t, xs - l : xe - l] = x[..., ys:ye, xs:xe]
+    return out
+
+
+def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
+    """Inverse of :func:`_crop` after resizing back to ``box.size``: (B, C, s, s) → (B, C, H, W)."""
+    x = F.interpolate(x, size=(box.size, box.size), mode="bilinear", align_corners=False)
+    out = x.new_zeros(*x.shape[:-2], h, w)
+    t, l, s = box.top, box.left, box.size
+    ys, ye, xs, xe = max(t, 0), min(t + s, h), max(l, 0), min(l + s, w)
+    if ys < ye and xs < xe:
+        out[..., ys:ye, xs:xe] = x[..., ys - t : ye - t, xs - l : xe - l]
+    return out
+
+
+@torch.no_grad()
+def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None, size: int = 256,
+                  pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
+    """Predict albedo, transport, light (and mask) for one photo at its own resolution.
+
+    Args:
+        model: a :class:`RelightNet` (eval mode).
+        image: (3, H, W) sRGB in [0, 1] (or uint8).
+        mask: (H, W) person mask in [0, 1]; None uses the model's mask head on the whole
+            frame (padded to a square) and then crops around the predicted mask.
+        size: working resolution (a multiple of the model's 2**levels).
+        pad: crop padding (fraction of the mask box's larger side).
+
+    Returns:
+        (prediction at the original resolution with a batch of 1 — maps are zero outside the
+        crop, ``mask`` is the given or predicted mask — and the crop box used).
+    """
+    check_shape(image, [3, "H", "W"], name="image")
+    if image.dtype == torch.uint8:
+        image = image.float() / 255
+    h, w = image.shape[-2:]
+    m = model.config.multiple
+    if size % m:
+        raise InputError(f"size: expected a multiple of {m}, got {size}")
+    dev = next(model.parameters()).device
+    image = image.to(dev)
+    if mask is None:
+        if not model.config.mask_head:
+            raise InputError("mask: this model has no mask head; give a mask of the person")
+        full = CropBox((h - max(h, w)) // 2, (w - max(h, w)) // 2, max(h, w))
+        x = F.interpolate(_crop(image[None], full), size=(size, size), mode="bilinear", align_corners=False)
+        coarse = model(normalize_input(x, torch.ones_like(x[:, :1])))
+        mask = _paste(coarse.mask, full, h, w)[0, 0]
+        if not (mask > 0.5).any():
+            raise InputError("image: the mask head found no person in the image")
+    check_shape(mask, [h, w], name="mask")
+    mask = mask.to(dev).float()
+    box = mask_crop_box(mask, pad)
+    x = F.interpolate(_crop(image[None], box), size=(size, size), mode="bilinear", align_corners=False)
+    mk = F.interpolate(_crop(mask[None, None], box), size=(size, size), mode="bilinear", align_corners=False)
+    pred = model(normalize_input(x, (mk > 0.5).float()))
+    inside = mask[None, None]
+    return Prediction(
+        albedo=_paste(pred.albedo, box, h, w) * inside,
+        transport=_paste(pred.transport, box, h, w) * inside,
+        light=pred.light,
+        mask=mask[None, None],
+    ), box
+
+
+def estimate_light(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
+                   size: int = 256) -> torch.Tensor:
+    """The SH light (K, 3) of a photo, camera-relative light frame, linear RGB."""
+    pred, _ = predict_image(model, image, mask, size)
+    return pred.light[0]

@@ -1,0 +1,99 @@
+"""Training losses of the inverse-rendering CNN (Kanamori & Endo 2018's set, weighted by a config).
+
+With ground truth (A, T, L), the image I = A ⊙ S(T, L) and predictions (Â, T̂, L̂), all
+masked by the person mask M and averaged over masked pixels:
+
+- direct: |T̂ − T|, |Â − A| (pixels), |L̂ − L| (coefficients);
+- shading: |S(T̂, L) − S(T, L)|, |S(T, L̂) − S(T, L)|, |S(T̂, L̂) − S(T, L)|;
+- rendering: |Â ⊙ S(T̂, L̂) − I|, |Â ⊙ S(T, L) − I|, |A ⊙ S(T̂, L̂) − I|. KE18's released
+  code computed one rendering term with the shading of a different term (a copy-paste of
+  the wrong shading variable); here every term uses its own shading;
+- total variation of T̂ and Â inside the eroded mask;
+- mask: binary cross-entropy of the mask head against M (when present).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import torch
+from torch.nn import functional as F
+
+from .network import Prediction, shading_map
+
+__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses"]
+
+
+@dataclass(frozen=True)
+class LossWeights:
+    transport: float = 1.0
+    albedo: float = 1.0
+    light: float = 1.0
+    shading_t: float = 1.0
+    shading_l: float = 1.0
+    shading_tl: float = 1.0
+    render_al: float = 1.0
+    render_a: float = 1.0
+    render_tl: float = 1.0
+    tv: float = 0.05
+    mask: float = 0.5
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
+    """Binary erosion of (B, 1, H, W) masks by a (2r+1)² square (min-pooling)."""
+    if radius <= 0:
+        return mask
+    return -F.max_pool2d(-mask, 2 * radius + 1, stride=1, padding=radius)
+
+
+def masked_l1(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+    """Mean |a − b| over masked pixels (and channels). a, b: (B, C, H, W); mask: (B, 1, H, W)."""
+    num = ((a - b).abs() * mask).sum()
+    return num / (mask.sum() * a.shape[1]).clamp_min(1.0)
+
+
+def total_variation(x: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+    """Mean absolute horizontal + vertical differences of (B, C, H, W) inside (B, 1, H, W)."""
+    dx = (x[..., :, 1:] - x[..., :, :-1]).abs() * (mask[..., :, 1:] * mask[..., :, :-1])
+    dy = (x[..., 1:, :] - x[..., :-1, :]).abs() * (mask[..., 1:, :] * mask[..., :-1, :])
+    return (dx.sum() + dy.sum()) / (mask.sum() * x.shape[1]).clamp_min(1.0)
+
+
+def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWeights()) -> dict:
+    """All loss terms and their weighted total.
+
+    Args:
+        pred: network output.
+        batch: ``image`` (B, 3, H, W) linear, ``mask`` (B, 1, H, W), ``albedo`` (B, 3, H, W),
+            ``transport`` (B, K, H, W), ``light`` (B, K, 3).
+        weights: per-term weights (0 disables a term).
+
+    Returns:
+        dict of scalar tensors, including ``total``.
+    """
+    M = batch["mask"]
+    I, A, T, L = batch["image"], batch["albedo"], batch["transport"], batch["light"]
+    Ah, Th, Lh = pred.albedo, pred.transport, pred.light
+    S = shading_map(T, L)
+    S_tl = shading_map(Th, Lh)
+    terms = {
+        "transport": masked_l1(Th, T, M),
+        "albedo": masked_l1(Ah, A, M),
+        "light": (Lh - L).abs().mean(),
+        "shading_t": masked_l1(shading_map(Th, L), S, M),
+        "shading_l": masked_l1(shading_map(T, Lh), S, M),
+        "shading_tl": masked_l1(S_tl, S, M),
+        "render_al": masked_l1(Ah * S_tl, I, M),
+        "render_a": masked_l1(Ah * S, I, M),
+        "render_tl": masked_l1(A * S_tl, I, M),
+    }
+    inner = erode(M)
+    terms["tv"] = total_variation(Th, inner) + total_variation(Ah, inner)
+    if pred.mask is not None:
+        terms["mask"] = F.binary_cross_entropy(pred.mask.clamp(1e-6, 1 - 1e-6), M)
+    w = weights.to_dict()
+    terms["total"] = sum(w[k] * v for k, v in terms.items() if w.get(k, 0.0))
+    return terms

@@ -1,0 +1,200 @@
+"""The inverse-rendering CNN of the 2D path (Kanamori & Endo 2018 style).
+
+An encoder–decoder with skip connections reads a masked image of a person and predicts
+
+- ``transport`` (B, K, H, W): per-pixel SH transport, occlusion included, unbounded;
+- ``albedo`` (B, 3, H, W): linear albedo in (0, 1) (sigmoid);
+- ``light`` (B, K, 3): the scene's SH light (camera-relative light frame), from a head on
+  the pooled bottleneck and decoder features — any batch size and any H, W that are
+  multiples of 16 (no fixed reshape as in KE18);
+- optionally ``mask`` (B, 1, H, W) logits, so the 2D path runs without a user mask.
+
+Normalisation (``normalize_input``) is KE18's: the 8-bit sRGB image mapped to [−1, 1] and
+multiplied by the mask, with the mask as a fourth input channel. Images are RGB everywhere
+inside relightnet; BGR only exists in Kanamori–Endo light files (see relightnet.sh.io).
+GroupNorm keeps the network independent of the batch size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from ..checks import InputError, ShapeError, check_shape
+
+__all__ = ["NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "pad_to_multiple", "shading_map"]
+
+
+@dataclass(frozen=True)
+class NetConfig:
+    """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``."""
+
+    lmax: int = 2
+    width: int = 32
+    max_width: int = 256
+    levels: int = 4
+    mask_head: bool = True
+    light_hidden: int = 256
+
+    @property
+    def n_coeffs(self) -> int:
+        return (self.lmax + 1) ** 2
+
+    @property
+    def multiple(self) -> int:
+        return 2**self.levels
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """What the network predicts (CNN layout, channels first).
+
+    Attributes:
+        albedo: (B, 3, H, W) linear albedo.
+        transport: (B, K, H, W) SH transport.
+        light: (B, K, 3) SH light, linear RGB, camera-relative light frame.
+        mask: (B, 1, H, W) probability of "person", or None without a mask head.
+    """
+
+    albedo: torch.Tensor
+    transport: torch.Tensor
+    light: torch.Tensor
+    mask: torch.Tensor | None = None
+
+    def shading(self, light: torch.Tensor | None = None) -> torch.Tensor:
+        """(B, 3, H, W) S = T · L with the predicted or a given (K, 3) / (B, K, 3) light."""
+        return shading_map(self.transport, self.light if light is None else light)
+
+
+def shading_map(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
+    """S = Σ_k T_k L_k in the CNN layout.
+
+    Args:
+        transport: (B, K, H, W).
+        light: (K, 3) or (B, K, 3).
+
+    Returns:
+        (B, 3, H, W).
+    """
+    dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
+    if light.dim() == 2:
+        check_shape(light, [dims["K"], 3], name="light")
+        return torch.einsum("bkhw,kc->bchw", transport, light.to(transport))
+    check_shape(light, [dims["B"], dims["K"], 3], name="light")
+    return torch.einsum("bkhw,bkc->bchw", transport, light.to(transport))
+
+
+def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
+    """Relit image A ⊙ (T · L′) (linear RGB).
+
+    Args:
+        pred: a :class:`Prediction`.
+        new_light: (K, 3) or (B, K, 3) light in the camera-relative light frame.
+
+    Returns:
+        (B, 3, H, W).
+    """
+    return pred.albedo * shading_map(pred.transport, new_light)
+
+
+def normalize_input(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+    """KE18 input: sRGB image in [0, 1] → [−1, 1], times the mask, mask appended.
+
+    Args:
+        image: (B, 3, H, W) sRGB in [0, 1] (uint8 is divided by 255).
+        mask: (B, 1, H, W) or (B, H, W) in [0, 1].
+
+    Returns:
+        (B, 4, H, W).
+    """
+    dims = check_shape(image, ["B", 3, "H", "W"], name="image")
+    if mask.dim() == 3:
+        mask = mask[:, None]
+    check_shape(mask, [dims["B"], 1, dims["H"], dims["W"]], name="mask")
+    if image.dtype == torch.uint8:
+        image = image.float() / 255
+    mask = mask.to(image.dtype)
+    return torch.cat([(image * 2 - 1) * mask, mask], 1)
+
+
+def pad_to_multiple(x: torch.Tensor, multiple: int = 16) -> tuple[torch.Tensor, tuple[int, int]]:
+    """Zero-pad (B, C, H, W) at the bottom/right to multiples of ``multiple``; returns the original (H, W)."""
+    h, w = x.shape[-2:]
+    ph, pw = (-h) % multiple, (-w) % multiple
+    return (F.pad(x, (0, pw, 0, ph)) if ph or pw else x), (h, w)
+
+
+def _norm(c: int) -> nn.GroupNorm:
+    return nn.GroupNorm(min(8, c // 4) if c >= 8 else 1, c)
+
+
+class _Block(nn.Sequential):
+    def __init__(self, cin: int, cout: int, stride: int = 1) -> None:
+        super().__init__(
+            nn.Conv2d(cin, cout, 3, stride, 1, bias=False), _norm(cout), nn.SiLU(inplace=True),
+            nn.Conv2d(cout, cout, 3, 1, 1, bias=False), _norm(cout), nn.SiLU(inplace=True),
+        )
+
+
+class _Decoder(nn.Module):
+    def __init__(self, widths: list[int], out: int) -> None:
+        super().__init__()
+        rev = widths[::-1]
+        self.ups = nn.ModuleList(_Block(rev[i] + rev[i + 1], rev[i + 1]) for i in range(len(rev) - 1))
+        self.head = nn.Conv2d(rev[-1], out, 3, 1, 1)
+
+    def forward(self, feats: list[torch.Tensor]) -> tuple[torch.Tensor, list[torch.Tensor]]:
+        x = feats[-1]
+        inner = []
+        for up, skip in zip(self.ups, feats[-2::-1], strict=True):
+            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = up(torch.cat([x, skip], 1))
+            inner.append(x)
+        return self.head(x), inner
+
+
+class RelightNet(nn.Module):
+    """Encoder–decoder predicting albedo, transport, light (and a mask)."""
+
+    def __init__(self, config: NetConfig | None = None) -> None:
+        super().__init__()
+        self.config = cfg = config or NetConfig()
+        widths = [min(cfg.width * 2**i, cfg.max_width) for i in range(cfg.levels + 1)]
+        self.widths = widths
+        self.stem = _Block(4, widths[0])
+        self.down = nn.ModuleList(_Block(widths[i], widths[i + 1], stride=2) for i in range(cfg.levels))
+        k = cfg.n_coeffs
+        self.transport_dec = _Decoder(widths, k)
+        self.albedo_dec = _Decoder(widths, 3 + (1 if cfg.mask_head else 0))
+        pooled = widths[-1] + sum(widths[:-1])
+        self.light_head = nn.Sequential(
+            nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
+        )
+
+    def forward(self, x: torch.Tensor) -> Prediction:
+        """Args: x (B, 4, H, W) from :func:`normalize_input`, H and W multiples of 2**levels.
+
+        Returns:
+            :class:`Prediction`.
+        """
+        m = self.config.multiple
+        if x.dim() != 4 or x.shape[1] != 4:
+            raise ShapeError(f"input: expected (B, 4, H, W) from normalize_input, got {tuple(x.shape)}")
+        if x.shape[-2] % m or x.shape[-1] % m:
+            raise InputError(
+                f"input: H and W must be multiples of {m}, got {tuple(x.shape[-2:])} (use pad_to_multiple)"
+            )
+        feats = [self.stem(x)]
+        for d in self.down:
+            feats.append(d(feats[-1]))
+        transport, t_inner = self.transport_dec(feats)
+        a, a_inner = self.albedo_dec(feats)
+        # Light: pooled bottleneck + pooled decoder features (both decoders see the whole person).
+        pooled = [feats[-1].mean((2, 3))] + [(t + u).mean((2, 3)) for t, u in zip(t_inner, a_inner, strict=True)]
+        light = self.light_head(torch.cat(pooled, 1)).view(x.shape[0], self.config.n_coeffs, 3)
+        albedo = torch.sigmoid(a[:, :3])
+        mask = torch.sigmoid(a[:, 3:4]) if self.config.mask_head else None
+        return Prediction(albedo=albedo, transport=transport, light=light, mask=mask)

@@ -1,0 +1,271 @@
+"""Training loop of the inverse-rendering CNN: deterministic, resumable, optionally distributed.
+
+Everything that decides a run is in :class:`TrainConfig` (YAML). The data order is a pure
+function of (seed, step): epoch ``e`` shuffles the training items with a generator seeded
+by (seed, e) and each item's augmentation draws from a generator seeded by (seed, e, item).
+A checkpoint therefore only needs the model, optimiser, scheduler and step to continue
+bit-identically. Under ``torchrun`` (``WORLD_SIZE`` > 1) the loop runs DistributedDataParallel
+(gloo on CPU, nccl on CUDA); rank r takes the r-th slice of every global batch and only
+rank 0 writes files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError
+from ..io import atomic_write, linear_to_srgb
+from .checkpoint import load_checkpoint, save_checkpoint
+from .losses import LossWeights, relight_losses
+from .network import NetConfig, RelightNet, normalize_input
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "TrainData"]
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """A training run. ``target`` selects the transport field: ``transport`` (occlusion-aware)
+    or ``transport_unoccluded`` (the ablation "occlusion ignored")."""
+
+    steps: int = 1000
+    batch_size: int = 8
+    lr: float = 2e-3
+    weight_decay: float = 1e-4
+    warmup: int = 50
+    seed: int = 0
+    checkpoint_every: int = 100
+    log_every: int = 10
+    target: str = "transport"
+    net: dict = field(default_factory=dict)
+    loss: dict = field(default_factory=dict)
+    augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.8, 1.0], "intensity": [0.5, 2.0],
+                                                   "white_balance": 0.1})
+    threads: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
+            if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
+                raise InputError(f"train config {name}: expected an integer >= 1, got {getattr(self, name)!r}")
+        if not self.lr > 0:
+            raise InputError(f"train config lr: expected > 0, got {self.lr!r}")
+        if self.target not in ("transport", "transport_unoccluded"):
+            raise InputError(
+                f"train config target: expected 'transport' or 'transport_unoccluded', got {self.target!r}"
+            )
+        NetConfig(**self.net)
+        LossWeights(**self.loss)
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def load_train_config(path) -> TrainConfig:
+    """Read a :class:`TrainConfig` from YAML/JSON; unknown keys are an error."""
+    import yaml
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: training config not found")
+    try:
+        d = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as e:
+        raise InputError(f"{path}: unreadable YAML ({e})") from None
+    unknown = set(d) - {f.name for f in dataclasses.fields(TrainConfig)}
+    if unknown:
+        raise InputError(f"{path}: unknown keys {sorted(unknown)}")
+    return TrainConfig(**d)
+
+
+class TrainData:
+    """The training split held in memory (only the fields training needs).
+
+    Args:
+        root: dataset folder made by ``relightnet synth``.
+        split: which split.
+        target: transport field to learn.
+    """
+
+    FIELDS = ("image", "mask", "albedo", "light")
+
+    def __init__(self, root, split: str = "train", target: str = "transport") -> None:
+        from ..data.dataset import SynthDataset
+
+        ds = SynthDataset(root, split, fields=(*self.FIELDS, target), cache_shards=1)
+        if len(ds) == 0:
+            raise InputError(f"{root}: the {split} split is empty")
+        items = [ds[i] for i in range(len(ds))]  # shard order: each shard is read once
+        self.target = target
+        self.tensors = {k: torch.stack([it[k] for it in items]) for k in (*self.FIELDS, target)}
+        self.tensors["transport"] = self.tensors.pop(target)
+        self.n_coeffs = self.tensors["transport"].shape[1]
+
+    def __len__(self) -> int:
+        return self.tensors["image"].shape[0]
+
+    def batch(self, idx: torch.Tensor, augment=None, gens: list | None = None) -> dict:
+        """Gather items (augmented one by one with their own generators)."""
+        out = []
+        for j, i in enumerate(idx.tolist()):
+            s = {k: v[i] for k, v in self.tensors.items()}
+            if augment is not None:
+                s = augment(s, gens[j])
+            out.append(s)
+        return {k: torch.stack([s[k] for s in out]) for k in out[0]}
+
+
+def batch_to_input(batch: dict) -> torch.Tensor:
+    """Network input of a batch: the camera's view (sRGB of the linear image) and the mask."""
+    srgb = linear_to_srgb(batch["image"].clamp(0, 1))
+    return normalize_input(srgb, batch["mask"])
+
+
+def _indices(n: int, step: int, batch: int, seed: int, world: int, rank: int) -> tuple[torch.Tensor, int]:
+    per_epoch = max(1, n // (batch * world))
+    epoch, b = divmod(step, per_epoch)
+    perm = torch.randperm(n, generator=torch.Generator().manual_seed(seed * 100003 + epoch))
+    if n < batch * world:
+        perm = perm.repeat(math.ceil(batch * world / n))
+    start = (b * world + rank) * batch
+    return perm[start : start + batch], epoch
+
+
+def _lr_lambda(cfg: TrainConfig):
+    def f(step: int) -> float:
+        if step < cfg.warmup:
+            return (step + 1) / cfg.warmup
+        t = (step - cfg.warmup) / max(1, cfg.steps - cfg.warmup)
+        return 0.5 * (1 + math.cos(math.pi * min(t, 1.0)))
+
+    return f
+
+
+def _dist_env() -> tuple[int, int]:
+    return int(os.environ.get("RANK", 0)), int(os.environ.get("WORLD_SIZE", 1))
+
+
+def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str = "cpu",
+          stop_after: int | None = None) -> dict:
+    """Train (or continue training) a :class:`RelightNet`.
+
+    Args:
+        cfg: the run's configuration.
+        data_dir: dataset folder (``relightnet synth``).
+        out_dir: run folder: ``last.pt`` (atomic checkpoints), ``metrics.jsonl``, ``loss.png``.
+        resume: continue from ``out_dir/last.pt`` (bit-identical continuation).
+        device: ``cpu`` or ``cuda``.
+        stop_after: stop (with a checkpoint) after this many steps of this call, for tests.
+
+    Returns:
+        The last logged metrics.
+    """
+    from ..data.augment import Augment
+
+    rank, world = _dist_env()
+    if world > 1 and not torch.distributed.is_initialized():
+        torch.distributed.init_process_group("nccl" if device.startswith("cuda") else "gloo")
+    if cfg.threads:
+        torch.set_num_threads(cfg.threads)
+    out = Path(out_dir)
+    if rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    data = TrainData(data_dir, "train", cfg.target)
+    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
+    torch.manual_seed(cfg.seed)
+    model = RelightNet(net_cfg).to(device)
+    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(cfg))
+    step = 0
+    ckpt = out / "last.pt"
+    if resume:
+        state = load_checkpoint(ckpt, map_location=device)
+        if state["train_config"] != cfg.to_dict():
+            raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["optimizer"])
+        sched.load_state_dict(state["scheduler"])
+        step = state["step"]
+    ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
+    aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
+    weights = LossWeights(**cfg.loss)
+    log_path = out / "metrics.jsonl"
+    last: dict = {}
+    t0, done_here = time.perf_counter(), 0
+    while step < cfg.steps and (stop_after is None or done_here < stop_after):
+        idx, epoch = _indices(len(data), step, cfg.batch_size, cfg.seed, world, rank)
+        gens = [torch.Generator().manual_seed(cfg.seed * 7919 + epoch * 104729 + int(i)) for i in idx]
+        batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
+        pred = ddp(batch_to_input(batch))
+        terms = relight_losses(pred, batch, weights)
+        opt.zero_grad(set_to_none=True)
+        terms["total"].backward()
+        opt.step()
+        sched.step()
+        step += 1
+        done_here += 1
+        if rank == 0 and (step % cfg.log_every == 0 or step == cfg.steps):
+            dt = time.perf_counter() - t0
+            last = {"step": step, "lr": sched.get_last_lr()[0],
+                    "samples_per_s": done_here * cfg.batch_size * world / dt,
+                    **{k: float(v.detach()) for k, v in terms.items()}}
+            with open(log_path, "a") as f:
+                f.write(json.dumps(last) + "\n")
+            logger.info("step %d/%d loss %.4f (%.1f samples/s)", step, cfg.steps, last["total"], last["samples_per_s"])
+        if rank == 0 and (step % cfg.checkpoint_every == 0 or step == cfg.steps
+                          or (stop_after is not None and done_here == stop_after)):
+            save_checkpoint(ckpt, model, net_cfg, step=step, optimizer=opt, scheduler=sched,
+                            train_config=cfg.to_dict(), data=str(data_dir))
+    if rank == 0 and step >= cfg.steps:
+        plot_losses(log_path, out / "loss.png")
+    if world > 1:
+        check_ranks_in_sync(model)
+        torch.distributed.barrier()
+    return last
+
+
+def check_ranks_in_sync(model: torch.nn.Module) -> None:
+    """Raise if the replicas' parameters differ across ranks (DDP must keep them equal)."""
+    flat = torch.cat([p.detach().reshape(-1).double() for p in model.parameters()])
+    mine = torch.stack([flat.sum(), (flat * torch.arange(flat.numel(), dtype=flat.dtype) % 9973).sum()])
+    gathered = [torch.zeros_like(mine) for _ in range(torch.distributed.get_world_size())]
+    torch.distributed.all_gather(gathered, mine)
+    if any(not torch.equal(g, gathered[0]) for g in gathered):
+        raise RuntimeError(f"DDP ranks diverged: parameter checksums {[g.tolist() for g in gathered]}")
+    logger.info("ranks in sync: %d replicas, parameter checksum %.6e", len(gathered), float(mine[0]))
+
+
+def plot_losses(log_path, png_path) -> None:
+    """Loss curves (total and terms) from a metrics JSONL, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [json.loads(line) for line in Path(log_path).read_text().splitlines() if line.strip()]
+    if not rows:
+        return
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    steps = np.array([r["step"] for r in rows])
+    for key in ("total", "transport", "albedo", "light", "shading_tl", "render_al"):
+        if key in rows[0]:
+            ax.plot(steps, [r[key] for r in rows], label=key, lw=2 if key == "total" else 1)
+    ax.set_yscale("log")
+    ax.set_xlabel("step")
+    ax.set_ylabel("loss")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    with atomic_write(png_path) as f:
+        fig.savefig(f, format="png", dpi=100)
+    plt.close(fig)

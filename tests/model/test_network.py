@@ -1,0 +1,65 @@
+import pytest
+import torch
+
+from relightnet.checks import InputError, ShapeError
+from relightnet.model import NetConfig, Prediction, RelightNet, normalize_input, pad_to_multiple, relight, shading_map
+
+TINY = NetConfig(width=8, max_width=32, light_hidden=32)
+
+
+@pytest.mark.parametrize("b,h,w", [(1, 32, 32), (2, 48, 64), (3, 64, 16)])
+def test_output_shapes_and_ranges(b, h, w):
+    net = RelightNet(TINY)
+    p = net(normalize_input(torch.rand(b, 3, h, w), torch.ones(b, 1, h, w)))
+    assert p.albedo.shape == (b, 3, h, w) and p.transport.shape == (b, 9, h, w)
+    assert p.light.shape == (b, 9, 3) and p.mask.shape == (b, 1, h, w)
+    assert p.albedo.dtype == torch.float32
+    assert 0 <= p.albedo.min() and p.albedo.max() <= 1 and 0 <= p.mask.min() and p.mask.max() <= 1
+    assert relight(p, torch.randn(9, 3)).shape == (b, 3, h, w)
+
+
+def test_batch_independence_groupnorm():
+    net = RelightNet(TINY).eval()
+    x = normalize_input(torch.rand(3, 3, 32, 32), torch.ones(3, 1, 32, 32))
+    with torch.no_grad():
+        full = net(x)
+        one = net(x[1:2])
+    torch.testing.assert_close(full.light[1:2], one.light, atol=1e-5, rtol=1e-4)
+    torch.testing.assert_close(full.transport[1:2], one.transport, atol=1e-5, rtol=1e-4)
+
+
+def test_gradients_reach_every_parameter():
+    net = RelightNet(TINY)
+    p = net(normalize_input(torch.rand(2, 3, 32, 32), torch.ones(2, 1, 32, 32)))
+    (p.albedo.mean() + p.transport.mean() + p.light.mean() + p.mask.mean()).backward()
+    missing = [n for n, q in net.named_parameters() if q.grad is None or not torch.isfinite(q.grad).all()]
+    assert not missing
+
+
+def test_relight_is_albedo_times_shading():
+    A, T, L = torch.rand(2, 3, 4, 5), torch.randn(2, 9, 4, 5), torch.randn(9, 3)
+    p = Prediction(A, T, torch.randn(2, 9, 3))
+    expected = A * torch.einsum("bkhw,kc->bchw", T, L)
+    torch.testing.assert_close(relight(p, L), expected)
+    torch.testing.assert_close(p.shading(L), shading_map(T, L))
+
+
+def test_input_normalisation_like_ke18():
+    img = torch.full((1, 3, 2, 2), 1.0)
+    mask = torch.tensor([[[[1.0, 0.0], [1.0, 1.0]]]])
+    x = normalize_input(img, mask)
+    assert x.shape == (1, 4, 2, 2)
+    assert x[0, :3, 0, 0].tolist() == [1.0, 1.0, 1.0] and x[0, :3, 0, 1].tolist() == [0.0, 0.0, 0.0]
+    assert normalize_input((img * 255).to(torch.uint8), mask).allclose(x)
+
+
+def test_sizes_not_multiple_of_16_are_rejected_or_padded():
+    net = RelightNet(TINY)
+    x = normalize_input(torch.rand(1, 3, 30, 33), torch.ones(1, 1, 30, 33))
+    with pytest.raises(InputError, match="multiples of 16"):
+        net(x)
+    xp, orig = pad_to_multiple(x, 16)
+    assert xp.shape[-2:] == (32, 48) and orig == (30, 33)
+    assert net(xp).albedo.shape[-2:] == (32, 48)
+    with pytest.raises(ShapeError):
+        net(torch.rand(1, 3, 32, 32))

@@ -1,0 +1,88 @@
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.model import load_checkpoint, load_model
+from relightnet.model.training import TrainConfig, load_train_config, train
+
+REPO = Path(__file__).resolve().parents[2]
+NET = {"width": 8, "max_width": 32, "light_hidden": 32}
+
+
+def _losses(run):
+    return [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
+
+
+def test_a_few_steps_reduce_the_loss(tiny_dataset, tmp_path):
+    cfg = TrainConfig(steps=25, batch_size=3, lr=3e-3, warmup=1, log_every=1, checkpoint_every=25, net=NET,
+                      augment={}, threads=2)
+    train(cfg, tiny_dataset, tmp_path / "run")
+    totals = [r["total"] for r in _losses(tmp_path / "run")]
+    assert len(totals) == 25
+    assert sum(totals[-5:]) / 5 < 0.8 * sum(totals[:5]) / 5
+    assert (tmp_path / "run" / "loss.png").stat().st_size > 1000
+    model = load_model(tmp_path / "run" / "last.pt")
+    assert model.config.width == 8
+
+
+def test_resume_continues_bit_identically(tiny_dataset, tmp_path):
+    cfg = TrainConfig(steps=4, batch_size=2, warmup=1, log_every=1, checkpoint_every=10, net=NET, threads=1)
+    train(cfg, tiny_dataset, tmp_path / "full")
+    train(cfg, tiny_dataset, tmp_path / "cut", stop_after=2)  # "killed" after step 2 (checkpoint written)
+    assert load_checkpoint(tmp_path / "cut" / "last.pt")["step"] == 2
+    train(cfg, tiny_dataset, tmp_path / "cut", resume=True)
+    full, cut = _losses(tmp_path / "full"), _losses(tmp_path / "cut")
+    assert [r["step"] for r in cut] == [1, 2, 3, 4]
+    for a, b in zip(full, cut, strict=True):
+        assert a["total"] == b["total"] and a["transport"] == b["transport"]
+    other = TrainConfig(steps=5, batch_size=2, warmup=1, net=NET)
+    with pytest.raises(InputError, match="different training config"):
+        train(other, tiny_dataset, tmp_path / "cut", resume=True)
+
+
+def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a checkpoint")
+    with pytest.raises(InputError, match="unreadable checkpoint"):
+        load_model(bad)
+    torch.save({"hello": 1}, tmp_path / "other.pt")
+    with pytest.raises(InputError, match="not a relightnet checkpoint"):
+        load_model(tmp_path / "other.pt")
+    cfg = TrainConfig(steps=1, batch_size=2, warmup=1, net=NET)
+    train(cfg, tiny_dataset, tmp_path / "r")
+    state = load_checkpoint(tmp_path / "r" / "last.pt")
+    state["net_config"]["width"] = 16
+    torch.save(state, tmp_path / "mismatch.pt")
+    with pytest.raises(InputError, match="weights do not match"):
+        load_model(tmp_path / "mismatch.pt")
+    truncated = tmp_path / "trunc.pt"
+    truncated.write_bytes((tmp_path / "r" / "last.pt").read_bytes()[:2000])
+    with pytest.raises(InputError, match="unreadable checkpoint"):
+        load_model(truncated)
+    with pytest.raises(InputError, match="target"):
+        TrainConfig(target="normals")
+    (tmp_path / "c.yaml").write_text("steps: 3\nbogus: 1\n")
+    with pytest.raises(InputError, match="unknown keys"):
+        load_train_config(tmp_path / "c.yaml")
+
+
+def test_the_shipped_recipes_parse():
+    for name in ("small.yaml", "tiny.yaml"):
+        load_train_config(REPO / "train" / "configs" / name)
+
+
+def test_distributed_two_cpu_processes_stay_in_sync(tiny_dataset, tmp_path):
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2", "-m", "train",
+           "--config", str(REPO / "train" / "configs" / "tiny.yaml"), "--data", str(tiny_dataset),
+           "--out", str(tmp_path / "ddp")]
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(REPO)}
+    r = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stderr.count("ranks in sync: 2 replicas") == 2
+    assert load_checkpoint(tmp_path / "ddp" / "last.pt")["step"] == 6
