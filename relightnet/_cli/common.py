@@ -49,3 +49,21 @@ def pos_int(text: str) -> int:
     if v < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return v
+
+
+def key_value_arg(keys, cast, key_name: str = "NAME", value_name: str = "a number"):
+    """An argparse type parsing ``KEY=VALUE`` with KEY in ``keys`` (a sequence or a callable giving one)."""
+
+    def parse(text: str):
+        names = keys() if callable(keys) else keys
+        k, sep, v = text.partition("=")
+        if not sep or k not in names:
+            raise argparse.ArgumentTypeError(
+                f"expected {key_name}=VALUE with {key_name} in {', '.join(names)}, got {text!r}"
+            )
+        try:
+            return k, cast(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {value_name} after '{k}=', got {v!r}") from None
+
+    return parse

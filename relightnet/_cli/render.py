@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, nonneg_int, pos_int
+from .common import LIGHT_HELP, add_command, exposure_arg, key_value_arg, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.render")
 
@@ -142,16 +142,13 @@ def run_render_body(args: argparse.Namespace) -> int:
     return 0
 
 
-def _phenotype(text: str):
+def _phenotypes():
     from ..body import PHENOTYPES
 
-    k, sep, v = text.partition("=")
-    if not sep or k not in PHENOTYPES:
-        raise argparse.ArgumentTypeError(f"expected NAME=VALUE with NAME in {', '.join(PHENOTYPES)}, got {text!r}")
-    try:
-        return k, float(v)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number after '{k}=', got {v!r}") from None
+    return PHENOTYPES
+
+
+_phenotype = key_value_arg(_phenotypes, float, "NAME", "a number")
 
 
 def _prt_options(p: argparse.ArgumentParser, n_dirs: int) -> None:

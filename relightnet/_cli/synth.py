@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import add_command
+from .common import add_command, key_value_arg
 
 logger = logging.getLogger("relightnet.synth")
 
@@ -24,16 +24,13 @@ resumes: finished shards are checked (sha256) and kept; other settings are an er
 after the sample axis)."""
 
 
-def _split_count(text: str):
+def _splits():
     from ..data import SPLITS
 
-    k, sep, v = text.partition("=")
-    if not sep or k not in SPLITS:
-        raise argparse.ArgumentTypeError(f"expected SPLIT=N with SPLIT in {', '.join(SPLITS)}, got {text!r}")
-    try:
-        return k, int(v)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer after '{k}=', got {v!r}") from None
+    return SPLITS
+
+
+_split_count = key_value_arg(_splits, int, "SPLIT", "an integer")
 
 
 def build_config(args: argparse.Namespace):

@@ -50,8 +50,8 @@ class TrainConfig:
     target: str = "transport"
     net: dict = field(default_factory=dict)
     loss: dict = field(default_factory=dict)
-    augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.8, 1.0], "intensity": [0.5, 2.0],
-                                                   "white_balance": 0.1})
+    augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.875, 0.875],
+                                                   "intensity": [0.5, 2.0], "white_balance": 0.1})
     threads: int = 0
 
     def __post_init__(self) -> None:
@@ -66,6 +66,12 @@ class TrainConfig:
             )
         NetConfig(**self.net)
         LossWeights(**self.loss)
+        cs = self.augment.get("crop_scale") if self.augment else None
+        if cs is not None and cs[0] != cs[1] and self.augment.get("size") is None:
+            raise InputError(
+                f"train config augment.crop_scale: a range {list(cs)} gives items of different sizes; "
+                "use a fixed scale [s, s] or set augment.size so that batches stack"
+            )
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

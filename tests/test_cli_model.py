@@ -1,0 +1,52 @@
+import json
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from relightnet.cli import main
+from relightnet.io import write_image
+from relightnet.sh import load_light
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_train_evaluate_estimate_light(tiny_dataset, tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main(["-q", "train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tiny_dataset),
+                 "--out", str(run)]) == 0
+    ckpt = run / "last.pt"
+    assert ckpt.is_file() and (run / "metrics.jsonl").is_file()
+    assert main(["-q", "evaluate", "--checkpoint", str(ckpt), "--data", str(tiny_dataset),
+                 "--out", str(tmp_path / "rep")]) == 0
+    metrics = json.loads((tmp_path / "rep" / "metrics.json").read_text())
+    assert metrics["n"] == 3 and "relit_rmse" in metrics["model"]
+    assert "| metric |" in (tmp_path / "rep" / "report.md").read_text()
+    # A photo-like input of any size with a mask.
+    img = np.zeros((90, 70, 3), np.uint8)
+    img[10:80, 20:50] = 180
+    mask = np.zeros((90, 70, 3), np.uint8)
+    mask[10:80, 20:50] = 255
+    write_image(tmp_path / "p.png", img)
+    write_image(tmp_path / "m.png", mask)
+    for out in ("l.npz", "l.npy"):
+        assert main(["-q", "estimate-light", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"),
+                     "--checkpoint", str(ckpt), "--size", "32", "--out", str(tmp_path / out)]) == 0
+    a, b = load_light(tmp_path / "l.npz"), load_light(tmp_path / "l.npy")
+    assert a.shape == (9, 3) and torch.allclose(a, b, atol=1e-5)
+
+
+def test_bad_inputs(tmp_path, tiny_dataset, capsys):
+    assert main(["train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tmp_path),
+                 "--out", str(tmp_path / "r")]) == 1
+    assert "no manifest.json" in capsys.readouterr().err
+    (tmp_path / "junk.pt").write_bytes(b"junk")
+    assert main(["evaluate", "--checkpoint", str(tmp_path / "junk.pt"), "--data", str(tiny_dataset),
+                 "--out", str(tmp_path / "e")]) == 1
+    assert "unreadable checkpoint" in capsys.readouterr().err
+    write_image(tmp_path / "p.png", np.zeros((8, 8, 3), np.uint8))
+    write_image(tmp_path / "m.png", np.zeros((9, 8, 3), np.uint8))
+    assert main(["estimate-light", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"),
+                 "--checkpoint", str(tmp_path / "junk.pt"), "--out", str(tmp_path / "l.npz")]) == 1
+    assert "differs from the image" in capsys.readouterr().err
+    assert not (tmp_path / "l.npz").exists()
