@@ -1,4 +1,4 @@
-"""`relightnet light show|convert` and `relightnet demo`, in-process and as a subprocess."""
+"""`relightnet light show|convert`, in-process and as a subprocess (the demo: tests/pipeline)."""
 
 import os
 import subprocess
@@ -73,13 +73,6 @@ def test_bad_arguments_are_usage_errors(tmp_path, capsys):
         main(["light", "show", "studio", "--exposure", "-2"])
     assert e.value.code == 2
     assert main(["light"]) == 2  # no subcommand: help
-
-
-def test_demo_writes_preset_previews(tmp_path):
-    assert main(["demo", "--out", str(tmp_path / "demo"), "--size", "24"]) == 0
-    names = sorted(p.name for p in (tmp_path / "demo").iterdir())
-    assert names == sorted(f"{n}.png" for n in ["city", "courtyard", "forest", "interior", "night",
-                                               "studio", "sunrise", "sunset"])
 
 
 def test_subprocess(tmp_path):

@@ -97,6 +97,7 @@ def register(sub) -> None:
     p.add_argument("image", help="image file (PNG/JPEG)")
     p.add_argument("--mask", help="mask of the person (white = person); default: the model's mask head")
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
-    p.add_argument("--size", type=int, default=256, help="working resolution (multiple of 16, default: 256)")
+    p.add_argument("--size", type=int, default=None,
+                   help="working resolution, a multiple of 16 (default: the size the model was trained at)")
     _common(p)
     p.set_defaults(func=run_estimate_light)

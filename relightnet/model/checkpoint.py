@@ -1,8 +1,8 @@
 """Checkpoints: atomic save, validated load, and the shipped model.
 
 A checkpoint is a ``torch.save`` dict: ``format`` (a version tag), ``net_config``, ``model``
-(state dict), ``step``, and for training runs ``optimizer``, ``scheduler``,
-``train_config`` and ``rng`` (torch's CPU RNG state).
+(state dict), ``step``, ``input_size`` (side of the training images), and for training runs
+``optimizer``, ``scheduler``, ``train_config`` and ``rng`` (torch's CPU RNG state).
 """
 
 from __future__ import annotations
@@ -17,7 +17,8 @@ from ..checks import InputError
 from ..io import atomic_write
 from .network import NetConfig, RelightNet
 
-__all__ = ["FORMAT", "SHIPPED", "save_checkpoint", "load_checkpoint", "load_model", "shipped_checkpoint"]
+__all__ = ["FORMAT", "SHIPPED", "save_checkpoint", "load_checkpoint", "load_model", "shipped_checkpoint",
+           "release_checkpoint"]
 
 FORMAT = "relightnet-ckpt-1"
 #: The pretrained model shipped in the package.
@@ -86,4 +87,19 @@ def load_model(path=None, device="cpu") -> RelightNet:
     except RuntimeError as e:
         first = str(e).strip().splitlines()[0] if str(e).strip() else "state dict mismatch"
         raise InputError(f"{path}: weights do not match the network configuration ({first})") from None
+    #: The side of the square crops it was trained on: the natural working size for inference.
+    model.input_size = int(state.get("input_size", 256))
     return model.to(device).eval()
+
+
+def release_checkpoint(src, dst, **extra) -> Path:
+    """Copy a training checkpoint without its optimiser/scheduler state (what ships), adding ``extra`` keys."""
+    state = load_checkpoint(src)
+    for key in ("optimizer", "scheduler", "rng"):
+        state.pop(key, None)
+    state.update(extra)
+    buf = io.BytesIO()
+    torch.save(state, buf)
+    with atomic_write(dst) as f:
+        f.write(buf.getvalue())
+    return Path(dst)

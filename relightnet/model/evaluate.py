@@ -117,8 +117,9 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
                 add(who, "relit_ssim", ssim)
             if who == "model" and sheet is not None and len(rows) < 6:
                 for j in range(min(len(chunk), 6 - len(rows))):
-                    rows.append([b["image"][j], A[j], b["albedo"][j], shading_map(T, L)[j], gt_s[j], relit[j],
-                                 gt_relit[j]])
+                    mj = M[j]
+                    rows.append([b["image"][j], A[j] * mj, b["albedo"][j], shading_map(T, L)[j] * mj, gt_s[j],
+                                 relit[j] * mj, gt_relit[j]])
     result = {who: {k: float(np.mean(v)) for k, v in d.items()} for who, d in sums.items() if d}
     result["n"] = n
     if sheet is not None and rows:

@@ -67,8 +67,8 @@ def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
 
 
 @torch.no_grad()
-def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None, size: int = 256,
-                  pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
+def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
+                  size: int | None = None, pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
     """Predict albedo, transport, light (and mask) for one photo at its own resolution.
 
     Args:
@@ -76,7 +76,8 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
         image: (3, H, W) sRGB in [0, 1] (or uint8).
         mask: (H, W) person mask in [0, 1]; None uses the model's mask head on the whole
             frame (padded to a square) and then crops around the predicted mask.
-        size: working resolution (a multiple of the model's 2**levels).
+        size: working resolution (a multiple of the model's 2**levels); default: the size the
+            model was trained at (``model.input_size``, set by ``load_model``), else 256.
         pad: crop padding (fraction of the mask box's larger side).
 
     Returns:
@@ -88,6 +89,7 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
         image = image.float() / 255
     h, w = image.shape[-2:]
     m = model.config.multiple
+    size = int(getattr(model, "input_size", 256)) if size is None else int(size)
     if size % m:
         raise InputError(f"size: expected a multiple of {m}, got {size}")
     dev = next(model.parameters()).device
@@ -117,7 +119,7 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
 
 
 def estimate_light(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
-                   size: int = 256) -> torch.Tensor:
+                   size: int | None = None) -> torch.Tensor:
     """The SH light (K, 3) of a photo, camera-relative light frame, linear RGB."""
     pred, _ = predict_image(model, image, mask, size)
     return pred.light[0]

@@ -116,6 +116,7 @@ class TrainData:
         self.tensors = {k: torch.stack([it[k] for it in items]) for k in (*self.FIELDS, target)}
         self.tensors["transport"] = self.tensors.pop(target)
         self.n_coeffs = self.tensors["transport"].shape[1]
+        self.size = int(self.tensors["image"].shape[-1])
 
     def __len__(self) -> int:
         return self.tensors["image"].shape[0]
@@ -231,7 +232,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         if rank == 0 and (step % cfg.checkpoint_every == 0 or step == cfg.steps
                           or (stop_after is not None and done_here == stop_after)):
             save_checkpoint(ckpt, model, net_cfg, step=step, optimizer=opt, scheduler=sched,
-                            train_config=cfg.to_dict(), data=str(data_dir))
+                            train_config=cfg.to_dict(), data=str(data_dir), input_size=data.size)
     if rank == 0 and step >= cfg.steps:
         plot_losses(log_path, out / "loss.png")
     if world > 1:
