@@ -1,0 +1,61 @@
+"""``relightnet export`` (ONNX with the smoothing layer) and ``relightnet onnx-run`` (ONNX Runtime serving)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+
+from .common import add_command
+
+logger = logging.getLogger("relightnet.onnx")
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
+    from ..model.onnx_export import export_onnx
+
+    ckpt = Path(args.checkpoint) if args.checkpoint else shipped_checkpoint()
+    net = load_model(ckpt)
+    opts = {"alpha": args.alpha} if args.smoothing == "ema" else {}
+    out = export_onnx(net, args.out, smoothing=args.smoothing,
+                      train_config=load_checkpoint(ckpt).get("train_config"), **opts)
+    if args.int8:
+        from ..model.onnx_serving import quantize_int8
+
+        q = quantize_int8(out, Path(args.out).with_name(Path(args.out).stem + "_int8.onnx"))
+        logger.info("wrote %s (int8 weights, dynamic quantisation)", q)
+    return 0
+
+
+def run_onnx(args: argparse.Namespace) -> int:
+    from ..model.onnx_serving import run_video
+
+    res = run_video(args.model, args.video, args.masks, args.out_dir, size=args.size)
+    logger.info("wrote %d frames of lights (raw and smoothed) and albedo.mp4 to %s", len(res["raw"]), args.out_dir)
+    return 0
+
+
+def register(sub) -> None:
+    from ..model.onnx_export import SMOOTHERS
+
+    p = add_command(sub, "export", "Export the CNN with a streaming light-smoothing layer to one ONNX file.",
+                    "  relightnet export --out relightnet.onnx\n"
+                    "  relightnet export --checkpoint runs/small/last.pt --out m.onnx --smoothing one-euro\n"
+                    "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
+    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    p.add_argument("--out", required=True, help="output .onnx (weights inside)")
+    p.add_argument("--smoothing", choices=SMOOTHERS, default="ema", help="light smoothing in the graph (default: ema)")
+    p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")
+    p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx (int8 weights)")
+    p.set_defaults(func=run_export)
+
+    p = add_command(sub, "onnx-run", "Run an exported model over a video with ONNX Runtime (lights per frame).",
+                    "  relightnet onnx-run relightnet.onnx --video clip.mp4 --masks masks/ --out-dir out/clip\n"
+                    "  relightnet onnx-run m.onnx --video clip.mp4 --masks clip_masks.mp4 --out-dir out/clip\n")
+    p.add_argument("model", help="model from 'relightnet export'")
+    p.add_argument("--video", required=True, help="input video (mp4, mkv, ...)")
+    p.add_argument("--masks", required=True, help="folder of per-frame mask images (sorted) or a mask video")
+    p.add_argument("--out-dir", required=True, help="output folder: lights_raw.npz, lights_smoothed.npz, albedo.mp4")
+    p.add_argument("--size", type=int, default=None, help="working size (default: the model's training size)")
+    p.set_defaults(func=run_onnx)

@@ -1,0 +1,191 @@
+"""``relightnet smooth-light``: smooth a light sequence over time, correct outliers, plot it."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import logging
+from pathlib import Path
+
+from .common import add_command, nonneg_int, pos_int
+
+logger = logging.getLogger("relightnet.smooth")
+
+OFFLINE = ("hermite", "poly", "savgol")
+CAUSAL = ("ema", "one-euro", "fir")
+_LUMA = (0.2126, 0.7152, 0.0722)
+_PLOT_COEFFS = ((0, "DC (l=0)"), (1, "l=1, m=-1 (y)"), (2, "l=1, m=0 (z)"), (3, "l=1, m=1 (x)"))
+
+
+def _pos_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not v > 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return v
+
+
+def _smooth(args, sh):
+    """(smoothed, outliers (T,) bool, switches (T,) bool) for the chosen method."""
+    import torch
+
+    from ..checks import InputError, sh_order_from_count
+    from ..temporal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate, parse_eps, run_causal, smooth_lights
+
+    eps = parse_eps(args.outlier_eps)
+    deg = 2 if args.degree is None else args.degree
+    if args.method in OFFLINE:
+        opts = {"hermite": {"knot_spacing": args.knots, "tangents": args.tangents},
+                "poly": {"degree": deg, "window": 15 if args.window is None else (args.window or None)},
+                "savgol": {"degree": deg, "window": 9 if args.window is None else args.window}}[args.method]
+        res = smooth_lights(sh, args.method, outlier_eps=args.outlier_eps, iterations=args.iterations,
+                            switches=None if args.switches == "none" else "auto", **opts)
+        return res.smoothed, res.outliers, res.switches
+    if eps is not None and eps[0] != "mad":
+        raise InputError(
+            f"--outlier-eps: causal methods take 'none' or '<c>mad' (c times the running innovation scale), "
+            f"got {args.outlier_eps!r}"
+        )
+    lmax = sh_order_from_count(sh.shape[-2])
+    filt = {"ema": lambda: EMAFilter(args.alpha),
+            "one-euro": lambda: OneEuroFilter(args.min_cutoff, args.beta, rate=args.rate, lmax=lmax),
+            "fir": lambda: FIRFilter(5 if args.window is None else args.window, args.degree or 0)}[args.method]()
+    if eps is None:
+        y = run_causal(filt, sh)
+        none = torch.zeros(sh.shape[0], dtype=torch.bool)
+        return y, none, none
+    y, states = run_causal(OutlierGate(filt, eps[1], args.persist, lmax=lmax), sh, return_states=True)
+    status = states[:, -1, 0, 0].round()
+    return y, status == 1, status == 2
+
+
+def _luma(x):
+    r, g, b = _LUMA
+    return r * x[..., 0] + g * x[..., 1] + b * x[..., 2]
+
+
+def _plot_png(raw, smoothed, truth, outliers, switches, title: str) -> bytes:
+    """PNG bytes: luminance of DC and the three l=1 coefficients over time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    t = range(raw.shape[0])
+    coeffs = [c for c in _PLOT_COEFFS if c[0] < raw.shape[1]]
+    fig = Figure(figsize=(10, 2.2 * len(coeffs)), dpi=80)
+    axes = fig.subplots(len(coeffs), 1, sharex=True, squeeze=False)[:, 0]
+    raw_l, sm_l = _luma(raw).numpy(), _luma(smoothed).numpy()
+    tr_l = _luma(truth).numpy() if truth is not None else None
+    out_t = outliers.nonzero().flatten().tolist()
+    for ax, (k, name) in zip(axes, coeffs, strict=True):
+        ax.plot(t, raw_l[:, k], ".", color="0.6", ms=3, label="raw")
+        ax.plot(t, sm_l[:, k], "-", color="tab:blue", lw=1.5, label="smoothed")
+        if tr_l is not None:
+            ax.plot(t, tr_l[:, k], "--", color="tab:green", lw=1.2, label="truth")
+        if out_t:
+            ax.plot(out_t, raw_l[out_t, k], "x", color="tab:red", ms=5, label="outlier")
+        for s in switches.nonzero().flatten().tolist():
+            ax.axvline(s - 0.5, color="tab:orange", ls=":", lw=1)
+        ax.set_ylabel(name, fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0].legend(fontsize=7, ncol=4, loc="upper right")
+    axes[0].set_title(title, fontsize=9)
+    axes[-1].set_xlabel("frame")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return buf.getvalue()
+
+
+def run_smooth(args: argparse.Namespace) -> int:
+    from ..checks import InputError, ShapeError
+    from ..io.atomic import atomic_write
+    from ..sh.io import load_light, save_light
+    from ..temporal import jitter, light_error, parse_eps
+
+    methods = OFFLINE + CAUSAL
+    if args.method not in methods:
+        raise InputError(f"--method: expected one of {', '.join(methods)}, got {args.method!r}")
+    parse_eps(args.outlier_eps)
+    out = Path(args.output)
+    if out.suffix.lower() not in (".npz", ".json"):
+        raise InputError(f"{out}: a light sequence is written as .npz or .json")
+    plot = Path(args.plot) if args.plot else None
+    if plot is not None and plot.suffix.lower() != ".png":
+        raise InputError(f"{plot}: expected a .png plot file")
+    sh = load_light(args.input)
+    if sh.dim() != 3:
+        raise ShapeError(f"{args.input}: expected a light sequence (T, K, 3), got one light {tuple(sh.shape)}")
+    if sh.shape[0] < 2:
+        raise ShapeError(f"{args.input}: expected at least 2 frames, got {sh.shape[0]}")
+    truth = None
+    if args.truth:
+        truth = load_light(args.truth)
+        if tuple(truth.shape) != tuple(sh.shape):
+            raise ShapeError(f"{args.truth}: expected the input's shape {tuple(sh.shape)}, got {tuple(truth.shape)}")
+
+    smoothed, outliers, switches = _smooth(args, sh)
+    smoothed = smoothed.detach()
+    n_out = int(outliers.sum())
+    summary = f"{args.method}: {sh.shape[0]} frames, {n_out} outlier(s)"
+    if bool(switches.any()):
+        summary += f", switches at frames {switches.nonzero().flatten().tolist()}"
+    if truth is not None and sh.shape[0] >= 3:
+        e0, e1 = light_error(sh, truth).item(), light_error(smoothed, truth).item()
+        j0, j1 = jitter(sh).item(), jitter(smoothed).item()
+        summary += f"; error to truth {e0:.4g} -> {e1:.4g}, jitter {j0:.4g} -> {j1:.4g}"
+    png = _plot_png(sh, smoothed, truth, outliers, switches, f"{Path(args.input).name}: {summary}") if plot else None
+
+    for p in (out, plot):
+        if p is not None and not p.parent.exists():
+            p.parent.mkdir(parents=True, exist_ok=True)
+    save_light(out, smoothed)
+    if png is not None:
+        with atomic_write(plot) as f:
+            f.write(png)
+    logger.info("wrote %s (%s)%s", out, summary, f" and {plot}" if plot else "")
+    return 0
+
+
+def register(sub) -> None:
+    p = add_command(
+        sub,
+        "smooth-light",
+        "Smooth a light sequence (T, K, 3) over time: offline regression (hermite spline, poly, savgol) with "
+        "outlier correction and switch splitting, or a causal filter (ema, one-euro, fir) as used on live video.",
+        "  relightnet smooth-light lights.npz smooth.npz --method hermite --knots 8 --outlier-eps 3mad\n"
+        "  relightnet smooth-light lights.npz smooth.npz --truth true.npz --plot plot.png\n"
+        "  relightnet smooth-light lights.npz smooth.npz --method savgol --window 11 --degree 2\n"
+        "  relightnet smooth-light lights.npz live.npz --method one-euro --min-cutoff 0.5 --beta 1\n",
+    )
+    p.add_argument("input", metavar="IN", help="light sequence .npz/.json with sh (T, K, 3)")
+    p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz or .json")
+    p.add_argument("--method", default="hermite",
+                   help=f"one of {', '.join(OFFLINE + CAUSAL)} (default: hermite)")
+    p.add_argument("--knots", type=_pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
+    p.add_argument("--tangents", choices=("catmull-rom", "free"), default="catmull-rom",
+                   help="hermite: knot tangents from finite differences or fitted (default: catmull-rom)")
+    p.add_argument("--degree", type=int, default=None,
+                   help="poly/savgol: polynomial degree (default 2); fir: 0 = moving average, 1 = linear")
+    p.add_argument("--window", type=nonneg_int, default=None,
+                   help="poly: local window (default 15; 0 = one polynomial per segment); savgol: odd window "
+                        "(default 9); fir: taps (default 5)")
+    p.add_argument("--outlier-eps", default="3mad",
+                   help="outlier threshold: '<c>mad' (c robust deviations above the median distance), an "
+                        "absolute light distance, or 'none' (default: 3mad); causal: '<c>mad' = c times the "
+                        "running innovation scale")
+    p.add_argument("--switches", choices=("auto", "none"), default="auto",
+                   help="offline: split the sequence at persistent jumps (default: auto)")
+    p.add_argument("--iterations", type=pos_int, default=3, help="offline outlier passes (default: 3)")
+    p.add_argument("--alpha", type=_pos_float, default=0.3, help="ema: weight of the new frame (default: 0.3)")
+    p.add_argument("--min-cutoff", type=_pos_float, default=0.5, help="one-euro: cutoff at rest, Hz (default: 0.5)")
+    p.add_argument("--beta", type=float, default=1.0, help="one-euro: cutoff gain per unit speed (default: 1)")
+    p.add_argument("--rate", type=_pos_float, default=30.0, help="one-euro: frames per second (default: 30)")
+    p.add_argument("--persist", type=pos_int, default=2,
+                   help="causal: frames a jump must last to count as a switch (default: 2)")
+    p.add_argument("--truth", default=None, help="true light sequence, for the error and the plot")
+    p.add_argument("--plot", default=None, help="write a .png of raw/smoothed/true coefficients over time")
+    p.set_defaults(func=run_smooth)

@@ -1,0 +1,142 @@
+"""ONNX export of the CNN with a streaming light-smoothing layer inside the graph.
+
+The exported graph is one step of a stream (loop-free, so any video length works):
+
+    inputs : image (B, 3, H, W) float32 sRGB in [0, 1], mask (B, 1, H, W) float32,
+             light_state (B, S, K, 3) float32, is_first (B,) bool
+    outputs: albedo (B, 3, H, W), transport (B, K, H, W), light_raw (B, K, 3),
+             light_smoothed (B, K, 3), light_state_out (B, S, K, 3)
+
+B, H and W are dynamic (H, W multiples of 16). ``is_first`` starts a new sequence (the
+smoother's state is ignored and reset). The smoother is any module with
+``forward(x (B, K, 3), state (B, S, K, 3), is_first (B,)) -> (y, new_state)`` and an int
+attribute ``state_size`` (S); ``"none"`` passes the raw light through (S = 1).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from pathlib import Path
+
+import torch
+from torch import nn
+
+from ..checks import InputError
+from ..io import atomic_write
+from .network import RelightNet, normalize_input
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["PassThrough", "StreamingRelighter", "make_smoother", "export_onnx", "INPUTS", "OUTPUTS", "SMOOTHERS"]
+
+INPUTS = ("image", "mask", "light_state", "is_first")
+OUTPUTS = ("albedo", "transport", "light_raw", "light_smoothed", "light_state_out")
+
+
+class PassThrough(nn.Module):
+    """No smoothing: y = x (state kept as the last raw light)."""
+
+    state_size = 1
+
+    def forward(self, x: torch.Tensor, state: torch.Tensor, is_first: torch.Tensor):
+        return x, x[:, None]
+
+
+#: Streaming smoothers that can live inside the exported graph.
+SMOOTHERS = ("none", "ema", "one-euro", "fir", "gated-one-euro")
+
+
+def make_smoother(name: str, lmax: int = 2, **opts) -> nn.Module:
+    """A streaming smoother module by name (see :mod:`relightnet.temporal.causal`).
+
+    ``gated-one-euro`` puts an outlier gate in front of the one-euro filter: a frame far from
+    the running output is dropped, a jump that persists is taken as a light switch.
+    """
+    from ..temporal.causal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate
+
+    if name == "none":
+        return PassThrough()
+    if name == "ema":
+        return EMAFilter(**opts)
+    if name == "fir":
+        return FIRFilter(**opts)
+    if name == "one-euro":
+        return OneEuroFilter(lmax=lmax, **opts)
+    if name == "gated-one-euro":
+        return OutlierGate(OneEuroFilter(lmax=lmax), lmax=lmax, **opts)
+    raise InputError(f"smoothing: expected one of {SMOOTHERS}, got {name!r}")
+
+
+class StreamingRelighter(nn.Module):
+    """The CNN followed by a streaming smoother of its light: one frame per call."""
+
+    def __init__(self, net: RelightNet, smoother: nn.Module) -> None:
+        super().__init__()
+        self.net, self.smoother = net, smoother
+
+    def forward(self, image, mask, light_state, is_first):
+        p = self.net(normalize_input(image, mask))
+        smoothed, state = self.smoother(p.light, light_state, is_first)
+        return p.albedo, p.transport, p.light, smoothed, state
+
+
+def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: dict | None) -> dict:
+    cfg_text = json.dumps(train_config or {}, sort_keys=True)
+    return {
+        "relightnet.sh_order": str(net.config.lmax),
+        "relightnet.sh_convention": "real orthonormal SH, no Condon-Shortley phase, k=l(l+1)+m, "
+                                    "light frame x=toward camera, y=image right, z=up; light (K,3) linear RGB",
+        "relightnet.input": "image: sRGB in [0,1] RGB (B,3,H,W); mask (B,1,H,W); normalised inside the graph "
+                            "as KE18: (2*image-1)*mask, mask appended; H, W multiples of 16",
+        "relightnet.smoothing": smoothing,
+        "relightnet.state_size": str(state_size),
+        "relightnet.input_size": str(getattr(net, "input_size", 128)),
+        "relightnet.train_config_sha256": hashlib.sha256(cfg_text.encode()).hexdigest(),
+    }
+
+
+def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict | None = None,
+                example_size: int = 64, **smoother_opts) -> Path:
+    """Export one self-contained ``.onnx`` file (weights inside, dynamic batch/H/W).
+
+    Args:
+        net: the trained network (eval mode).
+        out: output path (written atomically).
+        smoothing: ``none``, ``ema`` or ``one-euro``.
+        train_config: stored as a hash in the model metadata.
+        example_size: H = W of the example used for tracing (any multiple of 16).
+
+    Returns:
+        The path written.
+    """
+    import onnx
+
+    if example_size % 16:
+        raise InputError(f"example_size: expected a multiple of 16, got {example_size}")
+    smoother = make_smoother(smoothing, lmax=net.config.lmax, **smoother_opts)
+    model = StreamingRelighter(net.eval(), smoother).eval()
+    k, s = net.config.n_coeffs, smoother.state_size
+    b, hw = 2, example_size
+    args = (torch.rand(b, 3, hw, hw), torch.ones(b, 1, hw, hw), torch.zeros(b, s, k, 3),
+            torch.ones(b, dtype=torch.bool))
+    batch = torch.export.Dim("batch", min=1, max=1024)
+    h16, w16 = torch.export.Dim("h16", min=1, max=512), torch.export.Dim("w16", min=1, max=512)
+    spatial = {0: batch, 2: 16 * h16, 3: 16 * w16}
+    shapes = {"image": spatial, "mask": spatial, "light_state": {0: batch}, "is_first": {0: batch}}
+    import warnings
+
+    with warnings.catch_warnings(), torch.no_grad():
+        warnings.simplefilter("ignore")
+        prog = torch.onnx.export(model, args, dynamo=True, dynamic_shapes=shapes, input_names=list(INPUTS),
+                                 output_names=list(OUTPUTS), verbose=False)
+    proto = prog.model_proto
+    for key, value in _metadata(net, smoothing, s, train_config).items():
+        entry = proto.metadata_props.add()
+        entry.key, entry.value = key, value
+    with atomic_write(out) as f:
+        f.write(proto.SerializeToString())
+    onnx.checker.check_model(str(out))
+    logger.info("wrote %s (smoothing=%s, state (B, %d, %d, 3))", out, smoothing, s, k)
+    return Path(out)

@@ -1,0 +1,196 @@
+"""Serving the exported model with ONNX Runtime: ``OnnxRelighter`` and int8 quantisation.
+
+``OnnxRelighter`` runs frames in order through one ``onnxruntime.InferenceSession``,
+carrying the smoothing state between calls, and validates every input (name, shape, dtype)
+before ONNX Runtime sees it, so mistakes give one clear line.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError, ShapeError
+from .onnx_export import INPUTS
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["OnnxRelighter", "quantize_int8", "run_video"]
+
+
+class OnnxRelighter:
+    """A streaming relighter backed by an exported ``.onnx`` file.
+
+    Args:
+        path: the model from ``relightnet export``.
+        threads: intra-op threads of the session (0: ONNX Runtime's default).
+
+    Call :meth:`step` with one frame batch at a time; :meth:`reset` starts a new sequence.
+    """
+
+    def __init__(self, path, threads: int = 0) -> None:
+        import onnxruntime as ort
+
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise InputError(f"{self.path}: ONNX model not found")
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = threads
+        opts.log_severity_level = 3
+        try:
+            self.session = ort.InferenceSession(str(self.path), opts, providers=["CPUExecutionProvider"])
+        except Exception as e:  # truncated or not an ONNX file
+            first = str(e).strip().splitlines()[0][:200] if str(e).strip() else type(e).__name__
+            raise InputError(f"{self.path}: unreadable ONNX model ({first})") from None
+        names = [i.name for i in self.session.get_inputs()]
+        if names != list(INPUTS):
+            raise InputError(f"{self.path}: not a relightnet model (inputs {names}, expected {list(INPUTS)})")
+        meta = self.session.get_modelmeta().custom_metadata_map
+        self.metadata = dict(meta)
+        state = self.session.get_inputs()[2].shape  # [batch, S, K, 3]
+        self.state_size, self.n_coeffs = int(state[1]), int(state[2])
+        self._state: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forget the smoothing state: the next frame starts a new sequence."""
+        self._state = None
+
+    def _check(self, image: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if not isinstance(image, np.ndarray) or image.dtype != np.float32:
+            raise InputError(f"image: expected a float32 numpy array (sRGB in [0, 1]), got "
+                             f"{getattr(image, 'dtype', type(image).__name__)}")
+        if image.ndim != 4 or image.shape[1] != 3:
+            raise ShapeError(f"image: expected (B, 3, H, W), got {tuple(image.shape)}")
+        b, _, h, w = image.shape
+        if h % 16 or w % 16:
+            raise ShapeError(f"image: H and W must be multiples of 16, got ({h}, {w})")
+        mask = np.asarray(mask, dtype=np.float32)
+        if mask.shape != (b, 1, h, w):
+            raise ShapeError(f"mask: expected ({b}, 1, {h}, {w}), got {tuple(mask.shape)}")
+        return image, mask
+
+    def run(self, feeds: dict) -> list[np.ndarray]:
+        """One raw session call with validated feeds (the four named inputs, right dtypes)."""
+        if set(feeds) != set(INPUTS):
+            raise InputError(f"inputs: expected exactly {list(INPUTS)}, got {sorted(feeds)}")
+        want = {"image": np.float32, "mask": np.float32, "light_state": np.float32, "is_first": np.bool_}
+        for name, dtype in want.items():
+            arr = feeds[name]
+            if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
+                raise InputError(f"{name}: expected a numpy {np.dtype(dtype).name} array, got "
+                                 f"{getattr(arr, 'dtype', type(arr).__name__)}")
+        self._check(feeds["image"], feeds["mask"])
+        b = feeds["image"].shape[0]
+        if feeds["light_state"].shape != (b, self.state_size, self.n_coeffs, 3):
+            raise ShapeError(f"light_state: expected ({b}, {self.state_size}, {self.n_coeffs}, 3), "
+                             f"got {tuple(feeds['light_state'].shape)}")
+        if feeds["is_first"].shape != (b,):
+            raise ShapeError(f"is_first: expected ({b},), got {tuple(feeds['is_first'].shape)}")
+        return self.session.run(None, feeds)
+
+    def step(self, image: np.ndarray, mask: np.ndarray) -> dict:
+        """Run one frame (batch of B streams).
+
+        Args:
+            image: (B, 3, H, W) float32 sRGB in [0, 1].
+            mask: (B, 1, H, W) float32.
+
+        Returns:
+            ``albedo``, ``transport``, ``light_raw``, ``light_smoothed`` numpy arrays.
+        """
+        image, mask = self._check(image, mask)
+        b = image.shape[0]
+        first = self._state is None or self._state.shape[0] != b
+        state = np.zeros((b, self.state_size, self.n_coeffs, 3), np.float32) if first else self._state
+        outs = self.run({"image": image, "mask": mask, "light_state": state,
+                         "is_first": np.full((b,), first, dtype=bool)})
+        albedo, transport, raw, smoothed, self._state = outs
+        return {"albedo": albedo, "transport": transport, "light_raw": raw, "light_smoothed": smoothed}
+
+
+def quantize_int8(src, dst) -> Path:
+    """A second model file with int8 weights (ONNX Runtime dynamic quantisation: weights int8,
+    activations quantised on the fly).
+
+    Static QDQ quantisation (calibrated activations) was tried: with onnxruntime 1.32 it
+    writes an invalid model for graphs from ``torch.onnx.export(dynamo=True)`` (a duplicated
+    value definition), so the dynamic form is what ships.
+    """
+    from onnxruntime.quantization import QuantType, quantize_dynamic
+
+    src, dst = Path(src), Path(dst)
+    tmp = dst.with_name(f".{dst.name}.tmp")
+    try:
+        quantize_dynamic(str(src), str(tmp), weight_type=QuantType.QInt8)
+        tmp.replace(dst)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return dst
+
+
+def _mask_frames(masks) -> tuple[int, object]:
+    """(count, iterator of (H, W) float masks) from a folder of images or a mask video."""
+    from ..io import read_image, read_video, video_info
+
+    p = Path(masks)
+    if p.is_dir():
+        files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
+        if not files:
+            raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
+        return len(files), ((read_image(f).mean(-1) > 0.5).float() for f in files)
+    info = video_info(p)
+    return info.n_frames, (torch.from_numpy(f).float().mean(-1) > 127 for f in read_video(p))
+
+
+def run_video(model_path, video, masks, out_dir, size: int | None = None, threads: int = 0) -> dict:
+    """Stream a video through an exported model: per-frame raw and smoothed lights, albedo video.
+
+    Frames are cropped around each frame's mask (KE18 framing), resized to ``size`` (default:
+    the model's training size from its metadata), and run in order so the smoothing state
+    carries over. Writes ``lights_raw.npz`` and ``lights_smoothed.npz`` ((T, K, 3) light
+    sequences) and ``albedo.mp4`` (the predicted albedo pasted back into the frame).
+
+    Returns:
+        ``{"raw": (T, K, 3), "smoothed": (T, K, 3)}`` numpy arrays.
+    """
+    import torch.nn.functional as F
+
+    from ..io import VideoWriter, read_video, video_info
+    from ..sh import save_light
+    from .inference import _crop, _paste, mask_crop_box
+
+    r = OnnxRelighter(model_path, threads=threads)
+    size = int(r.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
+    if size % 16:
+        raise InputError(f"size: expected a multiple of 16, got {size}")
+    n_video = video_info(video).n_frames
+    n_masks, mask_iter = _mask_frames(masks)
+    if n_video and n_masks and n_video != n_masks:
+        raise InputError(f"{masks}: {n_masks} masks for {n_video} video frames")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    raw, smooth = [], []
+    with VideoWriter(out / "albedo.mp4", fps=video_info(video).fps) as writer:
+        for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
+            if frame is None or mask is None:  # containers such as mkv do not store a frame count
+                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
+            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
+            if mask.shape != img.shape[1:]:
+                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
+            box = mask_crop_box(mask.float())
+            x = F.interpolate(_crop(img[None], box), size=(size, size), mode="bilinear", align_corners=False)
+            m = F.interpolate(_crop(mask.float()[None, None], box), size=(size, size), mode="bilinear",
+                              align_corners=False)
+            res = r.step(x.numpy(), (m > 0.5).float().numpy())
+            raw.append(res["light_raw"][0])
+            smooth.append(res["light_smoothed"][0])
+            albedo = _paste(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask
+            writer.write(albedo.permute(1, 2, 0))
+    result = {"raw": np.stack(raw), "smoothed": np.stack(smooth)}
+    save_light(out / "lights_raw.npz", torch.from_numpy(result["raw"]))
+    save_light(out / "lights_smoothed.npz", torch.from_numpy(result["smoothed"]))
+    return result

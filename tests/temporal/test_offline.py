@@ -1,0 +1,165 @@
+"""Offline smoothing: noise removal, outliers, switches, batching, gradients, errors."""
+
+import math
+
+import pytest
+import torch
+
+from relightnet.checks import InputError, ShapeError
+from relightnet.sh import preset_light, rotate_sh_up
+from relightnet.temporal import (
+    detect_switches,
+    light_distance,
+    light_error,
+    outlier_scores,
+    smooth_hermite,
+    smooth_lights,
+    smooth_poly,
+    smooth_savgol,
+    step_lag,
+)
+
+METHOD_OPTS = {
+    "hermite": {"knot_spacing": 8},
+    "poly": {"degree": 2, "window": 15},
+    "savgol": {"window": 15, "degree": 2},
+}
+
+
+def rotating(t_len=120, seed=0, step=None, noise=0.0, dtype=torch.float32):
+    """A preset light turning smoothly about the up axis; optionally a switch to another preset at ``step``."""
+    a, b = preset_light("studio").to(dtype), preset_light("sunset").to(dtype)
+    ang = 0.6 * torch.sin(torch.arange(t_len, dtype=torch.float64) / 25.0)
+    truth = torch.stack([rotate_sh_up(a if step is None or t < step else b, float(ang[t])) for t in range(t_len)])
+    g = torch.Generator().manual_seed(seed)
+    noisy = truth + noise * torch.randn(truth.shape, generator=g, dtype=dtype)
+    return truth, noisy
+
+
+def poly_lights(t_len, degree, seed=0):
+    """(T, 9, 3) lights whose every coefficient is a random polynomial of ``degree`` in t."""
+    g = torch.Generator().manual_seed(seed)
+    c = torch.randn(degree + 1, 9, 3, generator=g, dtype=torch.float64)
+    t = torch.linspace(-1.3, 0.7, t_len, dtype=torch.float64)
+    return sum(c[i] * t[:, None, None] ** i for i in range(degree + 1))
+
+
+def test_polynomial_data_is_not_flagged_and_kept_exactly():
+    x = poly_lights(50, 3)
+    res = smooth_poly(x, degree=3, outlier_eps="3mad", switches="auto")
+    torch.testing.assert_close(res.smoothed, x, rtol=0, atol=1e-10)
+    assert not res.outliers.any() and not res.switches.any()  # rounding errors are not outliers
+
+
+@pytest.mark.parametrize("method", ["hermite", "poly", "savgol"])
+def test_every_method_removes_noise(method):
+    truth, noisy = rotating(noise=0.05)
+    res = smooth_lights(noisy, method, **METHOD_OPTS[method])
+    assert res.smoothed.shape == truth.shape and res.outliers.shape == res.distances.shape == (120,)
+    raw, smooth = light_error(noisy, truth).item(), light_error(res.smoothed, truth).item()
+    assert smooth < 0.45 * raw, (raw, smooth)
+
+
+@pytest.mark.parametrize("method", ["hermite", "poly", "savgol"])
+def test_injected_outliers_are_detected_and_corrected(method):
+    truth, noisy = rotating(t_len=200, noise=0.05, seed=1)
+    g = torch.Generator().manual_seed(7)
+    idx = torch.randperm(200, generator=g)[:12]
+    spikes = torch.randn(12, 9, 3, generator=g)
+    spikes *= 5.0 / light_distance(spikes)[:, None, None]  # about a third of the light's norm
+    noisy[idx] += spikes
+    truth_flags = torch.zeros(200, dtype=torch.bool)
+    truth_flags[idx] = True
+    res = smooth_lights(noisy, method, outlier_eps="3mad", **METHOD_OPTS[method])
+    recall, precision = outlier_scores(res.outliers, truth_flags)
+    assert recall >= 0.9 and precision >= 0.7, (recall, precision)
+    plain = smooth_lights(noisy, method, **METHOD_OPTS[method]).smoothed
+    # Corrected: the spikes no longer leak into the smoothed light.
+    err_fixed = light_distance(res.smoothed, truth)[idx].mean()
+    err_plain = light_distance(plain, truth)[idx].mean()
+    assert err_fixed < 0.4 * err_plain, (err_fixed, err_plain)
+    assert light_error(res.smoothed, truth) < 0.35 * light_error(noisy, truth)
+
+
+def test_noise_level_changing_at_a_switch_does_not_make_outliers():
+    # A dim light, then a bright one, each estimated with 5 % noise: thresholds are per segment and local.
+    dim, bright = preset_light("night") * 0.2, preset_light("studio") * 3
+    truth = torch.stack([dim] * 70 + [bright] * 70)
+    g = torch.Generator().manual_seed(11)
+    noisy = truth * (1 + 0.05 * torch.randn(truth.shape, generator=g))
+    res = smooth_hermite(noisy, outlier_eps="3mad", switches="auto")
+    assert res.switches.nonzero().flatten().tolist() == [70]
+    assert res.outliers.sum() <= 4
+    assert light_error(res.smoothed, truth) < 0.5 * light_error(noisy, truth)
+
+
+def test_switch_is_detected_and_followed_at_once():
+    truth, noisy = rotating(t_len=150, step=80, noise=0.05, seed=2)
+    noisy[[20, 79, 81, 120]] += 3.0  # outliers, two of them right at the switch
+    sw = detect_switches(noisy)
+    assert sw.nonzero().flatten().tolist() == [80]
+    split = smooth_hermite(noisy, outlier_eps="3mad", switches="auto")
+    assert split.switches.nonzero().flatten().tolist() == [80]
+    assert step_lag(split.smoothed, truth, 80) == 0
+    assert split.outliers[[20, 79, 81, 120]].all()
+    whole = smooth_hermite(noisy, outlier_eps="3mad")
+    assert step_lag(whole.smoothed, truth, 80) >= 2  # a spline over the switch blurs it
+    assert light_error(split.smoothed, truth) < 0.7 * light_error(whole.smoothed, truth)
+    # A smooth sequence without a switch has none.
+    _, calm = rotating(t_len=150, noise=0.05, seed=3)
+    assert not detect_switches(calm).any()
+
+
+def test_batched_equals_one_by_one_and_dtype_kept():
+    seqs = [rotating(t_len=60, noise=0.05, seed=s, step=30 if s == 1 else None)[1] for s in range(3)]
+    batch = torch.stack(seqs)
+    res = smooth_lights(batch, "hermite", outlier_eps="3mad", switches="auto", knot_spacing=6)
+    assert res.smoothed.shape == (3, 60, 9, 3) and res.outliers.shape == (3, 60)
+    assert res.smoothed.dtype == torch.float32
+    for i, s in enumerate(seqs):
+        one = smooth_lights(s, "hermite", outlier_eps="3mad", switches="auto", knot_spacing=6)
+        torch.testing.assert_close(res.smoothed[i], one.smoothed, rtol=1e-5, atol=1e-5)
+        assert torch.equal(res.outliers[i], one.outliers) and torch.equal(res.switches[i], one.switches)
+    assert res.switches[1].nonzero().flatten().tolist() == [30] and not res.switches[[0, 2]].any()
+
+
+def test_differentiable_in_the_lights():
+    _, noisy = rotating(t_len=24, noise=0.05, dtype=torch.float64)
+    x = noisy.clone().requires_grad_(True)
+    torch.autograd.gradcheck(lambda v: smooth_savgol(v, window=5).smoothed, (x,))
+    out = smooth_hermite(x, knot_spacing=6, outlier_eps="3mad").smoothed
+    out.square().sum().backward()
+    assert torch.isfinite(x.grad).all() and x.grad.abs().sum() > 0
+
+
+def test_short_sequences_and_single_frames():
+    truth, noisy = rotating(t_len=4, noise=0.01)
+    for method in ("hermite", "poly", "savgol"):
+        res = smooth_lights(noisy, method, outlier_eps="3mad", switches="auto", **METHOD_OPTS[method])
+        assert res.smoothed.shape == (4, 9, 3) and torch.isfinite(res.smoothed).all()
+    one = smooth_lights(noisy[:1], "hermite")
+    torch.testing.assert_close(one.smoothed, noisy[:1])
+
+
+def test_bad_inputs():
+    _, x = rotating(t_len=20)
+    with pytest.raises(ShapeError):
+        smooth_lights(x[0])  # one light, not a sequence
+    with pytest.raises(ShapeError):
+        smooth_lights(torch.zeros(20, 8, 3))
+    nan = x.clone()
+    nan[3, 0, 0] = math.nan
+    with pytest.raises(InputError, match="NaN"):
+        smooth_lights(nan)
+    with pytest.raises(InputError, match="method"):
+        smooth_lights(x, "spline")
+    with pytest.raises(InputError, match="unknown option"):
+        smooth_lights(x, "hermite", window=5)
+    with pytest.raises(InputError, match="odd"):
+        smooth_savgol(x, window=6)
+    with pytest.raises(InputError, match="eps"):
+        smooth_lights(x, outlier_eps="3sigma")
+    with pytest.raises(InputError, match="knot_spacing"):
+        smooth_hermite(x, knot_spacing=0)
+    with pytest.raises(ShapeError, match="switches"):
+        smooth_lights(x, switches=torch.zeros(5, dtype=torch.bool))

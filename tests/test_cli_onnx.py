@@ -1,0 +1,45 @@
+from pathlib import Path
+
+import numpy as np
+
+from relightnet.cli import main
+from relightnet.io import VideoWriter, write_image
+from relightnet.model.onnx_serving import OnnxRelighter
+from relightnet.sh import load_light
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _clip(tmp_path, n=4, h=48, w=64):
+    frames, masks = tmp_path / "clip.mkv", tmp_path / "masks"
+    masks.mkdir()
+    with VideoWriter(frames, fps=10) as v:
+        for t in range(n):
+            img = np.zeros((h, w, 3), np.uint8)
+            img[8:40, 20 + t : 36 + t] = 200
+            m = np.zeros((h, w, 3), np.uint8)
+            m[8:40, 20 + t : 36 + t] = 255
+            v.write(img)
+            write_image(masks / f"{t:04d}.png", m)
+    return frames, masks
+
+
+def test_export_and_run_a_video(tiny_dataset, tmp_path):
+    run = tmp_path / "run"
+    assert main(["-q", "train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tiny_dataset),
+                 "--out", str(run)]) == 0
+    onnx = tmp_path / "m.onnx"
+    assert main(["-q", "export", "--checkpoint", str(run / "last.pt"), "--out", str(onnx),
+                 "--smoothing", "one-euro"]) == 0
+    assert OnnxRelighter(onnx).metadata["relightnet.smoothing"] == "one-euro"
+    video, masks = _clip(tmp_path)
+    assert main(["-q", "onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
+                 "--out-dir", str(tmp_path / "out"), "--size", "32"]) == 0
+    raw, smooth = load_light(tmp_path / "out" / "lights_raw.npz"), load_light(tmp_path / "out" / "lights_smoothed.npz")
+    assert raw.shape == (4, 9, 3) and smooth.shape == (4, 9, 3)
+    assert (tmp_path / "out" / "albedo.mp4").is_file()
+    # Too few masks: one clear error, nothing written.
+    (masks / "0003.png").unlink()
+    assert main(["onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
+                 "--out-dir", str(tmp_path / "out2")]) == 1
+    assert not (tmp_path / "out2" / "lights_raw.npz").exists()
