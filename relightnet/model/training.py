@@ -37,7 +37,8 @@ __all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "Train
 @dataclass(frozen=True)
 class TrainConfig:
     """A training run. ``target`` selects the transport field: ``transport`` (occlusion-aware)
-    or ``transport_unoccluded`` (the ablation "occlusion ignored")."""
+    or ``transport_unoccluded`` (the ablation "occlusion ignored"); ``init`` starts from the
+    weights of a checkpoint (fine-tuning) instead of a random initialisation."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -53,6 +54,7 @@ class TrainConfig:
     augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.875, 0.875],
                                                    "intensity": [0.5, 2.0], "white_balance": 0.1})
     threads: int = 0
+    init: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -191,6 +193,11 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
+    if cfg.init and not resume:
+        init = load_checkpoint(cfg.init, map_location=device)
+        if init["net_config"] != dataclasses.asdict(net_cfg):
+            raise InputError(f"{cfg.init}: its network configuration differs from the training config's")
+        model.load_state_dict(init["model"])
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(cfg))
     step = 0

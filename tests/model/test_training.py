@@ -86,3 +86,18 @@ def test_distributed_two_cpu_processes_stay_in_sync(tiny_dataset, tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stderr.count("ranks in sync: 2 replicas") == 2
     assert load_checkpoint(tmp_path / "ddp" / "last.pt")["step"] == 6
+
+
+def test_init_from_a_checkpoint_fine_tunes_it(tiny_dataset, tmp_path):
+    base = TrainConfig(steps=1, batch_size=2, warmup=1, net=NET, threads=1)
+    train(base, tiny_dataset, tmp_path / "a")
+    start = load_model(tmp_path / "a" / "last.pt").state_dict()
+    tune = TrainConfig(steps=1, batch_size=2, warmup=1, lr=1e-9, weight_decay=0.0, net=NET, threads=1,
+                       init=str(tmp_path / "a" / "last.pt"))
+    train(tune, tiny_dataset, tmp_path / "b")
+    after = load_model(tmp_path / "b" / "last.pt").state_dict()
+    for k, v in start.items():
+        torch.testing.assert_close(after[k], v, atol=1e-6, rtol=0)
+    other = TrainConfig(steps=1, batch_size=2, warmup=1, net={**NET, "width": 16}, init=str(tmp_path / "a" / "last.pt"))
+    with pytest.raises(InputError, match="network configuration differs"):
+        train(other, tiny_dataset, tmp_path / "c")
