@@ -1,0 +1,70 @@
+"""``relightnet relight-image``: the 2D path on a photo (pipeline job 1)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+
+from .common import LIGHT_HELP, add_command
+
+logger = logging.getLogger("relightnet.relight")
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+    import torch
+
+    from ..io import atomic_write, read_image, write_image
+    from ..model.checkpoint import load_model
+    from ..pipeline.relight_image import relight_image
+    from ..sh import load_light, save_light
+
+    image = read_image(args.image).permute(2, 0, 1)
+    mask = None
+    if args.mask:
+        mask = (read_image(args.mask).mean(-1) > 0.5).float()
+        if tuple(mask.shape) != tuple(image.shape[1:]):
+            raise ValueError(f"--mask {args.mask}: size {tuple(mask.shape)} differs from the image's "
+                             f"{tuple(image.shape[1:])}")
+        if not mask.any():
+            raise ValueError(f"--mask {args.mask}: empty mask (no white pixel): expected the person's mask")
+    light = load_light(args.light)
+    if light.dim() != 2:
+        raise ValueError(f"--light {args.light}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+    model = load_model(args.checkpoint, device=args.device)
+    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute)
+    if res.mask_predicted:
+        logger.info("no --mask: the person was found by the model's mask head")
+    write_image(args.out, res.image, srgb=False)
+    if args.save_maps:
+        d = Path(args.save_maps)
+        d.mkdir(parents=True, exist_ok=True)
+        p = res.prediction
+        write_image(d / "albedo.png", p.albedo[0].permute(1, 2, 0))
+        s = p.shading()[0].permute(1, 2, 0) * p.mask[0].permute(1, 2, 0)
+        write_image(d / "shading.png", s / s.amax().clamp_min(1e-8))
+        write_image(d / "mask.png", p.mask[0].permute(1, 2, 0).expand(-1, -1, 3), srgb=False)
+        with atomic_write(d / "transport.npz") as f:
+            np.savez_compressed(f, transport=p.transport[0].numpy(), mask=p.mask[0, 0].numpy())
+        save_light(d / "light_estimated.npz", p.light[0])
+        save_light(d / "light_used.npz", res.light.to(torch.float32))
+    logger.info("wrote %s", args.out)
+    return 0
+
+
+def register(sub) -> None:
+    p = add_command(sub, "relight-image", "Relight a photo of a person with any light (2D path: the CNN).",
+                    "  relightnet relight-image person.png --mask mask.png --light sunset --out relit.png\n"
+                    "  relightnet relight-image person.jpg --light light.npy --out relit.png --save-maps maps/\n"
+                    "  relightnet relight-image person.png --mask m.png --light studio.exr --absolute --out r.png\n")
+    p.add_argument("image", help="photo (PNG/JPEG)")
+    p.add_argument("--mask", help="person mask (white = person); default: the model's mask head")
+    p.add_argument("--light", required=True, help=LIGHT_HELP)
+    p.add_argument("--out", required=True, help="relit image (PNG)")
+    p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
+    p.add_argument("--absolute", action="store_true",
+                   help="use the light at its own scale (default: keep the photo's exposure)")
+    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    p.set_defaults(func=run)

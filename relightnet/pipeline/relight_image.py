@@ -1,0 +1,78 @@
+"""Job 1 of the pipeline: relight a photo of a person with any light (2D path).
+
+predict (albedo, transport, light) at the model's working size around the person, relight
+with the new light, paste back at the original resolution over the untouched background.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from ..checks import check_finite, check_shape, sh_order_from_count
+from ..io.image import linear_to_srgb
+from ..model.inference import predict_image
+from ..model.network import Prediction, RelightNet, shading_map
+from ..sh.io import resize_sh
+
+__all__ = ["RelitImage", "relight_image", "match_exposure"]
+
+
+@dataclass(frozen=True, eq=False)
+class RelitImage:
+    """Result of :func:`relight_image`: ``image`` (H, W, 3) sRGB in [0, 1], ``prediction``,
+    the ``light`` actually used (K, 3) and whether the mask came from the model."""
+
+    image: torch.Tensor
+    prediction: Prediction
+    light: torch.Tensor
+    mask_predicted: bool
+
+
+def match_exposure(new_light: torch.Tensor, pred: Prediction) -> torch.Tensor:
+    """Scale ``new_light`` (K, 3) so the person's mean shading luminance stays what it was.
+
+    Lights come at any scale (a projected HDRI's sun reaches 1e4); matching the exposure keeps
+    the relit person as bright as in the photo while the direction and colour of light change.
+    """
+    m = pred.mask
+    lum = torch.tensor([0.2126, 0.7152, 0.0722])
+
+    def level(light):
+        s = shading_map(pred.transport, light.to(pred.transport))
+        return float((torch.einsum("bchw,c->bhw", s, lum.to(s))[:, None] * m).sum() / m.sum().clamp_min(1))
+
+    old, new = level(pred.light[0]), level(new_light)
+    return new_light * (old / new) if new > 1e-8 and old > 0 else new_light
+
+
+@torch.no_grad()
+def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
+                  keep_exposure: bool = True, size: int | None = None) -> RelitImage:
+    """Relight a photo.
+
+    Args:
+        model: the CNN (e.g. ``relightnet.model.load_model()``).
+        image: (3, H, W) sRGB in [0, 1] (or uint8).
+        light: (K, 3) new light, camera-relative light frame, linear RGB.
+        mask: (H, W) person mask; None uses the model's mask head.
+        keep_exposure: scale the light so the person keeps the photo's exposure.
+        size: working size (default: the model's training size).
+
+    Returns:
+        :class:`RelitImage`; outside the mask the photo is unchanged.
+    """
+    check_shape(light, ["K", 3], name="light")
+    check_finite(light, "light")
+    sh_order_from_count(light.shape[0], "light")
+    light = resize_sh(light, model.config.lmax)  # the model's order (truncate or zero-pad)
+    if image.dtype == torch.uint8:
+        image = image.float() / 255
+    pred, _ = predict_image(model, image, mask, size=size)
+    new = match_exposure(light, pred) if keep_exposure else light
+    relit = (pred.albedo * shading_map(pred.transport, new.to(pred.albedo)))[0]
+    m = pred.mask[0]
+    out = linear_to_srgb(relit.clamp(0, 1)) * m + image.to(relit) * (1 - m)  # background kept as shot
+    return RelitImage(out.permute(1, 2, 0).cpu(), pred, new, mask is None)
+

@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+import torch
+
+from relightnet.cli import main
+from relightnet.data import SynthConfig, generate_sample
+from relightnet.io import read_image, write_image
+from relightnet.model import load_model
+from relightnet.pipeline import relight_image
+from relightnet.sh import load_light, preset_light
+
+
+@pytest.fixture(scope="module")
+def photo(anny_body):
+    a = generate_sample(SynthConfig(res=96, n_dirs=16), "test", 1, body=anny_body).arrays
+    # Put the person into a bigger, non-square frame with a textured background.
+    img = np.full((120, 150, 3), 90, np.uint8)
+    img[::7] = 200
+    mask = np.zeros((120, 150), np.float32)
+    img[10:106, 30:126] = np.where(a["mask"][..., None] > 0.5, a["image_srgb"], img[10:106, 30:126])
+    mask[10:106, 30:126] = a["mask"]
+    return torch.from_numpy(img).permute(2, 0, 1), torch.from_numpy(mask)
+
+
+def test_relight_keeps_background_and_size(photo):
+    img, mask = photo
+    res = relight_image(load_model(), img, preset_light("sunset"), mask)
+    assert res.image.shape == (120, 150, 3)
+    outside = mask < 0.5
+    orig = img.permute(1, 2, 0).float() / 255
+    torch.testing.assert_close(res.image[outside], orig[outside])
+    assert (res.image[~outside] - orig[~outside]).abs().mean() > 0.005  # the person changed
+    # Exposure is kept: the relit person is about as bright as in the photo.
+    assert 0.3 < float(res.image[~outside].mean() / orig[~outside].mean()) < 3.0
+
+
+def test_cli_relight_image_and_errors(photo, tmp_path, capsys):
+    img, mask = photo
+    write_image(tmp_path / "p.png", img.permute(1, 2, 0))
+    write_image(tmp_path / "m.png", mask[..., None].expand(-1, -1, 3), srgb=False)
+    out = tmp_path / "r.png"
+    assert main(["-q", "relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"), "--light",
+                 "studio", "--out", str(out), "--save-maps", str(tmp_path / "maps")]) == 0
+    assert read_image(out).shape == (120, 150, 3)
+    assert load_light(tmp_path / "maps" / "light_estimated.npz").shape == (9, 3)
+    write_image(tmp_path / "small.png", np.zeros((10, 10, 3), np.uint8))
+    assert main(["relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "small.png"), "--light",
+                 "studio", "--out", str(tmp_path / "x.png")]) == 1
+    assert "differs from the image" in capsys.readouterr().err
+    write_image(tmp_path / "empty.png", np.zeros((120, 150, 3), np.uint8))
+    assert main(["relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "empty.png"), "--light",
+                 "studio", "--out", str(tmp_path / "x.png")]) == 1
+    assert "empty mask" in capsys.readouterr().err
+    bad = tmp_path / "bad.npy"
+    np.save(bad, np.full((9, 3), np.nan, np.float32))
+    assert main(["relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"), "--light",
+                 str(bad), "--out", str(tmp_path / "x.png")]) == 1
+    assert "NaN" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
