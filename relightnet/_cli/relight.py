@@ -1,4 +1,4 @@
-"""``relightnet relight-image``: the 2D path on a photo (pipeline job 1)."""
+"""``relightnet relight-image`` and ``relight-video``: the 2D path on photos and videos (pipeline jobs 1, 2)."""
 
 from __future__ import annotations
 
@@ -53,6 +53,20 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_video(args: argparse.Namespace) -> int:
+    from ..model.checkpoint import load_model
+    from ..pipeline.relight_video import relight_video
+    from ..sh import load_light
+
+    light = load_light(args.light)
+    if light.dim() != 2:
+        raise ValueError(f"--light {args.light}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+    model = load_model(args.checkpoint, device=args.device)
+    relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
+                  smoothing=args.smoothing, progress=not args.quiet)
+    return 0
+
+
 def register(sub) -> None:
     p = add_command(sub, "relight-image", "Relight a photo of a person with any light (2D path: the CNN).",
                     "  relightnet relight-image person.png --mask mask.png --light sunset --out relit.png\n"
@@ -68,3 +82,17 @@ def register(sub) -> None:
     p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
     p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
     p.set_defaults(func=run)
+
+    p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",
+                    "  relightnet relight-video clip.mp4 --masks masks/ --light sunset --out relit.mp4\n"
+                    "  relightnet relight-video clip.mp4 --masks masks.mp4 --light studio --turntable 30 --out t.mp4\n")
+    p.add_argument("video", help="input video (mp4, mkv, ...)")
+    p.add_argument("--masks", required=True, help="folder of per-frame mask images (sorted) or a mask video")
+    p.add_argument("--light", required=True, help=LIGHT_HELP)
+    p.add_argument("--out", required=True, help="output video (.mp4 or .mkv)")
+    p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
+    p.add_argument("--smoothing", type=float, default=0.3,
+                   help="EMA weight of the newest frame in the source-light estimate (1 = no smoothing)")
+    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    p.set_defaults(func=run_video)

@@ -1,0 +1,83 @@
+"""Job 2 of the pipeline: relight a video of a person frame by frame (2D path), streaming.
+
+Frames and masks are read one at a time and the output is written as it goes, so memory
+does not depend on the video's length. The light estimated from each source frame is
+smoothed causally (EMA) before it sets the exposure reference, so the relit person does
+not flicker with the per-frame estimate; the new light can turn about the up axis over time.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+from pathlib import Path
+
+import torch
+
+from ..checks import InputError
+from ..io import VideoWriter, read_video, video_info
+from ..io.image import linear_to_srgb
+from ..model.inference import predict_image
+from ..model.network import RelightNet, shading_map
+from ..sh import rotate_sh_up
+from ..sh.io import resize_sh
+from .relight_image import match_exposure
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["relight_video"]
+
+
+@torch.no_grad()
+def relight_video(model: RelightNet, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
+                  smoothing: float = 0.3, progress: bool = True) -> int:
+    """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
+
+    Args:
+        model: the CNN.
+        video: input video file.
+        masks: folder of per-frame mask images (sorted) or a mask video, one per frame.
+        light: (K, 3) new light (camera-relative light frame).
+        out: output video path (written atomically).
+        turntable_deg_per_s: turn the new light about the up axis at this rate.
+        smoothing: EMA weight of the newest frame in the source-light estimate (1 = none).
+
+    Returns:
+        The number of frames written.
+    """
+    from tqdm import tqdm
+
+    from ..model.onnx_serving import _mask_frames
+
+    if not 0 < smoothing <= 1:
+        raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
+    info = video_info(video)
+    n_masks, mask_iter = _mask_frames(masks)
+    if info.n_frames and info.n_frames != n_masks:
+        raise InputError(f"{masks}: {n_masks} masks for {info.n_frames} video frames")
+    light = resize_sh(light, model.config.lmax)
+    src = None
+    n = 0
+    with VideoWriter(out, fps=info.fps, srgb=False) as writer:
+        pairs = itertools.zip_longest(read_video(video), mask_iter)
+        for t, (frame, mask) in enumerate(tqdm(pairs, total=n_masks, desc="relight-video", unit="frame",
+                                               disable=not progress)):
+            if frame is None or mask is None:
+                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
+            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
+            if tuple(mask.shape) != tuple(img.shape[1:]):
+                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
+            if not mask.any():
+                raise InputError(f"{masks}: mask {t} is empty")
+            pred, _ = predict_image(model, img, mask.float())
+            est = pred.light[0]
+            src = est if src is None else smoothing * est + (1 - smoothing) * src
+            new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
+            new = match_exposure(new, pred.__class__(pred.albedo, pred.transport, src[None], pred.mask))
+            relit = (pred.albedo * shading_map(pred.transport, new))[0]
+            m = pred.mask[0]
+            writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
+            n += 1
+    logger.info("wrote %s (%d frames)", Path(out), n)
+    return n

@@ -1,0 +1,43 @@
+import numpy as np
+
+from relightnet.cli import main
+from relightnet.io import VideoWriter, read_video, video_info, write_image
+
+
+def _clip(tmp_path, n=3, h=64, w=48):
+    video, masks = tmp_path / "clip.mkv", tmp_path / "masks"
+    masks.mkdir()
+    g = np.random.default_rng(0)
+    with VideoWriter(video, fps=12) as v:
+        for t in range(n):
+            img = g.integers(40, 90, (h, w, 3), dtype=np.uint8)
+            img[8:56, 14 + t : 30 + t] = 180
+            m = np.zeros((h, w, 3), np.uint8)
+            m[8:56, 14 + t : 30 + t] = 255
+            v.write(img)
+            write_image(masks / f"{t:03d}.png", m)
+    return video, masks
+
+
+def test_relight_video_streams_all_frames(tmp_path):
+    video, masks = _clip(tmp_path)
+    out = tmp_path / "relit.mkv"
+    assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--turntable", "90",
+                 "--out", str(out)]) == 0
+    frames = list(read_video(out))
+    assert len(frames) == 3 and frames[0].shape == (64, 48, 3)
+    src = list(read_video(video))
+    # The background (outside the masks) is unchanged (lossless mkv).
+    np.testing.assert_array_equal(frames[0][:, :10], src[0][:, :10])
+    assert video_info(out).fps == 12
+
+
+def test_relight_video_bad_inputs_leave_nothing(tmp_path, capsys):
+    video, masks = _clip(tmp_path)
+    (masks / "002.png").unlink()
+    out = tmp_path / "r.mp4"
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "studio", "--out", str(out)]) == 1
+    assert "2 masks" in capsys.readouterr().err and not out.exists()
+    assert main(["relight-video", str(tmp_path / "nope.mp4"), "--masks", str(masks), "--light", "studio",
+                 "--out", str(out)]) == 1
+    assert "not found" in capsys.readouterr().err
