@@ -8,6 +8,7 @@ Frames are (H, W, 3) uint8 sRGB, or float linear RGB that the writer converts.
 from __future__ import annotations
 
 import contextlib
+import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -20,7 +21,7 @@ from ..checks import InputError, check_shape
 from .atomic import atomic_write
 from .image import to_uint8
 
-__all__ = ["VideoInfo", "video_info", "read_video", "VideoWriter"]
+__all__ = ["VideoInfo", "video_info", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
 
 _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), ".mkv": ("ffv1", "bgr0", {})}
 
@@ -152,3 +153,50 @@ class VideoWriter:
             self.close()
         else:
             self.abort()
+
+
+def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
+    """Per-frame person masks from a folder of images (sorted by name) or from a mask video.
+
+    Returns:
+        (count, iterator of (H, W) float32 masks in {0, 1}); count is 0 when a mask video's
+        container does not store its frame count.
+    """
+    from .image import read_image
+
+    p = Path(masks)
+    if p.is_dir():
+        files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
+        if not files:
+            raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
+        return len(files), ((read_image(f).mean(-1) > 0.5).float() for f in files)
+    return video_info(p).n_frames, (
+        (torch.from_numpy(f).float().mean(-1) > 127).float() for f in read_video(p)
+    )
+
+
+def frames_with_masks(video, masks) -> tuple[VideoInfo, int, Iterator[tuple[int, torch.Tensor, torch.Tensor]]]:
+    """Stream a video's frames with their masks, checking that they belong together.
+
+    Returns:
+        (video info, mask count, iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W))).
+        The iterator raises :class:`InputError` when the counts differ (also for containers
+        that do not store a frame count), a mask's size differs from its frame, or a mask is empty.
+    """
+    info = video_info(video)
+    n_masks, mask_iter = read_masks(masks)
+    if info.n_frames and info.n_frames != n_masks:
+        raise InputError(f"{masks}: {n_masks} masks for {info.n_frames} video frames")
+
+    def pairs():
+        for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
+            if frame is None or mask is None:
+                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
+            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
+            if tuple(mask.shape) != tuple(img.shape[1:]):
+                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
+            if not mask.any():
+                raise InputError(f"{masks}: mask {t} is empty")
+            yield t, img, mask
+
+    return info, n_masks, pairs()

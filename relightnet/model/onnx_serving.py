@@ -7,7 +7,6 @@ before ONNX Runtime sees it, so mistakes give one clear line.
 
 from __future__ import annotations
 
-import itertools
 import logging
 from pathlib import Path
 
@@ -132,20 +131,6 @@ def quantize_int8(src, dst) -> Path:
     return dst
 
 
-def _mask_frames(masks) -> tuple[int, object]:
-    """(count, iterator of (H, W) float masks) from a folder of images or a mask video."""
-    from ..io import read_image, read_video, video_info
-
-    p = Path(masks)
-    if p.is_dir():
-        files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
-        if not files:
-            raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
-        return len(files), ((read_image(f).mean(-1) > 0.5).float() for f in files)
-    info = video_info(p)
-    return info.n_frames, (torch.from_numpy(f).float().mean(-1) > 127 for f in read_video(p))
-
-
 def run_video(model_path, video, masks, out_dir, size: int | None = None, threads: int = 0) -> dict:
     """Stream a video through an exported model: per-frame raw and smoothed lights, albedo video.
 
@@ -159,7 +144,7 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     """
     import torch.nn.functional as F
 
-    from ..io import VideoWriter, read_video, video_info
+    from ..io import VideoWriter, frames_with_masks
     from ..sh import save_light
     from .inference import _crop, _paste, mask_crop_box
 
@@ -167,21 +152,13 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     size = int(r.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
     if size % 16:
         raise InputError(f"size: expected a multiple of 16, got {size}")
-    n_video = video_info(video).n_frames
-    n_masks, mask_iter = _mask_frames(masks)
-    if n_video and n_masks and n_video != n_masks:
-        raise InputError(f"{masks}: {n_masks} masks for {n_video} video frames")
+    info, _, pairs = frames_with_masks(video, masks)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     raw, smooth = [], []
-    with VideoWriter(out / "albedo.mp4", fps=video_info(video).fps) as writer:
-        for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
-            if frame is None or mask is None:  # containers such as mkv do not store a frame count
-                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
-            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
-            if mask.shape != img.shape[1:]:
-                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
-            box = mask_crop_box(mask.float())
+    with VideoWriter(out / "albedo.mp4", fps=info.fps) as writer:
+        for _, img, mask in pairs:
+            box = mask_crop_box(mask)
             x = F.interpolate(_crop(img[None], box), size=(size, size), mode="bilinear", align_corners=False)
             m = F.interpolate(_crop(mask.float()[None, None], box), size=(size, size), mode="bilinear",
                               align_corners=False)

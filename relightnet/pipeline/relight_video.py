@@ -8,7 +8,6 @@ not flicker with the per-frame estimate; the new light can turn about the up axi
 
 from __future__ import annotations
 
-import itertools
 import logging
 import math
 from pathlib import Path
@@ -16,7 +15,7 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
-from ..io import VideoWriter, read_video, video_info
+from ..io import VideoWriter, frames_with_masks
 from ..io.image import linear_to_srgb
 from ..model.inference import predict_image
 from ..model.network import RelightNet, shading_map
@@ -48,29 +47,15 @@ def relight_video(model: RelightNet, video, masks, light: torch.Tensor, out, tur
     """
     from tqdm import tqdm
 
-    from ..model.onnx_serving import _mask_frames
-
     if not 0 < smoothing <= 1:
         raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
-    info = video_info(video)
-    n_masks, mask_iter = _mask_frames(masks)
-    if info.n_frames and info.n_frames != n_masks:
-        raise InputError(f"{masks}: {n_masks} masks for {info.n_frames} video frames")
+    info, n_masks, pairs = frames_with_masks(video, masks)
     light = resize_sh(light, model.config.lmax)
     src = None
     n = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
-        pairs = itertools.zip_longest(read_video(video), mask_iter)
-        for t, (frame, mask) in enumerate(tqdm(pairs, total=n_masks, desc="relight-video", unit="frame",
-                                               disable=not progress)):
-            if frame is None or mask is None:
-                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
-            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
-            if tuple(mask.shape) != tuple(img.shape[1:]):
-                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
-            if not mask.any():
-                raise InputError(f"{masks}: mask {t} is empty")
-            pred, _ = predict_image(model, img, mask.float())
+        for t, img, mask in tqdm(pairs, total=n_masks, desc="relight-video", unit="frame", disable=not progress):
+            pred, _ = predict_image(model, img, mask)
             est = pred.light[0]
             src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)

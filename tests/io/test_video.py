@@ -57,3 +57,30 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(InputError, match="junk.mp4"):
         list(read_video(tmp_path / "junk.mp4"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.mp4"]
+
+
+def test_frames_with_masks_from_a_mask_video_and_its_checks(tmp_path):
+    from relightnet.io import frames_with_masks
+
+    frames = _frames(3, 16, 16)
+    masks = [np.zeros((16, 16, 3), np.uint8) for _ in range(3)]
+    for m in masks:
+        m[4:12, 4:12] = 255
+    for name, items in (("v.mkv", frames), ("m.mkv", masks)):
+        with VideoWriter(tmp_path / name, fps=5) as w:
+            for f in items:
+                w.write(f)
+    info, n, pairs = frames_with_masks(tmp_path / "v.mkv", tmp_path / "m.mkv")
+    got = list(pairs)
+    assert len(got) == 3 and got[0][1].shape == (3, 16, 16) and got[0][2].sum() == 64
+    masks[1][:] = 0
+    with VideoWriter(tmp_path / "m0.mkv", fps=5) as w:
+        for f in masks:
+            w.write(f)
+    with pytest.raises(InputError, match="mask 1 is empty"):
+        list(frames_with_masks(tmp_path / "v.mkv", tmp_path / "m0.mkv")[2])
+    with VideoWriter(tmp_path / "m2.mkv", fps=5) as w:
+        for f in (masks[0], masks[2]):
+            w.write(f)
+    with pytest.raises(InputError, match="different number of frames"):
+        list(frames_with_masks(tmp_path / "v.mkv", tmp_path / "m2.mkv")[2])
