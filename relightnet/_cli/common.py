@@ -67,3 +67,13 @@ def key_value_arg(keys, cast, key_name: str = "NAME", value_name: str = "a numbe
             raise argparse.ArgumentTypeError(f"expected {value_name} after '{k}=', got {v!r}") from None
 
     return parse
+
+
+def load_single_light(arg: str, lmax: int | None = None):
+    """``load_light`` for options that take one light (K, 3): a sequence is an error naming the option."""
+    from ..sh import load_light
+
+    light = load_light(arg, lmax=lmax)
+    if light.dim() != 2:
+        raise ValueError(f"--light {arg}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+    return light

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command
+from .common import LIGHT_HELP, add_command, load_single_light
 
 logger = logging.getLogger("relightnet.relight")
 
@@ -18,7 +18,7 @@ def run(args: argparse.Namespace) -> int:
     from ..io import atomic_write, read_image, write_image
     from ..model.checkpoint import load_model
     from ..pipeline.relight_image import relight_image
-    from ..sh import load_light, save_light
+    from ..sh import save_light
 
     image = read_image(args.image).permute(2, 0, 1)
     mask = None
@@ -29,9 +29,7 @@ def run(args: argparse.Namespace) -> int:
                              f"{tuple(image.shape[1:])}")
         if not mask.any():
             raise ValueError(f"--mask {args.mask}: empty mask (no white pixel): expected the person's mask")
-    light = load_light(args.light)
-    if light.dim() != 2:
-        raise ValueError(f"--light {args.light}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+    light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute)
     if res.mask_predicted:
@@ -56,11 +54,8 @@ def run(args: argparse.Namespace) -> int:
 def run_video(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_model
     from ..pipeline.relight_video import relight_video
-    from ..sh import load_light
 
-    light = load_light(args.light)
-    if light.dim() != 2:
-        raise ValueError(f"--light {args.light}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+    light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
     relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet)

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, key_value_arg, nonneg_int, pos_int
+from .common import LIGHT_HELP, add_command, exposure_arg, key_value_arg, load_single_light, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.render")
 
@@ -44,11 +44,7 @@ def _save_maps(out_dir: Path, r, transport_v=None, stem: str = "") -> None:
 def run_render(args: argparse.Namespace) -> int:
     from ..io import write_image
     from ..render.jobs import render_mesh_file
-    from ..sh import load_light
-
-    light = load_light(args.light, lmax=args.lmax)
-    if light.dim() != 2:
-        raise ValueError(f"{args.light}: expected a single light (K, 3), got a sequence {tuple(light.shape)}")
+    light = load_single_light(args.light, lmax=args.lmax)
     r = render_mesh_file(args.mesh, light, size=args.res, occlusion=args.occlusion, bounces=args.bounces,
                          n_dirs=args.n_dirs)
     img, scale = _exposed(r.image[0], r.alpha[0], args.exposure)

@@ -42,6 +42,11 @@ def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 
         state["scheduler"] = scheduler.state_dict()
     if train_config is not None:
         state["train_config"] = train_config
+    return _write(path, state)
+
+
+def _write(path, state: dict) -> Path:
+    """torch.save into memory, then one atomic file write."""
     buf = io.BytesIO()
     torch.save(state, buf)
     with atomic_write(path) as f:
@@ -98,8 +103,4 @@ def release_checkpoint(src, dst, **extra) -> Path:
     for key in ("optimizer", "scheduler", "rng"):
         state.pop(key, None)
     state.update(extra)
-    buf = io.BytesIO()
-    torch.save(state, buf)
-    with atomic_write(dst) as f:
-        f.write(buf.getvalue())
-    return Path(dst)
+    return _write(dst, state)

@@ -103,12 +103,13 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
                                  baseline["light"].to(dev).expand(B, -1, 3))
         for who, (A, T, L) in cands.items():
             relit = A * shading_map(T, novel)
+            S_pred = shading_map(T, L)
             for j in range(len(chunk)):
                 sl = slice(j, j + 1)
                 add(who, "transport_rmse", _rmse(T[sl], T_gt[sl], M[sl]))
                 add(who, "albedo_rmse", _rmse(A[sl], b["albedo"][sl], M[sl]))
                 add(who, "light_rmse", float(((L[sl] - b["light"][sl]) ** 2).mean()) ** 0.5)
-                add(who, "shading_rmse", _rmse(shading_map(T[sl], L[sl]), gt_s[sl], M[sl]))
+                add(who, "shading_rmse", _rmse(S_pred[sl], gt_s[sl], M[sl]))
                 add(who, "relit_rmse", _rmse(relit[sl], gt_relit[sl], M[sl]))
                 if concave[sl].sum() > 0:
                     add(who, "relit_rmse_concave", _rmse(relit[sl], gt_relit[sl], concave[sl]))
@@ -118,7 +119,7 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             if who == "model" and sheet is not None and len(rows) < 6:
                 for j in range(min(len(chunk), 6 - len(rows))):
                     mj = M[j]
-                    rows.append([b["image"][j], A[j] * mj, b["albedo"][j], shading_map(T, L)[j] * mj, gt_s[j],
+                    rows.append([b["image"][j], A[j] * mj, b["albedo"][j], S_pred[j] * mj, gt_s[j],
                                  relit[j] * mj, gt_relit[j]])
     result = {who: {k: float(np.mean(v)) for k, v in d.items()} for who, d in sums.items() if d}
     result["n"] = n

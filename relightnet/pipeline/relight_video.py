@@ -8,6 +8,7 @@ not flicker with the per-frame estimate; the new light can turn about the up axi
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from pathlib import Path
@@ -59,7 +60,8 @@ def relight_video(model: RelightNet, video, masks, light: torch.Tensor, out, tur
             est = pred.light[0]
             src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
-            new = match_exposure(new, pred.__class__(pred.albedo, pred.transport, src[None], pred.mask))
+            # Exposure reference: the smoothed source light, not this frame's raw estimate.
+            new = match_exposure(new, dataclasses.replace(pred, light=src[None]))
             relit = (pred.albedo * shading_map(pred.transport, new))[0]
             m = pred.mask[0]
             writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from ..body.base import vertex_normals
-from ..checks import InputError
+from ..checks import InputError, sh_order_from_count
 from ..prt import vertex_transport
 from ..raster import Camera, default_camera, look_at, perspective_camera
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
@@ -98,7 +98,7 @@ def render_mesh_file(path, light: torch.Tensor, size=512, occlusion: bool = True
         :class:`RenderOutput` with maps.
     """
     mesh = load_mesh(path, albedo)
-    lmax = int(round(math.sqrt(light.shape[-2]))) - 1
+    lmax = sh_order_from_count(light.shape[-2], "light")
     T = vertex_transport(mesh.verts, mesh.faces, mesh.normals, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion,
                          bounces=bounces, albedo=mesh.albedo if bounces else None, seed=seed)
     return render_mesh(mesh.verts, mesh.faces, T, mesh.albedo, light, fit_camera(mesh.verts, size),
@@ -151,7 +151,7 @@ def render_body_frames(
     n = out.batch_size
     if light.dim() == 3 and light.shape[0] not in (1, n):
         raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
-    lmax = int(round(math.sqrt(light.shape[-2]))) - 1
+    lmax = sh_order_from_count(light.shape[-2], "light")
     bounce_albedo = vertex_albedo if vertex_albedo is not None else albedo if isinstance(albedo, torch.Tensor) else None
     for t in range(n):
         v, nrm = out.verts[t], out.normals[t]
