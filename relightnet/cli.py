@@ -18,7 +18,9 @@ from .checks import RelightError
 logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
-COMMAND_MODULES = ["light", "render", "synth", "model", "smooth", "onnx", "relight", "demo"]
+COMMAND_MODULES = [
+    "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "demo",
+]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -77,3 +77,12 @@ def load_single_light(arg: str, lmax: int | None = None):
     if light.dim() != 2:
         raise ValueError(f"--light {arg}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
     return light
+
+
+def add_model_args(p: argparse.ArgumentParser) -> None:
+    """--checkpoint, --backend and --device: where the CNN comes from and runs."""
+    p.add_argument("--checkpoint", help="model checkpoint (.pt; or .onnx with --backend onnx; "
+                   "default: the shipped model)")
+    p.add_argument("--backend", default="torch", choices=("torch", "onnx"),
+                   help="run the CNN in PyTorch or in ONNX Runtime (exported once and cached; default: torch)")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (torch backend; default: cpu)")

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, load_single_light
+from .common import LIGHT_HELP, add_command, add_model_args, load_single_light
 
 logger = logging.getLogger("relightnet.relight")
 
@@ -52,11 +52,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_video(args: argparse.Namespace) -> int:
-    from ..model.checkpoint import load_model
+    from ..pipeline.backends import make_predictor
     from ..pipeline.relight_video import relight_video
 
     light = load_single_light(args.light)
-    model = load_model(args.checkpoint, device=args.device)
+    model = make_predictor(args.backend, args.checkpoint, args.device)
     relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet)
     return 0
@@ -88,6 +88,5 @@ def register(sub) -> None:
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
     p.add_argument("--smoothing", type=float, default=0.3,
                    help="EMA weight of the newest frame in the source-light estimate (1 = no smoothing)")
-    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
-    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    add_model_args(p)
     p.set_defaults(func=run_video)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import io
 import logging
 from pathlib import Path
 
@@ -13,8 +12,6 @@ logger = logging.getLogger("relightnet.smooth")
 
 OFFLINE = ("hermite", "poly", "savgol")
 CAUSAL = ("ema", "one-euro", "fir")
-_LUMA = (0.2126, 0.7152, 0.0722)
-_PLOT_COEFFS = ((0, "DC (l=0)"), (1, "l=1, m=-1 (y)"), (2, "l=1, m=0 (z)"), (3, "l=1, m=1 (x)"))
 
 
 def _pos_float(text: str) -> float:
@@ -61,50 +58,12 @@ def _smooth(args, sh):
     return y, status == 1, status == 2
 
 
-def _luma(x):
-    r, g, b = _LUMA
-    return r * x[..., 0] + g * x[..., 1] + b * x[..., 2]
-
-
-def _plot_png(raw, smoothed, truth, outliers, switches, title: str) -> bytes:
-    """PNG bytes: luminance of DC and the three l=1 coefficients over time."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
-    t = range(raw.shape[0])
-    coeffs = [c for c in _PLOT_COEFFS if c[0] < raw.shape[1]]
-    fig = Figure(figsize=(10, 2.2 * len(coeffs)), dpi=80)
-    axes = fig.subplots(len(coeffs), 1, sharex=True, squeeze=False)[:, 0]
-    raw_l, sm_l = _luma(raw).numpy(), _luma(smoothed).numpy()
-    tr_l = _luma(truth).numpy() if truth is not None else None
-    out_t = outliers.nonzero().flatten().tolist()
-    for ax, (k, name) in zip(axes, coeffs, strict=True):
-        ax.plot(t, raw_l[:, k], ".", color="0.6", ms=3, label="raw")
-        ax.plot(t, sm_l[:, k], "-", color="tab:blue", lw=1.5, label="smoothed")
-        if tr_l is not None:
-            ax.plot(t, tr_l[:, k], "--", color="tab:green", lw=1.2, label="truth")
-        if out_t:
-            ax.plot(out_t, raw_l[out_t, k], "x", color="tab:red", ms=5, label="outlier")
-        for s in switches.nonzero().flatten().tolist():
-            ax.axvline(s - 0.5, color="tab:orange", ls=":", lw=1)
-        ax.set_ylabel(name, fontsize=8)
-        ax.tick_params(labelsize=7)
-    axes[0].legend(fontsize=7, ncol=4, loc="upper right")
-    axes[0].set_title(title, fontsize=9)
-    axes[-1].set_xlabel("frame")
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    return buf.getvalue()
-
-
 def run_smooth(args: argparse.Namespace) -> int:
     from ..checks import InputError, ShapeError
     from ..io.atomic import atomic_write
     from ..sh.io import load_light, save_light
     from ..temporal import jitter, light_error, parse_eps
+    from ..temporal.plot import light_curves_png
 
     methods = OFFLINE + CAUSAL
     if args.method not in methods:
@@ -137,7 +96,8 @@ def run_smooth(args: argparse.Namespace) -> int:
         e0, e1 = light_error(sh, truth).item(), light_error(smoothed, truth).item()
         j0, j1 = jitter(sh).item(), jitter(smoothed).item()
         summary += f"; error to truth {e0:.4g} -> {e1:.4g}, jitter {j0:.4g} -> {j1:.4g}"
-    png = _plot_png(sh, smoothed, truth, outliers, switches, f"{Path(args.input).name}: {summary}") if plot else None
+    title = f"{Path(args.input).name}: {summary}"
+    png = light_curves_png(sh, smoothed, truth, outliers, switches, title) if plot else None
 
     for p in (out, plot):
         if p is not None and not p.parent.exists():

@@ -125,12 +125,19 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     h16, w16 = torch.export.Dim("h16", min=1, max=512), torch.export.Dim("w16", min=1, max=512)
     spatial = {0: batch, 2: 16 * h16, 3: 16 * w16}
     shapes = {"image": spatial, "mask": spatial, "light_state": {0: batch}, "is_first": {0: batch}}
+    import logging
     import warnings
 
-    with warnings.catch_warnings(), torch.no_grad():
-        warnings.simplefilter("ignore")
-        prog = torch.onnx.export(model, args, dynamo=True, dynamic_shapes=shapes, input_names=list(INPUTS),
-                                 output_names=list(OUTPUTS), verbose=False)
+    quiet = logging.getLogger("torch.onnx")  # "torchvision is not installed" notes from the op registry
+    level = quiet.level
+    quiet.setLevel(logging.ERROR)
+    try:
+        with warnings.catch_warnings(), torch.no_grad():
+            warnings.simplefilter("ignore")
+            prog = torch.onnx.export(model, args, dynamo=True, dynamic_shapes=shapes, input_names=list(INPUTS),
+                                     output_names=list(OUTPUTS), verbose=False)
+    finally:
+        quiet.setLevel(level)
     proto = prog.model_proto
     for key, value in _metadata(net, smoothing, s, train_config).items():
         entry = proto.metadata_props.add()

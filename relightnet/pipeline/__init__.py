@@ -1,7 +1,15 @@
-"""Whole jobs: relight an image or a video (2D path) and the demo. avatar and compare are still to come."""
+"""Whole jobs: relight an image or a video (2D path), put a relit avatar into a video (3D path), the demo."""
 
+from .avatar import SMOOTHING, AvatarResult, avatar, estimate_video_lights, smooth_video_lights
+from .backends import BACKENDS, OnnxPredictor, TorchPredictor, as_predictor, make_predictor
 from .demo import run_demo
 from .relight_image import RelitImage, match_exposure, relight_image
 from .relight_video import relight_video
+from .scene import avatar_albedo, load_body, load_camera, motion_params
 
-__all__ = ["run_demo", "RelitImage", "match_exposure", "relight_image", "relight_video"]
+__all__ = [
+    "SMOOTHING", "AvatarResult", "avatar", "estimate_video_lights", "smooth_video_lights",
+    "BACKENDS", "OnnxPredictor", "TorchPredictor", "as_predictor", "make_predictor",
+    "run_demo", "RelitImage", "match_exposure", "relight_image", "relight_video",
+    "avatar_albedo", "load_body", "load_camera", "motion_params",
+]

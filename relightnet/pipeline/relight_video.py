@@ -18,10 +18,10 @@ import torch
 from ..checks import InputError
 from ..io import VideoWriter, frames_with_masks
 from ..io.image import linear_to_srgb
-from ..model.inference import predict_image
-from ..model.network import RelightNet, shading_map
+from ..model.network import shading_map
 from ..sh import rotate_sh_up
 from ..sh.io import resize_sh
+from .backends import as_predictor
 from .relight_image import match_exposure
 
 logger = logging.getLogger(__name__)
@@ -30,12 +30,12 @@ __all__ = ["relight_video"]
 
 
 @torch.no_grad()
-def relight_video(model: RelightNet, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
+def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
                   smoothing: float = 0.3, progress: bool = True) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
-        model: the CNN.
+        model: the CNN: a :class:`RelightNet` or a predictor (:mod:`relightnet.pipeline.backends`).
         video: input video file.
         masks: folder of per-frame mask images (sorted) or a mask video, one per frame.
         light: (K, 3) new light (camera-relative light frame).
@@ -50,13 +50,14 @@ def relight_video(model: RelightNet, video, masks, light: torch.Tensor, out, tur
 
     if not 0 < smoothing <= 1:
         raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
+    predict = as_predictor(model)
     info, n_masks, pairs = frames_with_masks(video, masks)
-    light = resize_sh(light, model.config.lmax)
+    light = resize_sh(light, predict.lmax)
     src = None
     n = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks, desc="relight-video", unit="frame", disable=not progress):
-            pred, _ = predict_image(model, img, mask)
+            pred = predict(img, mask)
             est = pred.light[0]
             src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)

@@ -107,11 +107,22 @@ def render_mesh_file(path, light: torch.Tensor, size=512, occlusion: bool = True
 
 @dataclass(frozen=True, eq=False)
 class BodyFrame:
-    """One rendered body frame: its index, the render and the per-vertex transport (V, K[, 3])."""
+    """One rendered body frame: its index, the render, the per-vertex transport (V, K[, 3]) and
+    the posed vertices (V, 3) (world frame)."""
 
     index: int
     render: RenderOutput
     transport: torch.Tensor
+    verts: torch.Tensor | None = None
+
+
+def _frame_slice(params, a: int, b: int, n: int):
+    """Frames a..b of body parameters: tensors with ≥ 2 dims and n rows are sliced, others kept."""
+    if isinstance(params, Mapping):
+        return {k: _frame_slice(v, a, b, n) for k, v in params.items()}
+    if isinstance(params, torch.Tensor) and params.dim() >= 2 and params.shape[0] == n:
+        return params[a:b]
+    return params
 
 
 def render_body_frames(
@@ -127,6 +138,8 @@ def render_body_frames(
     seed: int = 0,
     maps: bool = False,
     vertex_albedo: torch.Tensor | None = None,
+    n_frames: int | None = None,
+    chunk: int = 16,
 ) -> Iterator[BodyFrame]:
     """Pose a body model and render it frame by frame (streaming: one frame in memory at a time).
 
@@ -141,22 +154,38 @@ def render_body_frames(
         maps: also produce the transport/albedo/normal/depth maps.
         vertex_albedo: (V, 3) albedo for interreflection when ``albedo`` is a texture
             (default: ``albedo`` itself when per-vertex, else 0.5 grey).
+        n_frames: T when ``params`` has a frame axis: the body is then posed ``chunk`` frames at
+            a time (tensors with ≥ 2 dims and T rows are sliced), so memory does not grow with T.
+            None poses all frames at once.
 
     Yields:
         :class:`BodyFrame` per frame.
     """
     camera = default_camera(size) if camera is None else camera
-    with torch.no_grad():
-        out = body(params)
-    n = out.batch_size
-    if light.dim() == 3 and light.shape[0] not in (1, n):
-        raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
+    if n_frames is not None and (isinstance(n_frames, bool) or int(n_frames) < 1 or int(chunk) < 1):
+        raise InputError(f"n_frames, chunk: expected integers >= 1, got {n_frames}, {chunk}")
+
+    def posed():
+        with torch.no_grad():
+            if n_frames is None:
+                yield body(params)
+                return
+            for a in range(0, n_frames, chunk):
+                yield body(_frame_slice(params, a, min(a + chunk, n_frames), n_frames))
+
     lmax = sh_order_from_count(light.shape[-2], "light")
     bounce_albedo = vertex_albedo if vertex_albedo is not None else albedo if isinstance(albedo, torch.Tensor) else None
-    for t in range(n):
-        v, nrm = out.verts[t], out.normals[t]
-        T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
-                             albedo=bounce_albedo, seed=seed)
-        L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
-        r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps)
-        yield BodyFrame(t, r, T)
+    t = 0
+    n = n_frames
+    for out in posed():
+        n = out.batch_size if n is None else n
+        if light.dim() == 3 and light.shape[0] not in (1, n):
+            raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
+        for i in range(out.batch_size):
+            v, nrm = out.verts[i], out.normals[i]
+            T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
+                                 albedo=bounce_albedo, seed=seed)
+            L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
+            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps)
+            yield BodyFrame(t, r, T, v)
+            t += 1

@@ -1,0 +1,62 @@
+"""``relightnet avatar``: put a relit avatar into a target video (pipeline job 3, the 3D path)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+
+from .common import LIGHT_HELP, add_command, add_model_args, nonneg_int, pos_int
+
+logger = logging.getLogger("relightnet.avatar")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io import video_info
+    from ..pipeline.avatar import avatar
+    from ..pipeline.backends import make_predictor
+    from ..pipeline.scene import load_camera
+    from ..sh import load_light
+
+    info = video_info(args.target)  # fail early, before loading the model
+    light = load_light(args.light) if args.light else None
+    predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
+    camera = load_camera(args.camera, info.size) if args.camera else None
+    res = avatar(args.target, args.out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
+                 target_masks=args.target_masks, light=light, camera=camera, smoothing=args.smoothing,
+                 n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces,
+                 model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet)
+    logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
+    return 0
+
+
+def register(sub) -> None:
+    p = add_command(
+        sub, "avatar",
+        "Put an avatar into a target video, lit by the target's light: the CNN estimates the light of every "
+        "frame from the person in it, the estimates are smoothed over time, and the avatar is rendered with "
+        "PRT transport under that light and composited over the frames (3D path).",
+        "  relightnet avatar --target clip.mp4 --target-masks masks/ --motion walk --out avatar.mp4\n"
+        "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
+        "--albedo skin.png --out a.mp4\n"
+        "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n",
+    )
+    p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
+    p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
+                   "(default: the model's mask head)")
+    p.add_argument("--motion", default="walk",
+                   help="Anny preset (walk, turn, idle, arm_raise; as long as the video) or an SMPL-style motion "
+                   "file (.npz/.pkl) for --body smpl:PATH (default: walk)")
+    p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
+    p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
+    p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP
+                   + "; or a light sequence file with one light per frame")
+    p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
+                   "(default: full body at the origin)")
+    p.add_argument("--smoothing", default="hermite", choices=("hermite", "poly", "savgol", "none"),
+                   help="light smoothing over time (default: robust Hermite with outlier correction)")
+    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
+    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
+    p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")
+    p.add_argument("--out", required=True, help="output video (.mp4/.mkv); OUT.lights.npz/.png are written beside it")
+    add_model_args(p)
+    p.set_defaults(func=run)

@@ -1,0 +1,276 @@
+"""Job 3 of the pipeline: put a relit avatar into a target video (the 3D path).
+
+Two streaming passes over the target video, so memory does not grow with its length:
+
+1. **Light.** The CNN estimates the SH light of every frame from the person in it (masks
+   given, or found by the model's mask head). The per-frame estimates are smoothed over
+   time (default: robust Hermite splines with 3-MAD outlier correction and light-switch
+   detection, :func:`relightnet.temporal.smooth_lights`). ``light=`` skips this pass.
+2. **Render.** The avatar (Anny or SMPL, posed by a motion) is rendered each frame with
+   PRT transport (cosine × visibility by ray casting, optional interreflection) under that
+   frame's smoothed light, and composited over the target frame.
+
+The light is camera-relative (the light frame of the target camera), and the avatar is
+rendered with the same camera-relative light, so it is lit as if it stood in the target
+scene seen by the target camera. The light's scale is the CNN's: the avatar gets the
+target video's exposure without any matching.
+
+Side outputs next to ``OUT.mp4``: ``OUT.lights.npz`` (raw and smoothed lights, outliers,
+switches, and a fingerprint of the inputs — when it matches, a rerun reuses the raw
+estimates instead of running the CNN again) and ``OUT.lights.png`` (light curves).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
+from ..io import VideoWriter, atomic_write, read_masks, read_video, video_info
+from ..io.image import linear_to_srgb
+from ..raster import Camera, default_camera
+from ..render import render_body_frames
+from .backends import as_predictor
+from .scene import avatar_albedo, load_body, motion_params
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "smooth_video_lights", "avatar"]
+
+#: Light smoothing over time: offline methods of relightnet.temporal, or none.
+SMOOTHING = ("hermite", "poly", "savgol", "none")
+
+
+@dataclass(frozen=True, eq=False)
+class AvatarResult:
+    """What :func:`avatar` wrote: frame count, paths, and the lights (T, K, 3) (raw is None with a given light)."""
+
+    n_frames: int
+    video: Path
+    lights_file: Path
+    plot: Path | None
+    lights_raw: torch.Tensor | None
+    lights_smoothed: torch.Tensor
+    reused_estimates: bool = False
+
+
+def _frames(video, masks):
+    """(t, frame (3, H, W) float, mask (H, W) | None) of a video, with masks checked when given."""
+    from ..io import frames_with_masks
+
+    if masks is not None:
+        return frames_with_masks(video, masks)[2]
+    return ((t, torch.from_numpy(f).permute(2, 0, 1).float() / 255, None) for t, f in enumerate(read_video(video)))
+
+
+@torch.no_grad()
+def estimate_video_lights(model, video, masks=None, progress: bool = True) -> torch.Tensor:
+    """Per-frame light estimates of a video (the first pass of :func:`avatar`).
+
+    Args:
+        model: a :class:`~relightnet.model.RelightNet` or a predictor (:mod:`.backends`).
+        video: the target video file.
+        masks: folder of mask images or a mask video (one per frame), or None to use the
+            model's mask head.
+
+    Returns:
+        (T, K, 3) raw lights, camera-relative light frame, linear RGB.
+    """
+    from tqdm import tqdm
+
+    predict = as_predictor(model)
+    if masks is None and not predict.has_mask_head:
+        raise InputError("--target-masks: this model has no mask head; give the target person's masks")
+    info = video_info(video)
+    lights = []
+    for _, img, mask in tqdm(_frames(video, masks), total=info.n_frames or None, desc="estimate light",
+                             unit="frame", disable=not progress):
+        lights.append(predict(img, mask).light[0].float().cpu())
+    if not lights:
+        raise InputError(f"{video}: the video has no frames")
+    return torch.stack(lights)
+
+
+def smooth_video_lights(raw: torch.Tensor, method: str = "hermite"):
+    """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
+
+    ``hermite``/``poly``/``savgol`` use :func:`relightnet.temporal.smooth_lights` with 3-MAD
+    outlier correction and automatic switch detection; ``none`` returns the raw lights.
+    """
+    from ..temporal import smooth_lights
+
+    if method not in SMOOTHING:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
+    none = torch.zeros(raw.shape[0], dtype=torch.bool)
+    if method == "none" or raw.shape[0] < 3:
+        return raw.clone(), none, none
+    res = smooth_lights(raw, method, outlier_eps="3mad", switches="auto")
+    return res.smoothed, res.outliers, res.switches
+
+
+def _fingerprint(video, masks, predictor_name: str) -> str:
+    def stat(p):
+        p = Path(p)
+        if p.is_dir():
+            return sorted((f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in p.iterdir())
+        st = p.stat()
+        return [p.name, st.st_size, st.st_mtime_ns]
+
+    return json.dumps({"video": stat(video), "masks": None if masks is None else stat(masks),
+                       "model": predictor_name}, sort_keys=True)
+
+
+def _reuse(path: Path, fingerprint: str) -> torch.Tensor | None:
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path) as z:
+            if str(z["fingerprint"]) == fingerprint and "raw" in z:
+                return torch.from_numpy(z["raw"])
+    except (OSError, ValueError, KeyError):
+        return None
+    return None
+
+
+def _side_paths(out: Path) -> tuple[Path, Path]:
+    return out.with_name(out.stem + ".lights.npz"), out.with_name(out.stem + ".lights.png")
+
+
+def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
+    if light.dim() == 2:
+        light = light[None].expand(n, -1, -1)
+    if light.dim() != 3 or light.shape[-1] != 3:
+        raise ShapeError(f"light: expected (K, 3) or (T, K, 3), got {tuple(light.shape)}")
+    if light.shape[0] != n:
+        raise InputError(f"light: a light sequence of {light.shape[0]} frames for a {n}-frame target video")
+    sh_order_from_count(light.shape[1], "light")
+    check_finite(light, "light")
+    return light.float()
+
+
+def _count_frames(video, masks) -> int:
+    n = video_info(video).n_frames
+    if n:
+        return n
+    return sum(1 for _ in read_video(video)) if masks is None else read_masks(masks)[0]
+
+
+@torch.no_grad()
+def avatar(
+    target,
+    out,
+    model=None,
+    motion="walk",
+    body="anny",
+    albedo="default",
+    target_masks=None,
+    light: torch.Tensor | None = None,
+    camera: Camera | None = None,
+    smoothing: str = "hermite",
+    n_dirs: int = 64,
+    occlusion: bool = True,
+    bounces: int = 0,
+    model_name: str = "model",
+    progress: bool = True,
+) -> AvatarResult:
+    """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
+
+    Args:
+        target: target video file (its frame rate and size are kept).
+        out: output video (.mp4/.mkv), written atomically; side files next to it (module docstring).
+        model: a :class:`~relightnet.model.RelightNet` or a predictor; needed unless ``light`` is given.
+        motion: a motion preset (``walk``, ``turn``, ``idle``, ``arm_raise``; made as long as the
+            video), an SMPL motion file (.npz, with an SMPL ``body``) or body parameters with a
+            leading frame axis.
+        body: ``"anny"``, ``"smpl:PATH"`` or a body model.
+        albedo: ``"default"``, a texture image path (sRGB, in the body's UV layout), a (V, 3)
+            per-vertex albedo or a :class:`~relightnet.render.TexturedAlbedo`.
+        target_masks: masks of the person in the target (folder or mask video); None: mask head.
+        light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
+        camera: the avatar's camera (default: :func:`~relightnet.raster.default_camera` at the
+            video's size: full body, standing at the origin).
+        smoothing: one of :data:`SMOOTHING`.
+        n_dirs, occlusion, bounces: PRT options.
+        model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
+
+    Returns:
+        :class:`AvatarResult`.
+    """
+    from tqdm import tqdm
+
+    from ..temporal.plot import light_curves_png
+
+    out = Path(out)
+    if out.suffix.lower() not in (".mp4", ".mkv"):
+        raise InputError(f"{out}: expected an .mp4 or .mkv output path")
+    if smoothing not in SMOOTHING:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {smoothing!r}")
+    info = video_info(target)
+    h, w = info.size
+    body_model = load_body(body)
+    tex = avatar_albedo(body_model, albedo)
+    lights_file, plot = _side_paths(out)
+    n = _count_frames(target, target_masks)
+    params, n_motion = motion_params(motion, body_model, n, info.fps)
+    reused = False
+    raw = outliers = switches = None
+    if light is None:
+        if model is None:
+            raise InputError("model: give a model (or predictor) to estimate the light, or a light")
+        predict = as_predictor(model)
+        fp = _fingerprint(target, target_masks, model_name)
+        raw = _reuse(lights_file, fp)
+        reused = raw is not None
+        if reused:
+            logger.info("reusing the light estimates in %s", lights_file)
+        else:
+            raw = estimate_video_lights(predict, target, target_masks, progress)
+        n = raw.shape[0]
+        smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
+    else:
+        fp = ""
+        smoothed = _given_light(light, n)
+    if n_motion < n:
+        logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
+    n = min(n, n_motion)
+    smoothed = smoothed[:n]
+    camera = default_camera((h, w)) if camera is None else camera
+    if tuple(camera.size) != (h, w):
+        raise InputError(f"camera: its image size {tuple(camera.size)} differs from the target video's {(h, w)}")
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {"smoothed": smoothed.numpy(), "fingerprint": np.array(fp)}
+    if raw is not None:
+        arrays.update(raw=raw.numpy(), outliers=outliers.numpy(), switches=switches.numpy(),
+                      smoothing=np.array(smoothing))
+    with atomic_write(lights_file) as f:
+        np.savez_compressed(f, **arrays)
+    png = light_curves_png(raw[:n] if raw is not None else None, smoothed,
+                           outliers=outliers[:n] if outliers is not None else None,
+                           switches=switches[:n] if switches is not None else None,
+                           title=f"{Path(target).name}: light of the target, {smoothing}")
+    with atomic_write(plot) as f:
+        f.write(png)
+
+    frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
+                                occlusion=occlusion, bounces=bounces, n_frames=n_motion)
+    written = 0
+    with VideoWriter(out, fps=info.fps, srgb=False) as writer:
+        for bg, fr in tqdm(zip(read_video(target), frames, strict=False), total=n, desc="avatar", unit="frame",
+                           disable=not progress):
+            if written == n:
+                break
+            r = fr.render
+            a = r.alpha[0][..., None]
+            bgf = torch.from_numpy(bg).float() / 255
+            writer.write(linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a))
+            written += 1
+        if written < n:
+            raise InputError(f"{target}: only {written} frames decoded, {n} expected")
+    logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
+    return AvatarResult(written, out, lights_file, plot, raw, smoothed, reused)

@@ -1,0 +1,142 @@
+"""Where the CNN runs: PyTorch (eager) or an exported ONNX model in ONNX Runtime.
+
+Both backends are *predictors*: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
+at the photo's own resolution (crop around the mask, resize to the working size, run, paste
+back), with ``predictor.lmax`` the SH order of the model. The jobs take either.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+from pathlib import Path
+
+import torch
+from torch.nn import functional as F
+
+from ..checks import InputError
+from ..model.network import Prediction, RelightNet
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["BACKENDS", "TorchPredictor", "OnnxPredictor", "as_predictor", "make_predictor", "onnx_cache_dir"]
+
+BACKENDS = ("torch", "onnx")
+
+
+class TorchPredictor:
+    """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size)."""
+
+    def __init__(self, model: RelightNet, size: int | None = None) -> None:
+        self.model, self.size = model, size
+        self.lmax = model.config.lmax
+        self.has_mask_head = bool(model.config.mask_head)
+
+    def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
+        from ..model.inference import predict_image
+
+        return predict_image(self.model, image, mask, size=self.size)[0]
+
+
+class OnnxPredictor:
+    """The exported model in ONNX Runtime (CPU). Masks are required (the graph has no mask head).
+
+    The light returned is the graph's raw per-frame estimate (``light_raw``); jobs smooth it
+    themselves.
+
+    Args:
+        path: ``.onnx`` file from ``relightnet export``.
+        threads: intra-op threads (0: ONNX Runtime's default).
+        size: working size (default: the training size stored in the model's metadata).
+    """
+
+    def __init__(self, path, threads: int = 0, size: int | None = None) -> None:
+        from ..model.onnx_serving import OnnxRelighter
+
+        self.relighter = OnnxRelighter(path, threads=threads)
+        self.size = int(self.relighter.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
+        if self.size % 16:
+            raise InputError(f"size: expected a multiple of 16, got {self.size}")
+        k = self.relighter.n_coeffs
+        self.lmax = int(round(k**0.5)) - 1
+        self.has_mask_head = False
+
+    @torch.no_grad()
+    def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
+        from ..model.inference import _crop, _paste, mask_crop_box
+
+        if mask is None:
+            raise InputError("mask: the ONNX backend has no mask head; give the person's masks")
+        if image.dtype == torch.uint8:
+            image = image.float() / 255
+        h, w = image.shape[-2:]
+        mask = mask.float()
+        box = mask_crop_box(mask)
+        s = (self.size, self.size)
+        x = F.interpolate(_crop(image[None].float(), box), size=s, mode="bilinear", align_corners=False)
+        m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
+        res = self.relighter.step(x.contiguous().numpy(), (m > 0.5).float().numpy())
+        inside = mask[None, None]
+        return Prediction(
+            albedo=_paste(torch.from_numpy(res["albedo"]), box, h, w) * inside,
+            transport=_paste(torch.from_numpy(res["transport"]), box, h, w) * inside,
+            light=torch.from_numpy(res["light_raw"]),
+            mask=inside,
+        )
+
+
+def as_predictor(model) -> TorchPredictor | OnnxPredictor:
+    """A predictor from a :class:`RelightNet` (wrapped) or a predictor (returned as is)."""
+    if isinstance(model, RelightNet):
+        return TorchPredictor(model)
+    if callable(model) and hasattr(model, "lmax"):
+        return model
+    raise InputError(f"model: expected a RelightNet or a predictor, got {type(model).__name__}")
+
+
+def onnx_cache_dir() -> Path:
+    """Where exported models of ``--backend onnx`` are kept: ``$RELIGHTNET_CACHE`` or ~/.cache/relightnet."""
+    return Path(os.environ.get("RELIGHTNET_CACHE") or Path.home() / ".cache" / "relightnet")
+
+
+def _exported(checkpoint) -> Path:
+    """The ONNX export of a checkpoint, made once and cached by the checkpoint's content hash."""
+    from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
+    from ..model.onnx_export import export_onnx
+
+    ckpt = shipped_checkpoint() if checkpoint is None else Path(checkpoint)
+    if not ckpt.is_file():
+        raise InputError(f"{ckpt}: checkpoint not found")
+    digest = hashlib.sha256(ckpt.read_bytes()).hexdigest()[:16]
+    out = onnx_cache_dir() / f"{ckpt.stem}-{digest}.onnx"
+    if not out.is_file():
+        logger.info("exporting %s to ONNX (once): %s", ckpt, out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        state = load_checkpoint(ckpt)
+        export_onnx(load_model(ckpt), out, smoothing="none", train_config=state.get("train_config"))
+    return out
+
+
+def make_predictor(backend: str = "torch", checkpoint=None, device: str = "cpu", threads: int = 0):
+    """A predictor for the jobs.
+
+    Args:
+        backend: ``"torch"`` or ``"onnx"``.
+        checkpoint: a ``.pt`` checkpoint (default: the shipped model); for ``onnx`` also a
+            ``.onnx`` file, else the checkpoint is exported once into :func:`onnx_cache_dir`.
+        device: torch device (``onnx`` runs on the CPU).
+        threads: ONNX Runtime intra-op threads (0: default).
+    """
+    from ..model.checkpoint import load_model
+
+    if backend not in BACKENDS:
+        raise InputError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
+    if backend == "torch":
+        if checkpoint is not None and str(checkpoint).endswith(".onnx"):
+            raise InputError(f"{checkpoint}: an ONNX model needs --backend onnx")
+        return TorchPredictor(load_model(checkpoint, device=device))
+    if device != "cpu":
+        raise InputError(f"device: the onnx backend runs on the CPU, got {device!r}")
+    path = Path(checkpoint) if checkpoint is not None and str(checkpoint).endswith(".onnx") else _exported(checkpoint)
+    return OnnxPredictor(path, threads=threads)

@@ -1,0 +1,486 @@
+"""Job 4 of the pipeline: the 2D-baseline comparison on generated clips with exact ground truth.
+
+The task is the relighting step of motion transfer: render a subject under the light of a
+target video, a light that has to be estimated from that video. Every clip of a sequence
+dataset (``relightnet synth --sequence T``) is one such case, made by
+:func:`relightnet.data.generate_sequence`: the subject moves, the light turns, ramps and may
+switch, and the clip stores the truth — ``image`` = albedo ⊙ (transport · L_t), linear, zero
+outside ``mask``. Per clip:
+
+1. **Light.** The CNN estimates L̂_t from each target frame (``image_composite``, the person
+   over a background, 8-bit sRGB) with its mask; L̃_t =
+   :func:`~relightnet.temporal.smooth_lights` (L̂, method, outlier_eps="3mad",
+   switches="auto"): by default the robust Hermite spline (``smoothing="none"``: L̃ = L̂).
+2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
+   photo" under a fixed *source* light: I_src,t = albedo_t ⊙ (transport_t · L_src), exact from
+   the clip's stored albedo and transport, L_src the ``studio`` preset scaled to level 1
+   (:func:`source_light`), 8-bit sRGB. It predicts Â_t and T̂_t; output = Â_t ⊙ (T̂_t · L).
+3. **3D path.** The clip's own mesh (:func:`relightnet.data.render_sample.clip_geometry`:
+   the same body, motion, camera and albedo texture), per-vertex transport by our PRT
+   (:func:`relightnet.prt.vertex_transport`, occlusion, ``n_dirs`` directions rotated by
+   ``prt_seed`` — not the ground truth's directions), rasterized with the clip's camera:
+   output = A ⊙ (T · L).
+
+Each path is shaded with L ∈ {true L_t, raw L̂_t, smoothed L̃_t}: six outputs, compared with
+the ground truth ``image`` in its mask, on sRGB-encoded values (clipped to [0, 1], then
+:func:`~relightnet.io.image.linear_to_srgb`) with :mod:`relightnet.pipeline.metrics`: RMSE,
+PSNR, SSIM per frame, and the temporal error per pair of frames. No exposure matching: the
+lights of the data are on an absolute scale. The light error (irradiance L2,
+:func:`~relightnet.temporal.light_error`) compares L̂ and L̃ with the truth.
+
+Aggregates: per clip, the mean over its frames (PSNR: mean of the per-frame dB values) and
+the temporal error pooled over its frame pairs; over the run, the mean over all frames of
+all clips, and the mean of the clips' temporal and light errors. The report's files are
+described in :mod:`relightnet.pipeline.compare_report`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError, sh_order_from_count
+from ..io.image import linear_to_srgb, to_uint8
+from ..model.inference import predict_image
+from ..model.network import RelightNet
+from ..temporal import light_distance, light_error, smooth_lights
+from . import metrics as M
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["SMOOTHING_METHODS", "PATHS", "LIGHTS", "ClipOutputs", "CompareResult", "source_light", "smooth_estimates",
+           "compare_clip", "clip_metrics", "compare"]
+
+#: Values of ``smoothing``.
+SMOOTHING_METHODS = ("hermite", "poly", "savgol", "none")
+#: The two paths and the three lights each is shaded with (the row order of the tables).
+PATHS = ("2d", "3d")
+LIGHTS = ("true", "raw", "smoothed")
+#: Arrays of a clip that the comparison reads.
+CLIP_FIELDS = ("image", "image_composite", "mask", "albedo", "transport", "light", "background")
+
+
+@dataclass(frozen=True, eq=False)
+class ClipOutputs:
+    """What :func:`compare_clip` makes for one clip (channels-last, linear RGB).
+
+    Attributes:
+        lights: ``"true"``, ``"raw"``, ``"smoothed"`` → (T, K, 3), K of the data.
+        renders: ``(path, light)`` → (T, H, W, 3) output of a path under a light, 0 off its mask.
+        alpha_3d: (T, H, W) coverage of the 3D path's rasterization.
+        source: (T, H, W, 3) the 2D path's input image I_src (linear).
+        outliers, switches: (T,) bool, what the smoother flagged (all False without smoothing).
+        seconds: time spent per stage (``cnn``, ``prt``, ``render``).
+    """
+
+    lights: dict
+    renders: dict
+    alpha_3d: torch.Tensor
+    source: torch.Tensor
+    outliers: torch.Tensor
+    switches: torch.Tensor
+    seconds: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CompareResult:
+    """What :func:`compare` returns: the report folder, the files written (name → path), and the
+    numbers (the content of ``metrics.json``)."""
+
+    out_dir: Path
+    files: dict
+    metrics: dict
+
+
+def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> torch.Tensor:
+    """The 2D path's fixed source light: a preset scaled so that its level is ``level``.
+
+    The level is the data generator's exposure rule (:mod:`relightnet.data.lights`: the
+    largest luminance of the irradiance over all normals), so I_src is exposed like the data.
+
+    Returns:
+        (K, 3) float32, K = (lmax+1)².
+    """
+    from ..data.lights import light_level
+    from ..sh import preset_light
+
+    sh = preset_light(name, lmax)
+    return (sh * (level / light_level(sh))).float()
+
+
+def smooth_estimates(raw: torch.Tensor, method: str = "hermite") -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Smooth per-frame light estimates with the robust default of the pipeline.
+
+    Args:
+        raw: (T, K, 3) estimates.
+        method: one of :data:`SMOOTHING_METHODS` (``"none"`` returns ``raw``).
+
+    Returns:
+        smoothed (T, K, 3), outliers (T,) bool, switches (T,) bool.
+    """
+    if method not in SMOOTHING_METHODS:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING_METHODS)}, got {method!r}")
+    none = torch.zeros(raw.shape[0], dtype=torch.bool)
+    if method == "none":
+        return raw.clone(), none, none
+    r = smooth_lights(raw.double(), method, outlier_eps="3mad", switches="auto")
+    return r.smoothed.to(raw.dtype), r.outliers.cpu(), r.switches.cpu()
+
+
+def _resize(sh: torch.Tensor, k: int) -> torch.Tensor:
+    from ..sh.io import resize_sh
+
+    return resize_sh(sh, sh_order_from_count(k))
+
+
+def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) -> torch.Tensor:
+    """(T, H, W, 3) albedo ⊙ (transport (T, H, W, K) · lights (T, K, 3))."""
+    return albedo * torch.einsum("thwk,tkc->thwc", transport, lights.to(transport))
+
+
+def compare_clip(model: RelightNet, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0,
+                 smoothing: str = "hermite", source: str = "studio", size: int | None = None, bounces: int = 0,
+                 tick=None) -> ClipOutputs:
+    """Run both paths on one clip (module docstring).
+
+    Args:
+        model: the CNN (eval mode, any device).
+        clip: the clip's arrays as stored (numpy, leading T): :data:`CLIP_FIELDS`.
+        geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
+        n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections).
+        smoothing: one of :data:`SMOOTHING_METHODS`.
+        source: preset name of the 2D path's source light.
+        size: the CNN's working size (default: the model's training size).
+        tick: optional callable, called after every frame.
+
+    Returns:
+        :class:`ClipOutputs`.
+    """
+    from ..prt import vertex_transport
+    from ..render.frame import render_mesh
+
+    true = torch.from_numpy(np.asarray(clip["light"], np.float32))
+    T, K = true.shape[0], true.shape[1]
+    km = model.config.n_coeffs
+    mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
+    comp = torch.from_numpy(np.asarray(clip["image_composite"])).permute(0, 3, 1, 2)
+    albedo = torch.from_numpy(np.asarray(clip["albedo"], np.float32))
+    src = _shade(albedo, torch.from_numpy(np.asarray(clip["transport"], np.float32)),
+                 source_light(source, sh_order_from_count(K))[None].expand(T, -1, -1))
+    if geometry.verts.shape[0] != T:
+        raise InputError(f"geometry: {geometry.verts.shape[0]} frames for a clip of {T}")
+    secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
+    raw, a2, t2, a3, t3, al3 = [], [], [], [], [], []
+    for t in range(T):
+        t0 = time.perf_counter()
+        pred, _ = predict_image(model, comp[t], mask[t], size=size)
+        raw.append(_resize(pred.light[0].float().cpu(), K))
+        img = to_uint8(src[t]).permute(2, 0, 1)
+        p2, _ = predict_image(model, img, mask[t], size=size)
+        a2.append(p2.albedo[0].permute(1, 2, 0).float().cpu())
+        t2.append(p2.transport[0].permute(1, 2, 0).float().cpu())
+        t1 = time.perf_counter()
+        Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=sh_order_from_count(K),
+                              n_dirs=n_dirs, occlusion=True, bounces=bounces, seed=prt_seed,
+                              threads=torch.get_num_threads())
+        t2_ = time.perf_counter()
+        rend = render_mesh(geometry.verts[t], geometry.faces, Tv, geometry.albedo, true[t], geometry.camera,
+                           maps=True)
+        a3.append(rend.albedo[0])
+        t3.append(rend.transport[0])
+        al3.append(rend.alpha[0])
+        t3_ = time.perf_counter()
+        secs["cnn"] += t1 - t0
+        secs["prt"] += t2_ - t1
+        secs["render"] += t3_ - t2_
+        if tick is not None:
+            tick()
+    raw = torch.stack(raw)
+    smoothed, outliers, switches = smooth_estimates(raw, smoothing)
+    lights = {"true": true, "raw": raw, "smoothed": smoothed}
+    a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
+    renders = {}
+    for name, L in lights.items():
+        renders[("2d", name)] = _shade(a2, t2, _resize(L, km))
+        renders[("3d", name)] = _shade(a3, t3, L) * al3[..., None]
+    return ClipOutputs(lights, renders, al3, src, outliers, switches, secs)
+
+
+def _srgb(x: torch.Tensor) -> torch.Tensor:
+    """(T, H, W, 3) linear → (T, 3, H, W) sRGB-encoded in [0, 1]."""
+    return linear_to_srgb(x.clamp(0, 1)).permute(0, 3, 1, 2)
+
+
+def _floats(x: torch.Tensor) -> list:
+    return [float(v) for v in x.flatten()]
+
+
+def clip_metrics(out: ClipOutputs, gt: torch.Tensor, mask: torch.Tensor) -> dict:
+    """The numbers of one clip.
+
+    Args:
+        out: a clip's :class:`ClipOutputs`.
+        gt: (T, H, W, 3) the true relit frames (linear).
+        mask: (T, H, W) the ground-truth mask.
+
+    Returns:
+        ``{"rows": [{"path", "light", "rmse", "psnr", "ssim", "temporal", "per_frame": {...}}, ...] (6),
+        "light": {"raw"|"smoothed": {"error", "relative", "per_frame"}}}``; per-frame lists have T
+        entries (``temporal``: T − 1, empty for a single frame).
+    """
+    g = _srgb(gt)
+    rows = []
+    for path in PATHS:
+        for light in LIGHTS:
+            x = _srgb(out.renders[(path, light)])
+            per = {"rmse": M.masked_rmse(x, g, mask), "psnr": M.psnr(x, g, mask), "ssim": M.ssim(x, g, mask)}
+            te = M.temporal_error(x, g, mask, reduction="none") if len(g) > 1 else torch.zeros(0)
+            row = {"path": path, "light": light, **{k: float(v.mean()) for k, v in per.items()},
+                   "temporal": float(M.temporal_error(x, g, mask)) if len(g) > 1 else math.nan,
+                   "per_frame": {**{k: _floats(v) for k, v in per.items()}, "temporal": _floats(te)}}
+            rows.append(row)
+    true = out.lights["true"].double()
+    lights = {}
+    for name in ("raw", "smoothed"):
+        est = out.lights[name].double()
+        lights[name] = {"error": float(light_error(est, true)), "relative": float(light_error(est, true, True)),
+                        "per_frame": _floats(light_distance(est, true))}
+    return {"rows": rows, "light": lights}
+
+
+# ----------------------------------------------------------------------------- the job
+
+
+def _open_data(data_dir, split: str):
+    """The dataset's config and its listed shard files of ``split``; InputError for anything unusable."""
+    from ..data.config import SPLITS
+    from ..data.shards import dataset_config, load_manifest
+
+    if split not in SPLITS:
+        raise InputError(f"split: expected one of {', '.join(SPLITS)}, got {split!r}")
+    root = Path(data_dir)
+    manifest = load_manifest(root)
+    try:
+        cfg = dataset_config(manifest)
+        entries = sorted(manifest["splits"].get(split, {}).get("shards", []), key=lambda e: e["index"])
+        files = [(root / e["file"], int(e["count"])) for e in entries]
+    except (KeyError, TypeError, AttributeError) as e:
+        raise InputError(f"{root}: bad manifest ({type(e).__name__}: {e})") from None
+    if not cfg.sequence_frames:
+        raise InputError(f"{root}: a dataset of still samples (sequence_frames = 0), not of clips; make clips "
+                         "with 'relightnet synth --sequence T'")
+    if not files:
+        planned = int(cfg.counts.get(split, 0))
+        raise InputError(f"{root}: split {split!r} has no clips" + (" made yet" if planned else ""))
+    return cfg, files
+
+
+def _clips(files, n: int | None):
+    """Yield (meta, arrays) of the first ``n`` clips (all with None), one shard in memory at a time."""
+    from ..data.shards import read_shard
+
+    done = 0
+    for path, _ in files:
+        arrays = read_shard(path, (*CLIP_FIELDS, "meta"))
+        for j, meta in enumerate(arrays["meta"]):
+            if n is not None and done >= n:
+                return
+            yield meta, {k: arrays[k][j] for k in CLIP_FIELDS}
+            done += 1
+
+
+def _staging(out_dir: Path) -> Path:
+    """A fresh hidden folder next to ``out_dir`` (same file system) where the report is made."""
+    import tempfile
+
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    anchor = out_dir.absolute().parent
+    while not anchor.exists():
+        anchor = anchor.parent
+    if not anchor.is_dir():
+        raise InputError(f"{out_dir}: {anchor} is not a folder")
+    return Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=anchor))
+
+
+def _publish(stage: Path, out_dir: Path) -> dict:
+    """Move every file of ``stage`` into ``out_dir`` (one ``os.replace`` each); drop stale clip plots."""
+    import os
+    import shutil
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    files = {}
+    for p in sorted(stage.rglob("*")):
+        if p.is_file():
+            rel = p.relative_to(stage)
+            dst = out_dir / rel
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(p, dst)
+            files[rel.as_posix()] = dst
+    for old in (out_dir / "plots").glob("clip*.png"):
+        if f"plots/{old.name}" not in files:
+            old.unlink()
+    shutil.rmtree(stage, ignore_errors=True)
+    return files
+
+
+def _one_thread_geometry(cfg, split, index, T, assets):
+    """:func:`clip_geometry` single-threaded, as the generator ran (bit-identical mesh and mask)."""
+    from ..data.render_sample import clip_geometry
+
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        return clip_geometry(cfg, split, index, T, assets)
+    finally:
+        torch.set_num_threads(n)
+
+
+def _summary(records: list) -> dict:
+    rows = []
+    for i, r0 in enumerate(records[0]["rows"]):
+        cat = {k: np.concatenate([np.asarray(c["rows"][i]["per_frame"][k], float) for c in records])
+               for k in ("rmse", "psnr", "ssim")}
+        temporal = [c["rows"][i]["temporal"] for c in records if math.isfinite(c["rows"][i]["temporal"])]
+        rows.append({"path": r0["path"], "light": r0["light"], **{k: float(v.mean()) for k, v in cat.items()},
+                     "temporal": float(np.mean(temporal)) if temporal else math.nan})
+    light = {n: {k: float(np.mean([c["light"][n][k] for c in records])) for k in ("error", "relative", "jitter")}
+             for n in ("raw", "smoothed")}
+    light["true"] = {"jitter": float(np.mean([c["light"]["true"]["jitter"] for c in records]))}
+    return {"rows": rows, "light": light}
+
+
+@torch.no_grad()
+def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int | None = None, n_dirs: int = 64,
+            smoothing: str = "hermite", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
+            source: str = "studio", size: int | None = None, bounces: int = 0, body=None) -> CompareResult:
+    """Compare the 2D and 3D paths on the clips of a sequence dataset and write a report (module docstring).
+
+    Args:
+        data_dir: a dataset folder made by ``relightnet synth`` with ``sequence_frames > 0``.
+        out_dir: the report folder (made if needed; the files of an earlier report are replaced).
+            Everything is made in a hidden folder beside it and moved in at the end, so a failed
+            run leaves nothing.
+        checkpoint: the CNN's checkpoint (default: the shipped model).
+        split: which split's clips.
+        clips: the first N clips (default: all).
+        n_dirs, prt_seed, bounces: the 3D path's PRT directions, their rotation seed, interreflections.
+        smoothing: ``"hermite"`` (default), ``"poly"``, ``"savgol"`` or ``"none"``.
+        device: for the CNN (``"cpu"``, ``"cuda"``); PRT and rasterization run on the CPU.
+        progress: show a tqdm bar (frames/s).
+        source: preset name of the 2D path's source light.
+        size: the CNN's working size, a multiple of 16 (default: its training size).
+        body: an :class:`~relightnet.body.AnnyBody` or ``SynthAssets`` to reuse (default: a new one).
+
+    Returns:
+        :class:`CompareResult`.
+
+    Raises:
+        InputError: a missing or unusable dataset, an empty split, a bad checkpoint or option.
+    """
+    from tqdm import tqdm
+
+    from ..data.sample import assets_for
+    from ..io import VideoWriter
+    from ..model.checkpoint import load_model, shipped_checkpoint
+    from ..sh import preset_names
+    from ..temporal import jitter
+    from . import compare_report as R
+
+    t_start = time.perf_counter()
+    if smoothing not in SMOOTHING_METHODS:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING_METHODS)}, got {smoothing!r}")
+    for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < lo):
+            raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
+    if source not in preset_names():
+        raise InputError(f"source: expected a preset name ({', '.join(preset_names())}), got {source!r}")
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError) as e:
+        raise InputError(f"device: {e}") from None
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise InputError(f"device: {device!r} asked for but CUDA is not available")
+    cfg, files = _open_data(data_dir, split)
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    model = load_model(checkpoint, device=dev)
+    size = int(getattr(model, "input_size", 256)) if size is None else int(size)
+    if size < 16 or size % model.config.multiple:
+        raise InputError(f"size: expected a positive multiple of {model.config.multiple}, got {size}")
+    assets = assets_for(body)
+    T = cfg.sequence_frames
+    n_total = sum(c for _, c in files) if clips is None else min(clips, sum(c for _, c in files))
+
+    stage = _staging(out_dir)
+    try:
+        (stage / "plots").mkdir()
+        records, light_arrays = [], {}
+        secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
+        bar = tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True)
+        with VideoWriter(stage / "side_by_side.mp4", fps=30.0) as video:
+            for meta, clip in _clips(files, clips):
+                index = int(meta["seed"]["index"])
+                geo = _one_thread_geometry(cfg, split, index, T, assets)
+                out = compare_clip(model, clip, geo, n_dirs, prt_seed, smoothing, source, size, bounces,
+                                   tick=lambda: bar.update(1))
+                for k in secs:
+                    secs[k] += out.seconds[k]
+                mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
+                rec = {"index": index, **clip_metrics(out, torch.from_numpy(np.asarray(clip["image"])), mask)}
+                for name in ("raw", "smoothed", "true"):
+                    rec["light"].setdefault(name, {})["jitter"] = (
+                        float(jitter(out.lights[name].double())) if T >= 3 else math.nan)
+                gm, am = mask > 0.5, out.alpha_3d > 0.5
+                rec.update(mask_iou_3d=float((gm & am).sum() / (gm | am).sum().clamp_min(1)),
+                           switch_frames=list(meta.get("switch_frames", [])),
+                           light_source=str(meta.get("light", {}).get("source", "?")),
+                           bounce=bool(meta.get("flags", {}).get("bounce", False)),
+                           smoother_outliers=np.nonzero(out.outliers.numpy())[0].tolist(),
+                           smoother_switches=np.nonzero(out.switches.numpy())[0].tolist())
+                records.append(rec)
+                for name, L in out.lights.items():
+                    light_arrays[f"clip{index}_{name}"] = L.numpy()
+                light_arrays[f"clip{index}_outliers"] = out.outliers.numpy()
+                light_arrays[f"clip{index}_switches"] = out.switches.numpy()
+                for frame in R.side_by_side(clip, out):
+                    video.write(frame)
+                R.plot_clip(stage / "plots" / f"clip{index:05d}_errors.png",
+                            stage / "plots" / f"clip{index:05d}_light.png", rec, out.lights, out.outliers,
+                            out.switches)
+        bar.close()
+        R.plot_summary(stage / "plots" / "errors.png", stage / "plots" / "light_error.png", records)
+        total = time.perf_counter() - t_start
+        frames = len(records) * T
+        ckpt = str(shipped_checkpoint() if checkpoint is None else Path(checkpoint))
+        metrics = {
+            "format": "relightnet-compare/1",
+            "settings": {"data": str(Path(data_dir)), "split": split, "clips": [r["index"] for r in records],
+                         "checkpoint": ckpt, "size": size, "device": str(dev), "smoothing": smoothing,
+                         "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"}, "n_dirs": n_dirs,
+                         "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
+                         "dataset": cfg.to_dict()},
+            "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,
+                       **{f"{k}_s": v for k, v in secs.items()}},
+            "summary": _summary(records),
+            "clips": records,
+        }
+        R.write_json(stage / "metrics.json", metrics)
+        R.write_lights(stage / "lights.npz", light_arrays)
+        with (stage / "report.md").open("w", encoding="utf-8") as f:
+            f.write(R.format_report(metrics))
+        files_out = _publish(stage, out_dir)
+    except BaseException:
+        import shutil
+
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    logger.info("wrote %s (%d clips, %d frames, %.1f s)", out_dir, len(records), frames, total)
+    return CompareResult(out_dir, files_out, metrics)

@@ -1,0 +1,176 @@
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from relightnet.cli import main
+from relightnet.io import VideoWriter, read_video, video_info, write_image
+from relightnet.pipeline.avatar import avatar, smooth_video_lights
+from relightnet.render import render_body_frames
+from relightnet.sh import save_light
+
+N, RES = 4, 64
+
+
+@pytest.fixture(scope="module")
+def target(tmp_path_factory, anny_body):
+    """A real target clip: a generated person walking under a turning light, lossless, with masks."""
+    from relightnet.data import SynthConfig, generate_sequence
+
+    d = tmp_path_factory.mktemp("target")
+    s = generate_sequence(SynthConfig(res=RES, n_dirs=16), "test", 1, N, body=anny_body)
+    with VideoWriter(d / "clip.mkv", fps=15) as w:
+        for f in s.arrays["image_composite"]:
+            w.write(f)
+    (d / "masks").mkdir()
+    for t, m in enumerate(s.arrays["mask"]):
+        write_image(d / "masks" / f"{t:03d}.png", np.repeat(m[..., None], 3, -1), srgb=False)
+    return d / "clip.mkv", d / "masks", torch.from_numpy(s.arrays["light"])
+
+
+@pytest.fixture(scope="module")
+def model():
+    from relightnet.model import load_model
+
+    return load_model()
+
+
+def test_avatar_writes_video_lights_and_plot(target, model, anny_body, tmp_path):
+    video, masks, _ = target
+    out = tmp_path / "avatar.mkv"
+    res = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=16, progress=False)
+    frames = list(read_video(out))
+    assert res.n_frames == N and len(frames) == N and frames[0].shape == (RES, RES, 3)
+    assert video_info(out).fps == 15
+    with np.load(res.lights_file) as z:
+        assert z["raw"].shape == (N, 9, 3) and z["smoothed"].shape == (N, 9, 3)
+        assert z["outliers"].shape == (N,) and str(z["smoothing"]) == "hermite"
+    assert res.plot.stat().st_size > 1000
+    # Outside the avatar the target frame is untouched (lossless container); the avatar changed pixels.
+    src = list(read_video(video))
+    assert (frames[0] != src[0]).any()
+    np.testing.assert_array_equal(frames[0][:, :4], src[0][:, :4])
+
+
+def test_avatar_given_light_is_the_render_composited(target, anny_body, tmp_path):
+    """With a given light the avatar pixels are exactly the PRT render under it (sRGB-encoded)."""
+    from relightnet.body import make_motion
+    from relightnet.io.image import linear_to_srgb
+    from relightnet.pipeline.scene import avatar_albedo
+
+    video, _, true = target
+    out = tmp_path / "given.mkv"
+    res = avatar(video, out, light=true, body=anny_body, motion="walk", n_dirs=16, progress=False)
+    assert res.lights_raw is None and torch.equal(res.lights_smoothed, true.float())
+    want = render_body_frames(anny_body, make_motion("walk", N, fps=15), true, avatar_albedo(anny_body), size=RES,
+                              n_dirs=16)
+    for got, (bg, fr) in zip(read_video(out), zip(read_video(video), want, strict=True), strict=True):
+        a = fr.render.alpha[0][..., None]
+        exp = linear_to_srgb(fr.render.image[0].clamp(0, 1)) * a + torch.from_numpy(bg) / 255 * (1 - a)
+        assert np.abs(got.astype(int) - (exp * 255).round().numpy().astype(int)).max() <= 1
+
+
+def test_avatar_reuses_light_estimates(target, model, anny_body, tmp_path):
+    video, masks, _ = target
+    out = tmp_path / "a.mkv"
+    first = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
+    again = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
+    assert not first.reused_estimates and again.reused_estimates
+    assert torch.equal(first.lights_raw, again.lights_raw)
+    # A different model name (another checkpoint) does not reuse them.
+    other = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, model_name="x",
+                   progress=False)
+    assert not other.reused_estimates
+
+
+def test_avatar_mask_head_and_onnx_backend_agree(target, model, anny_body, tmp_path, monkeypatch):
+    """Masks predicted by the mask head work; the ONNX backend gives the torch backend's lights."""
+    from relightnet.pipeline.backends import TorchPredictor, make_predictor
+
+    video, masks, _ = target
+    res = avatar(video, tmp_path / "mh.mkv", model=model, body=anny_body, n_dirs=8, progress=False)
+    assert res.n_frames == N and torch.isfinite(res.lights_raw).all()
+    monkeypatch.setenv("RELIGHTNET_CACHE", str(tmp_path / "cache"))
+    onnx = make_predictor("onnx")
+    assert list((tmp_path / "cache").glob("*.onnx"))
+    a = avatar(video, tmp_path / "o.mkv", model=onnx, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
+    t = avatar(video, tmp_path / "t.mkv", model=TorchPredictor(model), body=anny_body, target_masks=masks,
+               n_dirs=8, progress=False)
+    torch.testing.assert_close(a.lights_raw, t.lights_raw, atol=1e-3, rtol=1e-3)
+
+
+def test_smoothing_none_and_short_clips():
+    raw = torch.randn(5, 9, 3)
+    sm, out, sw = smooth_video_lights(raw, "none")
+    assert torch.equal(sm, raw) and not out.any() and not sw.any()
+    sm, _, _ = smooth_video_lights(raw[:2], "hermite")
+    assert torch.equal(sm, raw[:2])
+
+
+def _smpl_file(tmp_path) -> Path:
+    spec = importlib.util.spec_from_file_location("body_conftest", Path(__file__).parents[1] / "body" / "conftest.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    path = tmp_path / "smpl.npz"
+    np.savez(path, **mod.make_smpl_arrays(n_verts=500))
+    return path
+
+
+def test_avatar_cli_and_every_bad_input(target, tmp_path, capsys):
+    video, masks, true = target
+    out = tmp_path / "o.mp4"
+    args = ["-q", "avatar", "--target", str(video), "--n-dirs", "8", "--out", str(out)]
+    assert main([*args, "--target-masks", str(masks), "--motion", "idle"]) == 0
+    assert len(list(read_video(out))) == N and (tmp_path / "o.lights.png").is_file()
+    out.unlink()
+
+    def fails(extra, text, argv=None):
+        assert main(argv or [*args, *extra]) == 1, extra
+        err = capsys.readouterr().err
+        assert text in err, err
+        assert not out.exists()
+
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    fails(["--target", str(tmp_path / "none.mp4")], "not found")
+    (bad / "junk.mp4").write_bytes(b"not a video")
+    fails(["--target", str(bad / "junk.mp4")], "unreadable video")
+    few = bad / "few"
+    few.mkdir()
+    for f in sorted(masks.iterdir())[:2]:
+        (few / f.name).write_bytes(f.read_bytes())
+    fails(["--target-masks", str(few)], "2 masks")
+    big = bad / "big"
+    big.mkdir()
+    for t in range(N):
+        write_image(big / f"{t:03d}.png", np.full((RES + 16, RES, 3), 255, np.uint8), srgb=False)
+    fails(["--target-masks", str(big)], "mask 0 is")
+    empty = bad / "empty"
+    empty.mkdir()
+    for t in range(N):
+        write_image(empty / f"{t:03d}.png", np.zeros((RES, RES, 3), np.uint8), srgb=False)
+    fails(["--target-masks", str(empty)], "empty")
+    np.save(bad / "k5.npy", np.ones((5, 3), np.float32))
+    fails(["--light", str(bad / "k5.npy")], "k5.npy")
+    nan = true[0].clone()
+    nan[0, 0] = float("nan")
+    np.save(bad / "nan.npy", nan.numpy()[:, ::-1])
+    fails(["--light", str(bad / "nan.npy")], "NaN")
+    save_light(bad / "seq.npz", torch.ones(N + 2, 9, 3))
+    fails(["--light", str(bad / "seq.npz")], "frames")
+    fails(["--light", "studio", "--motion", "moonwalk"], "moonwalk")
+    np.savez(bad / "m.npz", poses=np.zeros((N, 72), np.float32))
+    fails(["--light", "studio", "--motion", str(bad / "m.npz")], "SMPL body")
+    smpl = _smpl_file(tmp_path)
+    fails(["--light", "studio", "--body", f"smpl:{smpl}", "--motion", str(bad / "m.npz")], "m.npz")
+    np.savez(bad / "m2.npz", poses=np.zeros((N, 70), np.float32), betas=np.zeros(10, np.float32),
+             trans=np.zeros((N, 3), np.float32))
+    fails(["--light", "studio", "--body", f"smpl:{smpl}", "--motion", str(bad / "m2.npz")], "72")
+    fails(["--light", "studio", "--albedo", str(bad / "nope.png")], "texture file not found")
+    (bad / "cam.json").write_text(json.dumps({"eye": [0, 1]}))
+    fails(["--light", "studio", "--camera", str(bad / "cam.json")], "--camera")
+    fails(["--light", "studio", "--out", str(tmp_path / "o.gif")], "o.gif", argv=[
+        "-q", "avatar", "--target", str(video), "--light", "studio", "--out", str(tmp_path / "o.gif")])
