@@ -66,24 +66,9 @@ def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
     return out
 
 
-@torch.no_grad()
-def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
-                  size: int | None = None, pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
-    """Predict albedo, transport, light (and mask) for one photo at its own resolution.
-
-    Args:
-        model: a :class:`RelightNet` (eval mode).
-        image: (3, H, W) sRGB in [0, 1] (or uint8).
-        mask: (H, W) person mask in [0, 1]; None uses the model's mask head on the whole
-            frame (padded to a square) and then crops around the predicted mask.
-        size: working resolution (a multiple of the model's 2**levels); default: the size the
-            model was trained at (``model.input_size``, set by ``load_model``), else 256.
-        pad: crop padding (fraction of the mask box's larger side).
-
-    Returns:
-        (prediction at the original resolution with a batch of 1 — maps are zero outside the
-        crop, ``mask`` is the given or predicted mask — and the crop box used).
-    """
+def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None, size: int | None,
+                   pad: float) -> tuple[torch.Tensor, CropBox, torch.Tensor]:
+    """(normalised network input (1, 4, s, s), crop box, mask (H, W)) of a photo (see predict_image)."""
     check_shape(image, [3, "H", "W"], name="image")
     if image.dtype == torch.uint8:
         image = image.float() / 255
@@ -108,7 +93,30 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
     box = mask_crop_box(mask, pad)
     x = F.interpolate(_crop(image[None], box), size=(size, size), mode="bilinear", align_corners=False)
     mk = F.interpolate(_crop(mask[None, None], box), size=(size, size), mode="bilinear", align_corners=False)
-    pred = model(normalize_input(x, (mk > 0.5).float()))
+    return normalize_input(x, (mk > 0.5).float()), box, mask
+
+
+@torch.no_grad()
+def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
+                  size: int | None = None, pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
+    """Predict albedo, transport, light (and mask) for one photo at its own resolution.
+
+    Args:
+        model: a :class:`RelightNet` (eval mode).
+        image: (3, H, W) sRGB in [0, 1] (or uint8).
+        mask: (H, W) person mask in [0, 1]; None uses the model's mask head on the whole
+            frame (padded to a square) and then crops around the predicted mask.
+        size: working resolution (a multiple of the model's 2**levels); default: the size the
+            model was trained at (``model.input_size``, set by ``load_model``), else 256.
+        pad: crop padding (fraction of the mask box's larger side).
+
+    Returns:
+        (prediction at the original resolution with a batch of 1 — maps are zero outside the
+        crop, ``mask`` is the given or predicted mask — and the crop box used).
+    """
+    h, w = image.shape[-2:]
+    x, box, mask = _network_input(model, image, mask, size, pad)
+    pred = model(x)
     inside = mask[None, None]
     return Prediction(
         albedo=_paste(pred.albedo, box, h, w) * inside,
@@ -118,8 +126,12 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
     ), box
 
 
+@torch.no_grad()
 def estimate_light(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
-                   size: int | None = None) -> torch.Tensor:
-    """The SH light (K, 3) of a photo, camera-relative light frame, linear RGB."""
-    pred, _ = predict_image(model, image, mask, size)
-    return pred.light[0]
+                   size: int | None = None, pad: float = 0.05) -> torch.Tensor:
+    """The SH light (K, 3) of a photo, camera-relative light frame, linear RGB.
+
+    Same arguments as :func:`predict_image`; the maps are not pasted back (cheaper).
+    """
+    x, _, _ = _network_input(model, image, mask, size, pad)
+    return model(x).light[0]

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import VideoWriter, atomic_write, read_masks, read_video, video_info
+from ..io import VideoWriter, atomic_write, read_video, video_info
 from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera
 from ..render import render_body_frames
@@ -90,7 +90,7 @@ def estimate_video_lights(model, video, masks=None, progress: bool = True) -> to
     lights = []
     for _, img, mask in tqdm(_frames(video, masks), total=info.n_frames or None, desc="estimate light",
                              unit="frame", disable=not progress):
-        lights.append(predict(img, mask).light[0].float().cpu())
+        lights.append(predict.light(img, mask).float().cpu())
     if not lights:
         raise InputError(f"{video}: the video has no frames")
     return torch.stack(lights)
@@ -153,11 +153,9 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
     return light.float()
 
 
-def _count_frames(video, masks) -> int:
-    n = video_info(video).n_frames
-    if n:
-        return n
-    return sum(1 for _ in read_video(video)) if masks is None else read_masks(masks)[0]
+def _count_frames(video) -> int:
+    """Frames of a video: from the container, else by decoding it (streaming)."""
+    return video_info(video).n_frames or sum(1 for _ in read_video(video))
 
 
 @torch.no_grad()
@@ -214,9 +212,8 @@ def avatar(
     h, w = info.size
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
+    motion_params(motion, body_model, 1, info.fps)  # a bad motion fails now, not after the light pass
     lights_file, plot = _side_paths(out)
-    n = _count_frames(target, target_masks)
-    params, n_motion = motion_params(motion, body_model, n, info.fps)
     reused = False
     raw = outliers = switches = None
     if light is None:
@@ -234,7 +231,9 @@ def avatar(
         smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
     else:
         fp = ""
+        n = _count_frames(target)
         smoothed = _given_light(light, n)
+    params, n_motion = motion_params(motion, body_model, n, info.fps)
     if n_motion < n:
         logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
     n = min(n, n_motion)

@@ -2,7 +2,8 @@
 
 Both backends are *predictors*: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
 at the photo's own resolution (crop around the mask, resize to the working size, run, paste
-back), with ``predictor.lmax`` the SH order of the model. The jobs take either.
+back), ``predictor.light(image, mask) -> (K, 3)`` (the light only, nothing pasted back), and
+``predictor.lmax`` the SH order of the model. The jobs take either.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 import torch
 from torch.nn import functional as F
 
-from ..checks import InputError
+from ..checks import InputError, check_shape
 from ..model.network import Prediction, RelightNet
 
 logger = logging.getLogger(__name__)
@@ -37,6 +38,12 @@ class TorchPredictor:
         from ..model.inference import predict_image
 
         return predict_image(self.model, image, mask, size=self.size)[0]
+
+    def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
+        """Only the light (K, 3) (the maps are not pasted back)."""
+        from ..model.inference import estimate_light
+
+        return estimate_light(self.model, image, mask, size=self.size)
 
 
 class OnnxPredictor:
@@ -62,21 +69,32 @@ class OnnxPredictor:
         self.lmax = int(round(k**0.5)) - 1
         self.has_mask_head = False
 
-    @torch.no_grad()
-    def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
-        from ..model.inference import _crop, _paste, mask_crop_box
+    def _step(self, image: torch.Tensor, mask: torch.Tensor | None):
+        from ..model.inference import _crop, mask_crop_box
 
         if mask is None:
             raise InputError("mask: the ONNX backend has no mask head; give the person's masks")
+        check_shape(image, [3, "H", "W"], name="image")
+        check_shape(mask, image.shape[1:], name="mask")
         if image.dtype == torch.uint8:
             image = image.float() / 255
-        h, w = image.shape[-2:]
         mask = mask.float()
         box = mask_crop_box(mask)
         s = (self.size, self.size)
         x = F.interpolate(_crop(image[None].float(), box), size=s, mode="bilinear", align_corners=False)
         m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
-        res = self.relighter.step(x.contiguous().numpy(), (m > 0.5).float().numpy())
+        return self.relighter.step(x.contiguous().numpy(), (m > 0.5).float().numpy()), box, mask
+
+    def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
+        """Only the light (K, 3) (the maps are not pasted back)."""
+        return torch.from_numpy(self._step(image, mask)[0]["light_raw"][0])
+
+    @torch.no_grad()
+    def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
+        from ..model.inference import _paste
+
+        res, box, mask = self._step(image, mask)
+        h, w = image.shape[-2:]
         inside = mask[None, None]
         return Prediction(
             albedo=_paste(torch.from_numpy(res["albedo"]), box, h, w) * inside,
@@ -90,7 +108,7 @@ def as_predictor(model) -> TorchPredictor | OnnxPredictor:
     """A predictor from a :class:`RelightNet` (wrapped) or a predictor (returned as is)."""
     if isinstance(model, RelightNet):
         return TorchPredictor(model)
-    if callable(model) and hasattr(model, "lmax"):
+    if callable(model) and hasattr(model, "lmax") and hasattr(model, "light"):
         return model
     raise InputError(f"model: expected a RelightNet or a predictor, got {type(model).__name__}")
 

@@ -1,0 +1,136 @@
+"""End-to-end frames/s of the video jobs (relight-video: torch/onnx; avatar: torch/onnx) and the
+split of the avatar job per stage, at 512² by default.
+
+The target clip is a generated person (the data generator, a few frames played back and forth
+to the wanted length) written as a lossless mkv with a mask video beside it.
+
+    python benchmarks/bench_pipeline.py                      # 48 frames at 512², all jobs + stages
+    python benchmarks/bench_pipeline.py --job avatar --frames 1000 --size 256   # one job (for /usr/bin/time -v)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import median_ms, table  # noqa: E402
+
+
+def make_clip(d: Path, size: int, frames: int, src_frames: int = 8):
+    """A person clip of ``frames`` frames (``src_frames`` generated, played back and forth)."""
+    from relightnet.body import AnnyBody
+    from relightnet.data import SynthConfig, generate_sequence
+    from relightnet.io import VideoWriter
+
+    s = generate_sequence(SynthConfig(res=size, n_dirs=16), "test", 2, src_frames, body=AnnyBody())
+    cyc = list(range(src_frames)) + list(range(src_frames - 2, 0, -1))
+    video, masks = d / f"clip{size}_{frames}.mkv", d / f"masks{size}_{frames}.mkv"
+    with VideoWriter(video, fps=30) as v, VideoWriter(masks, fps=30) as m:
+        for t in range(frames):
+            i = cyc[t % len(cyc)]
+            v.write(s.arrays["image_composite"][i])
+            m.write(np.repeat(s.arrays["mask"][i][..., None] * 255, 3, -1).astype(np.uint8))
+    return video, masks
+
+
+def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> float:
+    """Wall seconds of one job, end to end (model loading excluded)."""
+    from relightnet.pipeline import avatar, make_predictor, relight_video
+    from relightnet.sh import preset_light
+
+    pred = make_predictor(backend)
+    t0 = time.perf_counter()
+    if job == "avatar":
+        avatar(video, out / f"avatar_{backend}.mkv", model=pred, target_masks=masks, n_dirs=n_dirs, progress=False)
+    else:
+        relight_video(pred, video, masks, preset_light("sunset"), out / f"relit_{backend}.mkv", progress=False)
+    return time.perf_counter() - t0
+
+
+def stages(video, masks, n_dirs: int) -> list[list]:
+    """Median ms per frame of each stage of the avatar job."""
+    from relightnet.body import AnnyBody, make_motion
+    from relightnet.io import VideoWriter, read_masks, read_video
+    from relightnet.io.image import linear_to_srgb
+    from relightnet.pipeline import avatar_albedo, make_predictor, smooth_video_lights
+    from relightnet.prt import vertex_transport
+    from relightnet.raster import default_camera
+    from relightnet.render import render_mesh
+
+    frames = [f for _, f in zip(range(4), read_video(video), strict=False)]
+    mask = next(read_masks(masks)[1])
+    img = torch.from_numpy(frames[0]).permute(2, 0, 1).float() / 255
+    h, w = frames[0].shape[:2]
+    rows = []
+    rows.append(["decode frame", median_ms(lambda: next(iter(read_video(video))), repeat=5)])
+    for backend in ("torch", "onnx"):
+        p = make_predictor(backend)
+        rows.append([f"light estimate ({backend})", median_ms(lambda p=p: p(img, mask), repeat=7)])
+    raw = torch.randn(48, 9, 3) * 0.1 + 1
+    rows.append(["smoothing (48 frames, per frame)", median_ms(lambda: smooth_video_lights(raw), repeat=5) / 48])
+    body = AnnyBody()
+    motion = make_motion("walk", 16)
+    rows.append(["pose body (per frame, chunks of 16)", median_ms(lambda: body(motion), repeat=3) / 16])
+    out = body({"pose": {k: v[:1] for k, v in motion["pose"].items()}, "trans": motion["trans"][:1]})
+    v, n, f = out.verts[0], out.normals[0], out.faces
+    rows.append([f"PRT transport ({n_dirs} dirs, occlusion)", median_ms(
+        lambda: vertex_transport(v, f, n, n_dirs=n_dirs), repeat=5)])
+    T = vertex_transport(v, f, n, n_dirs=n_dirs)
+    tex, cam, light = avatar_albedo(body), default_camera((h, w)), torch.rand(9, 3) * 0.2
+    rows.append(["rasterize + shade", median_ms(lambda: render_mesh(v, f, T, tex, light, cam, normals=n), repeat=5)])
+    r = render_mesh(v, f, T, tex, light, cam, normals=n)
+    bg = torch.from_numpy(frames[0]).float() / 255
+
+    def comp():
+        a = r.alpha[0][..., None]
+        return linear_to_srgb(r.image[0].clamp(0, 1)) * a + bg * (1 - a)
+
+    rows.append(["composite", median_ms(comp, repeat=7)])
+    x = comp()
+    with tempfile.TemporaryDirectory() as d:
+        with VideoWriter(Path(d) / "e.mp4", fps=30, srgb=False) as wr:
+            rows.append(["encode (mp4, x264)", median_ms(lambda: wr.write(x), repeat=10)])
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=512)
+    ap.add_argument("--frames", type=int, default=48)
+    ap.add_argument("--n-dirs", type=int, default=64)
+    ap.add_argument("--job", choices=("all", "avatar", "relight-video"), default="all")
+    ap.add_argument("--backend", choices=("torch", "onnx"), default="torch")
+    args = ap.parse_args()
+    os.environ.setdefault("RELIGHTNET_CACHE", str(Path(tempfile.gettempdir()) / "relightnet-bench-cache"))
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        video, masks = make_clip(d, args.size, args.frames)
+        if args.job != "all":
+            s = run_job(args.job, args.backend, video, masks, d, args.n_dirs)
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+            print(f"{args.job} ({args.backend}) {args.frames} frames at {args.size}²: {s:.1f} s, "
+                  f"{args.frames / s:.2f} frames/s, peak RSS {rss:.0f} MiB")
+            return
+        rows = []
+        for job in ("relight-video", "avatar"):
+            for backend in ("torch", "onnx"):
+                s = run_job(job, backend, video, masks, d, args.n_dirs)
+                rows.append([job, backend, args.frames, f"{args.frames / s:.2f}", f"{1000 * s / args.frames:.0f}"])
+        print(f"End to end, {args.size}², {args.frames} frames, PRT {args.n_dirs} directions, "
+              f"{torch.get_num_threads()} threads\n")
+        print(table(["job", "backend", "frames", "frames/s", "ms/frame"], rows))
+        print(f"\nAvatar job per stage ({args.size}², median ms per frame)\n")
+        print(table(["stage", "ms"], stages(video, masks, args.n_dirs)))
+
+
+if __name__ == "__main__":
+    main()
