@@ -22,7 +22,7 @@ def run(args: argparse.Namespace) -> int:
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
     res = avatar(args.target, args.out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
-                 target_masks=args.target_masks, light=light, camera=camera, smoothing=args.smoothing,
+                 target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
@@ -43,6 +43,8 @@ def register(sub) -> None:
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
     p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
                    "(default: the model's mask head)")
+    p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
+                   "target's frames")
     p.add_argument("--motion", default="walk",
                    help="Anny preset (walk, turn, idle, arm_raise; as long as the video) or an SMPL-style motion "
                    "file (.npz/.pkl) for --body smpl:PATH (default: walk)")

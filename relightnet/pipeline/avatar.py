@@ -125,6 +125,27 @@ def _fingerprint(video, masks, predictor_name: str) -> str:
                        "model": predictor_name}, sort_keys=True)
 
 
+def _plate_frames(plate, target, size):
+    """uint8 (H, W, 3) frames to composite over: the target's, a clean-plate video's, or one image."""
+    import itertools
+
+    if plate is None:
+        return read_video(target)
+    p = Path(plate)
+    if p.suffix.lower() in (".png", ".jpg", ".jpeg"):
+        from ..io import read_image
+
+        if not p.is_file():
+            raise InputError(f"--plate {plate}: image not found")
+        img = (read_image(p) * 255).round().to(torch.uint8).numpy()
+        if img.shape[:2] != tuple(size):
+            raise InputError(f"--plate {plate}: size {img.shape[:2]} differs from the target's {tuple(size)}")
+        return itertools.repeat(img)
+    if video_info(p).size != tuple(size):
+        raise InputError(f"--plate {plate}: size {video_info(p).size} differs from the target's {tuple(size)}")
+    return read_video(p)
+
+
 def _reuse(path: Path, fingerprint: str) -> torch.Tensor | None:
     if not path.is_file():
         return None
@@ -167,6 +188,7 @@ def avatar(
     body="anny",
     albedo="default",
     target_masks=None,
+    plate=None,
     light: torch.Tensor | None = None,
     camera: Camera | None = None,
     smoothing: str = "hermite",
@@ -189,6 +211,8 @@ def avatar(
         albedo: ``"default"``, a texture image path (sRGB, in the body's UV layout), a (V, 3)
             per-vertex albedo or a :class:`~relightnet.render.TexturedAlbedo`.
         target_masks: masks of the person in the target (folder or mask video); None: mask head.
+        plate: what to composite over: None (the target's frames), a clean-plate video of the
+            same size (the scene without the person) or one image.
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
         camera: the avatar's camera (default: :func:`~relightnet.raster.default_camera` at the
             video's size: full body, standing at the origin).
@@ -213,6 +237,7 @@ def avatar(
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
     motion_params(motion, body_model, 1, info.fps)  # a bad motion fails now, not after the light pass
+    _plate_frames(plate, target, info.size)  # likewise a bad plate
     lights_file, plot = _side_paths(out)
     reused = False
     raw = outliers = switches = None
@@ -260,8 +285,8 @@ def avatar(
                                 occlusion=occlusion, bounces=bounces, n_frames=n_motion)
     written = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
-        for bg, fr in tqdm(zip(read_video(target), frames, strict=False), total=n, desc="avatar", unit="frame",
-                           disable=not progress):
+        pairs = zip(_plate_frames(plate, target, info.size), frames, strict=False)
+        for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
             if written == n:
                 break
             r = fr.render
@@ -270,6 +295,6 @@ def avatar(
             writer.write(linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a))
             written += 1
         if written < n:
-            raise InputError(f"{target}: only {written} frames decoded, {n} expected")
+            raise InputError(f"{plate or target}: only {written} frames decoded, {n} expected")
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
     return AvatarResult(written, out, lights_file, plot, raw, smoothed, reused)

@@ -49,7 +49,7 @@ from ..checks import InputError, sh_order_from_count
 from ..io.image import linear_to_srgb, to_uint8
 from ..model.inference import predict_image
 from ..model.network import RelightNet
-from ..temporal import light_distance, light_error, smooth_lights
+from ..temporal import jitter, light_distance, light_error, smooth_lights
 from . import metrics as M
 
 logger = logging.getLogger(__name__)
@@ -231,8 +231,9 @@ def clip_metrics(out: ClipOutputs, gt: torch.Tensor, mask: torch.Tensor) -> dict
 
     Returns:
         ``{"rows": [{"path", "light", "rmse", "psnr", "ssim", "temporal", "per_frame": {...}}, ...] (6),
-        "light": {"raw"|"smoothed": {"error", "relative", "per_frame"}}}``; per-frame lists have T
-        entries (``temporal``: T − 1, empty for a single frame).
+        "light": {"raw"|"smoothed": {"error", "relative", "jitter", "per_frame"}, "true": {"jitter"}},
+        "mask_iou_3d", "smoother_outliers", "smoother_switches"}``; per-frame lists have T entries
+        (``temporal``: T − 1, empty for a single frame); jitter is NaN below 3 frames.
     """
     g = _srgb(gt)
     rows = []
@@ -251,7 +252,12 @@ def clip_metrics(out: ClipOutputs, gt: torch.Tensor, mask: torch.Tensor) -> dict
         est = out.lights[name].double()
         lights[name] = {"error": float(light_error(est, true)), "relative": float(light_error(est, true, True)),
                         "per_frame": _floats(light_distance(est, true))}
-    return {"rows": rows, "light": lights}
+    for name in ("raw", "smoothed", "true"):
+        lights.setdefault(name, {})["jitter"] = float(jitter(out.lights[name].double())) if len(g) >= 3 else math.nan
+    gm, am = mask > 0.5, out.alpha_3d > 0.5
+    return {"rows": rows, "light": lights, "mask_iou_3d": float((gm & am).sum() / (gm | am).sum().clamp_min(1)),
+            "smoother_outliers": torch.nonzero(out.outliers).flatten().tolist(),
+            "smoother_switches": torch.nonzero(out.switches).flatten().tolist()}
 
 
 # ----------------------------------------------------------------------------- the job
@@ -295,41 +301,6 @@ def _clips(files, n: int | None):
             done += 1
 
 
-def _staging(out_dir: Path) -> Path:
-    """A fresh hidden folder next to ``out_dir`` (same file system) where the report is made."""
-    import tempfile
-
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError(f"{out_dir}: exists and is not a folder")
-    anchor = out_dir.absolute().parent
-    while not anchor.exists():
-        anchor = anchor.parent
-    if not anchor.is_dir():
-        raise InputError(f"{out_dir}: {anchor} is not a folder")
-    return Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=anchor))
-
-
-def _publish(stage: Path, out_dir: Path) -> dict:
-    """Move every file of ``stage`` into ``out_dir`` (one ``os.replace`` each); drop stale clip plots."""
-    import os
-    import shutil
-
-    out_dir.mkdir(parents=True, exist_ok=True)
-    files = {}
-    for p in sorted(stage.rglob("*")):
-        if p.is_file():
-            rel = p.relative_to(stage)
-            dst = out_dir / rel
-            dst.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(p, dst)
-            files[rel.as_posix()] = dst
-    for old in (out_dir / "plots").glob("clip*.png"):
-        if f"plots/{old.name}" not in files:
-            old.unlink()
-    shutil.rmtree(stage, ignore_errors=True)
-    return files
-
-
 def _one_thread_geometry(cfg, split, index, T, assets):
     """:func:`clip_geometry` single-threaded, as the generator ran (bit-identical mesh and mask)."""
     from ..data.render_sample import clip_geometry
@@ -340,20 +311,6 @@ def _one_thread_geometry(cfg, split, index, T, assets):
         return clip_geometry(cfg, split, index, T, assets)
     finally:
         torch.set_num_threads(n)
-
-
-def _summary(records: list) -> dict:
-    rows = []
-    for i, r0 in enumerate(records[0]["rows"]):
-        cat = {k: np.concatenate([np.asarray(c["rows"][i]["per_frame"][k], float) for c in records])
-               for k in ("rmse", "psnr", "ssim")}
-        temporal = [c["rows"][i]["temporal"] for c in records if math.isfinite(c["rows"][i]["temporal"])]
-        rows.append({"path": r0["path"], "light": r0["light"], **{k: float(v.mean()) for k, v in cat.items()},
-                     "temporal": float(np.mean(temporal)) if temporal else math.nan})
-    light = {n: {k: float(np.mean([c["light"][n][k] for c in records])) for k in ("error", "relative", "jitter")}
-             for n in ("raw", "smoothed")}
-    light["true"] = {"jitter": float(np.mean([c["light"]["true"]["jitter"] for c in records]))}
-    return {"rows": rows, "light": light}
 
 
 @torch.no_grad()
@@ -390,7 +347,6 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     from ..io import VideoWriter
     from ..model.checkpoint import load_model, shipped_checkpoint
     from ..sh import preset_names
-    from ..temporal import jitter
     from . import compare_report as R
 
     t_start = time.perf_counter()
@@ -419,13 +375,13 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     T = cfg.sequence_frames
     n_total = sum(c for _, c in files) if clips is None else min(clips, sum(c for _, c in files))
 
-    stage = _staging(out_dir)
+    stage = R.staging_dir(out_dir)
     try:
         (stage / "plots").mkdir()
         records, light_arrays = [], {}
         secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
-        bar = tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True)
-        with VideoWriter(stage / "side_by_side.mp4", fps=30.0) as video:
+        with (tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True) as bar,
+              VideoWriter(stage / "side_by_side.mp4", fps=30.0) as video):
             for meta, clip in _clips(files, clips):
                 index = int(meta["seed"]["index"])
                 geo = _one_thread_geometry(cfg, split, index, T, assets)
@@ -434,28 +390,12 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                 for k in secs:
                     secs[k] += out.seconds[k]
                 mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
-                rec = {"index": index, **clip_metrics(out, torch.from_numpy(np.asarray(clip["image"])), mask)}
-                for name in ("raw", "smoothed", "true"):
-                    rec["light"].setdefault(name, {})["jitter"] = (
-                        float(jitter(out.lights[name].double())) if T >= 3 else math.nan)
-                gm, am = mask > 0.5, out.alpha_3d > 0.5
-                rec.update(mask_iou_3d=float((gm & am).sum() / (gm | am).sum().clamp_min(1)),
-                           switch_frames=list(meta.get("switch_frames", [])),
-                           light_source=str(meta.get("light", {}).get("source", "?")),
-                           bounce=bool(meta.get("flags", {}).get("bounce", False)),
-                           smoother_outliers=np.nonzero(out.outliers.numpy())[0].tolist(),
-                           smoother_switches=np.nonzero(out.switches.numpy())[0].tolist())
+                rec = {"index": index, **clip_metrics(out, torch.from_numpy(np.asarray(clip["image"])), mask),
+                       "switch_frames": list(meta.get("switch_frames", [])),
+                       "light_source": str(meta.get("light", {}).get("source", "?")),
+                       "bounce": bool(meta.get("flags", {}).get("bounce", False))}
                 records.append(rec)
-                for name, L in out.lights.items():
-                    light_arrays[f"clip{index}_{name}"] = L.numpy()
-                light_arrays[f"clip{index}_outliers"] = out.outliers.numpy()
-                light_arrays[f"clip{index}_switches"] = out.switches.numpy()
-                for frame in R.side_by_side(clip, out):
-                    video.write(frame)
-                R.plot_clip(stage / "plots" / f"clip{index:05d}_errors.png",
-                            stage / "plots" / f"clip{index:05d}_light.png", rec, out.lights, out.outliers,
-                            out.switches)
-        bar.close()
+                R.add_clip(stage, video, clip, out, rec, light_arrays)
         R.plot_summary(stage / "plots" / "errors.png", stage / "plots" / "light_error.png", records)
         total = time.perf_counter() - t_start
         frames = len(records) * T
@@ -469,14 +409,14 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                          "dataset": cfg.to_dict()},
             "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,
                        **{f"{k}_s": v for k, v in secs.items()}},
-            "summary": _summary(records),
+            "summary": R.summarize(records),
             "clips": records,
         }
         R.write_json(stage / "metrics.json", metrics)
         R.write_lights(stage / "lights.npz", light_arrays)
         with (stage / "report.md").open("w", encoding="utf-8") as f:
             f.write(R.format_report(metrics))
-        files_out = _publish(stage, out_dir)
+        files_out = R.publish(stage, out_dir)
     except BaseException:
         import shutil
 

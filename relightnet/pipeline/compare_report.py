@@ -23,15 +23,20 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
+import shutil
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import torch
 
+from ..checks import InputError
 from ..io import atomic_write
 from ..io.image import to_uint8
 
-__all__ = ["json_safe", "side_by_side", "write_json", "write_lights", "plot_clip", "plot_summary",
-           "format_report"]
+__all__ = ["staging_dir", "publish", "summarize", "json_safe", "write_json", "write_lights", "side_by_side", "add_clip",
+           "to_uint8_seq", "plot_clip", "plot_summary", "format_report"]
 
 _LUMA = (0.2126, 0.7152, 0.0722)
 _COLORS = {"true": "tab:green", "raw": "tab:red", "smoothed": "tab:blue"}
@@ -63,6 +68,51 @@ def write_lights(path, lights: dict) -> None:
         np.savez_compressed(f, **{k: np.asarray(v) for k, v in lights.items()})
 
 
+def staging_dir(out_dir: Path) -> Path:
+    """A fresh hidden folder next to ``out_dir`` (same file system) where the report is made."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    anchor = out_dir.absolute().parent
+    while not anchor.exists():
+        anchor = anchor.parent
+    if not anchor.is_dir():
+        raise InputError(f"{out_dir}: {anchor} is not a folder")
+    return Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=anchor))
+
+
+def publish(stage: Path, out_dir: Path) -> dict:
+    """Move every file of ``stage`` into ``out_dir`` (one ``os.replace`` each); drop stale clip plots."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    files = {}
+    for p in sorted(stage.rglob("*")):
+        if p.is_file():
+            rel = p.relative_to(stage)
+            dst = out_dir / rel
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(p, dst)
+            files[rel.as_posix()] = dst
+    for old in (out_dir / "plots").glob("clip*.png"):
+        if f"plots/{old.name}" not in files:
+            old.unlink()
+    shutil.rmtree(stage, ignore_errors=True)
+    return files
+
+
+def summarize(records: list) -> dict:
+    """The run's means from the clips' records: per (path, light) row over all frames, light errors over clips."""
+    rows = []
+    for i, r0 in enumerate(records[0]["rows"]):
+        cat = {k: np.concatenate([np.asarray(c["rows"][i]["per_frame"][k], float) for c in records])
+               for k in ("rmse", "psnr", "ssim")}
+        temporal = [c["rows"][i]["temporal"] for c in records if math.isfinite(c["rows"][i]["temporal"])]
+        rows.append({"path": r0["path"], "light": r0["light"], **{k: float(v.mean()) for k, v in cat.items()},
+                     "temporal": float(np.mean(temporal)) if temporal else math.nan})
+    light = {n: {k: float(np.mean([c["light"][n][k] for c in records])) for k in ("error", "relative", "jitter")}
+             for n in ("raw", "smoothed")}
+    light["true"] = {"jitter": float(np.mean([c["light"]["true"]["jitter"] for c in records]))}
+    return {"rows": rows, "light": light}
+
+
 def side_by_side(clip: dict, out) -> np.ndarray:
     """The video frames of one clip: input | 2D | 3D | ground truth.
 
@@ -83,6 +133,20 @@ def side_by_side(clip: dict, out) -> np.ndarray:
         to_uint8_seq(torch.from_numpy(np.asarray(clip["image"], np.float32)) * m + bg * (1 - m)),
     ]
     return torch.cat(panels, dim=2).numpy()
+
+
+def add_clip(stage, video, clip: dict, out, record: dict, light_arrays: dict) -> None:
+    """One clip's share of the report: its video frames, its lights (into ``light_arrays``), its two plots."""
+    index = record["index"]
+    for name, L in out.lights.items():
+        light_arrays[f"clip{index}_{name}"] = L.numpy()
+    light_arrays[f"clip{index}_outliers"] = out.outliers.numpy()
+    light_arrays[f"clip{index}_switches"] = out.switches.numpy()
+    for frame in side_by_side(clip, out):
+        video.write(frame)
+    plots = Path(stage) / "plots"
+    plot_clip(plots / f"clip{index:05d}_errors.png", plots / f"clip{index:05d}_light.png", record, out.lights,
+              out.outliers, out.switches)
 
 
 def to_uint8_seq(x: torch.Tensor) -> torch.Tensor:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 
+from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import VideoWriter, read_video, video_info, write_image
 from relightnet.pipeline.avatar import avatar, smooth_video_lights
@@ -174,3 +175,17 @@ def test_avatar_cli_and_every_bad_input(target, tmp_path, capsys):
     fails(["--light", "studio", "--camera", str(bad / "cam.json")], "--camera")
     fails(["--light", "studio", "--out", str(tmp_path / "o.gif")], "o.gif", argv=[
         "-q", "avatar", "--target", str(video), "--light", "studio", "--out", str(tmp_path / "o.gif")])
+
+
+def test_avatar_over_a_clean_plate(target, anny_body, tmp_path):
+    video, _, true = target
+    plate = tmp_path / "plate.png"
+    write_image(plate, np.full((RES, RES, 3), 77, np.uint8), srgb=False)
+    res = avatar(video, tmp_path / "p.mkv", light=true[0], body=anny_body, plate=plate, n_dirs=8, progress=False)
+    frames = list(read_video(res.video))
+    assert len(frames) == N and (frames[0][:, :4] == 77).all() and (frames[0] != 77).any()
+    write_image(tmp_path / "small.png", np.zeros((RES // 2, RES, 3), np.uint8), srgb=False)
+    with pytest.raises(InputError, match="small.png"):
+        avatar(video, tmp_path / "q.mkv", light=true[0], body=anny_body, plate=tmp_path / "small.png",
+               progress=False)
+    assert not (tmp_path / "q.mkv").exists()
