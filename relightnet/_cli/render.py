@@ -57,29 +57,16 @@ def run_render(args: argparse.Namespace) -> int:
 
 def _body_and_params(args):
     """Build the body model and its per-frame parameters from the arguments."""
-    from ..body import AnnyBody, SMPLBody, load_motion, make_motion
+    from ..body import AnnyBody
+    from ..pipeline.scene import load_body, motion_params
 
-    if args.body == "anny":
-        body = AnnyBody()
-        pheno = dict(args.phenotype or [])
-        if args.motion:
-            if Path(args.motion).suffix.lower() in (".npz", ".pkl"):
-                raise ValueError(
-                    f"--motion {args.motion}: SMPL-style motion files drive an SMPL body (--body smpl:MODEL.npz); "
-                    "for Anny use a procedural motion: walk, turn, idle, arm_raise"
-                )
-            params = make_motion(args.motion, args.frames, fps=args.fps, seed=args.seed)
-            params["phenotype"] = pheno
-        else:
-            params = {"pose": body.pose(args.pose), "phenotype": pheno}
-        return body, params
-    if not args.body.startswith("smpl:"):
-        raise ValueError(f"--body: expected 'anny' or 'smpl:PATH', got {args.body!r}")
-    body = SMPLBody(args.body[5:])
+    body = load_body(args.body)
     if args.motion:
-        params = load_motion(args.motion).body_params()
+        params, _ = motion_params(args.motion, body, args.frames, fps=args.fps, seed=args.seed)
     else:
-        params = {}
+        params = {"pose": body.pose(args.pose)} if isinstance(body, AnnyBody) else {}
+    if isinstance(body, AnnyBody):
+        params["phenotype"] = dict(args.phenotype or [])
     return body, params
 
 

@@ -48,7 +48,8 @@ SMOOTHING = ("hermite", "poly", "savgol", "none")
 
 @dataclass(frozen=True, eq=False)
 class AvatarResult:
-    """What :func:`avatar` wrote: frame count, paths, and the lights (T, K, 3) (raw is None with a given light)."""
+    """What :func:`avatar` wrote: frame count, paths, the lights (T, K, 3) and the frames flagged as
+    outliers / light switches (T,) by the smoothing (raw, outliers, switches are None with a given light)."""
 
     n_frames: int
     video: Path
@@ -57,6 +58,8 @@ class AvatarResult:
     lights_raw: torch.Tensor | None
     lights_smoothed: torch.Tensor
     reused_estimates: bool = False
+    outliers: torch.Tensor | None = None
+    switches: torch.Tensor | None = None
 
 
 def _frames(video, masks):
@@ -297,4 +300,4 @@ def avatar(
         if written < n:
             raise InputError(f"{plate or target}: only {written} frames decoded, {n} expected")
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
-    return AvatarResult(written, out, lights_file, plot, raw, smoothed, reused)
+    return AvatarResult(written, out, lights_file, plot, raw, smoothed, reused, outliers, switches)
