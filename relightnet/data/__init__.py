@@ -9,6 +9,7 @@ from .dataset import DEFAULT_FIELDS, SynthDataset
 from .framing import crop_camera
 from .generate import GENERATOR_VERSION, Sample, generate_sample, generate_sequence
 from .preview import preview
+from .render_sample import ClipGeometry, clip_geometry
 from .shards import load_manifest, read_shard, read_shard_meta, verify_dataset, write_shard
 from .synth import run_synth
 
@@ -17,7 +18,7 @@ __all__ = [
     "HDRI_NAMES", "SPLITS", "SynthConfig", "load_config", "sample_seed",
     "DEFAULT_FIELDS", "SynthDataset",
     "crop_camera",
-    "GENERATOR_VERSION", "Sample", "generate_sample", "generate_sequence",
+    "GENERATOR_VERSION", "Sample", "generate_sample", "generate_sequence", "ClipGeometry", "clip_geometry",
     "preview",
     "load_manifest", "read_shard", "read_shard_meta", "verify_dataset", "write_shard",
     "run_synth",

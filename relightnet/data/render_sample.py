@@ -1,15 +1,19 @@
 """The core of the generator: draw every axis, place, frame, compute PRT, render (one still or a clip).
 
 See :mod:`relightnet.data.generate` for the public functions and what the arrays hold.
+:func:`clip_geometry` gives the geometry part alone (mesh per frame, crop camera, albedo texture):
+the 3D path of ``relightnet compare`` renders the same subject with it.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 
+from ..checks import InputError
 from ..io.image import to_uint8
 from ..prt import vertex_transport
 from ..raster import antialias, interpolate, perspective_camera
@@ -20,10 +24,10 @@ from .config import SynthConfig
 from .framing import camera_intrinsics, crop_camera
 from .lights import LUMA, LightDraw, light_at, sample_light
 from .poses import sample_phenotype, sample_pose, sample_yaw
-from .sample import GENERATOR_VERSION, Sample, SynthAssets
+from .sample import GENERATOR_VERSION, Sample, SynthAssets, assets_for
 from .textures import paint_albedo, sample_outfit, vertex_albedo
 
-__all__ = ["CLIP_KEY", "STREAMS", "render_clip"]
+__all__ = ["CLIP_KEY", "STREAMS", "ClipGeometry", "clip_geometry", "render_clip"]
 
 #: Random streams, one child of the sample's seed sequence each (in this order).
 STREAMS = ("body", "pose", "view", "albedo", "light", "background", "prt", "noise")
@@ -155,34 +159,110 @@ def _background(rng, cfg, split, assets: SynthAssets, draw: LightDraw, angle, ti
     return procedural_background(sub, cfg.res, factor * subject)
 
 
-def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
-                n_frames: int | None) -> Sample:
-    """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames."""
-    T = 1 if n_frames is None else n_frames
-    r = _streams(ss)
+@dataclass(frozen=True, eq=False)
+class ClipGeometry:
+    """The geometry of a still or clip: the posed, placed mesh, its crop camera and its albedo texture.
+
+    Everything is in the camera frame of the sample (the crop camera has rotation I, so its
+    light frame is the sample's light frame, see :mod:`relightnet.data.generate`).
+
+    Attributes:
+        verts: (T, V, 3) float32 vertex positions per frame (T = 1 for a still).
+        normals: (T, V, 3) float32 unit vertex normals per frame.
+        faces: (F, 3) int64 triangles.
+        camera: the crop :class:`~relightnet.raster.Camera` (batch 1, size ``(res, res)``).
+        albedo: the :class:`~relightnet.render.TexturedAlbedo` (texture (S, S, 3) linear RGB).
+        box: the :class:`~relightnet.data.framing.CropBox` in base-camera pixels.
+        pitch: camera pitch (radians); ``R``: (3, 3) float64 the pitch rotation.
+        world_to_camera: (4, 4) float64, the world (before yaw) → camera transform.
+        phenotype, pose, yaw, view, outfit: what was drawn (pose: the pose description).
+        regions: (V, R) the smoothed clothing-region field of the outfit.
+    """
+
+    verts: torch.Tensor
+    normals: torch.Tensor
+    faces: torch.Tensor
+    camera: object
+    albedo: TexturedAlbedo
+    box: object
+    pitch: float
+    R: torch.Tensor
+    world_to_camera: torch.Tensor
+    phenotype: dict
+    pose: dict
+    yaw: float
+    view: dict
+    outfit: dict
+    regions: np.ndarray
+
+
+def _geometry(cfg: SynthConfig, r: dict, assets: SynthAssets, T: int) -> ClipGeometry:
+    """Draw the body, pose, view and albedo streams (in that order) and build the geometry."""
     body = assets.body
     phen = sample_phenotype(r["body"], cfg.ages)
     params, pose_desc = sample_pose(r["pose"], n_frames=T)
     yaw = sample_yaw(r["pose"])
     view = _view(r["view"], cfg)
     outfit = sample_outfit(r["albedo"])
-    draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
-    dir_seed = int(r["prt"].integers(2**31 - 1))
-    bounce = bool(r["prt"].uniform() < cfg.bounce_prob)
-
     with torch.no_grad():
         out = body(pose=params["pose"], trans=params["trans"], phenotype=phen)
     v_cam, n_cam, R, pitch, w2c = _place(out.verts, out.normals, out.joints, view, yaw)
     cam, box = crop_camera(v_cam.reshape(-1, 3), _base_camera(), cfg.res, cfg.pad, cfg.jitter, r["view"],
                            view["mode"])
-    intr = camera_intrinsics(cam)
     regions = assets.region_field(outfit["sleeves"], outfit["legs"], "none" if outfit["hair"] is None else "short")
     tex = paint_albedo(assets.atlas, regions, outfit)
-    talb = TexturedAlbedo(tex, body.uv, body.uv_faces)
+    return ClipGeometry(verts=v_cam, normals=n_cam, faces=body.faces, camera=cam,
+                        albedo=TexturedAlbedo(tex, body.uv, body.uv_faces), box=box, pitch=pitch, R=R,
+                        world_to_camera=w2c, phenotype=phen, pose=pose_desc, yaw=yaw, view=view, outfit=outfit,
+                        regions=regions)
+
+
+def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None, body=None) -> ClipGeometry:
+    """The geometry of still (``n_frames`` None) or clip ``index`` of ``split``, without rendering it.
+
+    It draws from the same random streams as :func:`~relightnet.data.generate_sample` /
+    :func:`~relightnet.data.generate_sequence` (which use it), so the mesh, camera and
+    texture are those of the generated sample: rasterizing ``verts`` with ``camera`` gives
+    its ``mask`` (bit for bit at the same torch thread count).
+
+    Args:
+        cfg, split, index: as :func:`~relightnet.data.generate_sequence`.
+        n_frames: T ≥ 1 for a clip, None for a still (then T = 1 in the result).
+        body: None, an :class:`~relightnet.body.AnnyBody`, or ``SynthAssets`` (fastest).
+
+    Returns:
+        :class:`ClipGeometry` with (T, V, 3) vertices and normals.
+    """
+    from .generate import _check  # generate imports this module
+
+    ss = _check(cfg, split, index)
+    if n_frames is not None:
+        if isinstance(n_frames, bool) or not isinstance(n_frames, int | np.integer) or n_frames < 1:
+            raise InputError(f"n_frames: expected None or an integer >= 1, got {n_frames!r}")
+        ss = np.random.SeedSequence(ss.entropy, spawn_key=(CLIP_KEY,))
+    return _geometry(cfg, _streams(ss), assets_for(body), 1 if n_frames is None else int(n_frames))
+
+
+def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
+                n_frames: int | None) -> Sample:
+    """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames."""
+    T = 1 if n_frames is None else n_frames
+    r = _streams(ss)
+    geo = _geometry(cfg, r, assets, T)  # body, pose, view and albedo streams
+    draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
+    dir_seed = int(r["prt"].integers(2**31 - 1))
+    bounce = bool(r["prt"].uniform() < cfg.bounce_prob)
+
+    v_cam, n_cam, R, pitch, w2c = geo.verts, geo.normals, geo.R, geo.pitch, geo.world_to_camera
+    cam, box, view, yaw = geo.camera, geo.box, geo.view, geo.yaw
+    phen, pose_desc, outfit = geo.phenotype, geo.pose, geo.outfit
+    intr = camera_intrinsics(cam)
+    talb = geo.albedo
+    tex = talb.tex
     grey = vertex_albedo(assets.atlas, tex).mean(1) if bounce else None
     tilt = rotation_world_to_light(R).float()
-    faces = body.faces
-    field = torch.as_tensor(regions)
+    faces = geo.faces
+    field = torch.as_tensor(geo.regions)
     threads = torch.get_num_threads()
 
     keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")

@@ -1,7 +1,9 @@
-"""Whole jobs: relight an image or a video (2D path), put a relit avatar into a video (3D path), the demo."""
+"""Whole jobs: relight an image or a video (2D path), put a relit avatar into a video (3D path),
+compare the 2D and 3D paths against ground truth, the demo."""
 
 from .avatar import SMOOTHING, AvatarResult, avatar, estimate_video_lights, smooth_video_lights
 from .backends import BACKENDS, OnnxPredictor, TorchPredictor, as_predictor, make_predictor
+from .compare import ClipOutputs, CompareResult, clip_metrics, compare, compare_clip, source_light
 from .demo import run_demo
 from .relight_image import RelitImage, match_exposure, relight_image
 from .relight_video import relight_video
@@ -10,6 +12,7 @@ from .scene import avatar_albedo, load_body, load_camera, motion_params
 __all__ = [
     "SMOOTHING", "AvatarResult", "avatar", "estimate_video_lights", "smooth_video_lights",
     "BACKENDS", "OnnxPredictor", "TorchPredictor", "as_predictor", "make_predictor",
+    "ClipOutputs", "CompareResult", "clip_metrics", "compare", "compare_clip", "source_light",
     "run_demo", "RelitImage", "match_exposure", "relight_image", "relight_video",
     "avatar_albedo", "load_body", "load_camera", "motion_params",
 ]

@@ -10,7 +10,8 @@ outside ``mask``. Per clip:
 1. **Light.** The CNN estimates L̂_t from each target frame (``image_composite``, the person
    over a background, 8-bit sRGB) with its mask; L̃_t =
    :func:`~relightnet.temporal.smooth_lights` (L̂, method, outlier_eps="3mad",
-   switches="auto"): by default the robust Hermite spline (``smoothing="none"``: L̃ = L̂).
+   switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.pipeline.avatar.smooth_video_lights`):
+   by default the robust Hermite spline (``smoothing="none"``, or fewer than 3 frames: L̃ = L̂).
 2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
    photo" under a fixed *source* light: I_src,t = albedo_t ⊙ (transport_t · L_src), exact from
    the clip's stored albedo and transport, L_src the ``studio`` preset scaled to level 1
@@ -47,18 +48,18 @@ import torch
 
 from ..checks import InputError, sh_order_from_count
 from ..io.image import linear_to_srgb, to_uint8
-from ..model.inference import predict_image
-from ..model.network import RelightNet
-from ..temporal import jitter, light_distance, light_error, smooth_lights
+from ..temporal import jitter, light_distance, light_error
 from . import metrics as M
+from .avatar import SMOOTHING, smooth_video_lights
+from .backends import as_predictor
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["SMOOTHING_METHODS", "PATHS", "LIGHTS", "ClipOutputs", "CompareResult", "source_light", "smooth_estimates",
+__all__ = ["SMOOTHING_METHODS", "PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "source_light",
            "compare_clip", "clip_metrics", "compare"]
 
-#: Values of ``smoothing``.
-SMOOTHING_METHODS = ("hermite", "poly", "savgol", "none")
+#: Values of ``smoothing`` (those of ``relightnet avatar``).
+SMOOTHING_METHODS = SMOOTHING
 #: The two paths and the three lights each is shaded with (the row order of the tables).
 PATHS = ("2d", "3d")
 LIGHTS = ("true", "raw", "smoothed")
@@ -114,25 +115,6 @@ def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> tor
     return (sh * (level / light_level(sh))).float()
 
 
-def smooth_estimates(raw: torch.Tensor, method: str = "hermite") -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Smooth per-frame light estimates with the robust default of the pipeline.
-
-    Args:
-        raw: (T, K, 3) estimates.
-        method: one of :data:`SMOOTHING_METHODS` (``"none"`` returns ``raw``).
-
-    Returns:
-        smoothed (T, K, 3), outliers (T,) bool, switches (T,) bool.
-    """
-    if method not in SMOOTHING_METHODS:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING_METHODS)}, got {method!r}")
-    none = torch.zeros(raw.shape[0], dtype=torch.bool)
-    if method == "none":
-        return raw.clone(), none, none
-    r = smooth_lights(raw.double(), method, outlier_eps="3mad", switches="auto")
-    return r.smoothed.to(raw.dtype), r.outliers.cpu(), r.switches.cpu()
-
-
 def _resize(sh: torch.Tensor, k: int) -> torch.Tensor:
     from ..sh.io import resize_sh
 
@@ -144,19 +126,19 @@ def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) 
     return albedo * torch.einsum("thwk,tkc->thwc", transport, lights.to(transport))
 
 
-def compare_clip(model: RelightNet, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0,
-                 smoothing: str = "hermite", source: str = "studio", size: int | None = None, bounces: int = 0,
-                 tick=None) -> ClipOutputs:
+def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "hermite",
+                 source: str = "studio", bounces: int = 0, tick=None) -> ClipOutputs:
     """Run both paths on one clip (module docstring).
 
     Args:
-        model: the CNN (eval mode, any device).
+        model: the CNN: a :class:`~relightnet.model.RelightNet` (eval mode, any device; run at its
+            training size) or a predictor of :mod:`relightnet.pipeline.backends` (torch or ONNX).
         clip: the clip's arrays as stored (numpy, leading T): :data:`CLIP_FIELDS`.
         geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
-        n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections).
+        n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections; a
+            bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default).
         smoothing: one of :data:`SMOOTHING_METHODS`.
         source: preset name of the 2D path's source light.
-        size: the CNN's working size (default: the model's training size).
         tick: optional callable, called after every frame.
 
     Returns:
@@ -167,7 +149,8 @@ def compare_clip(model: RelightNet, clip: dict, geometry, n_dirs: int = 64, prt_
 
     true = torch.from_numpy(np.asarray(clip["light"], np.float32))
     T, K = true.shape[0], true.shape[1]
-    km = model.config.n_coeffs
+    predict = as_predictor(model)
+    km = (predict.lmax + 1) ** 2
     mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
     comp = torch.from_numpy(np.asarray(clip["image_composite"])).permute(0, 3, 1, 2)
     albedo = torch.from_numpy(np.asarray(clip["albedo"], np.float32))
@@ -178,31 +161,30 @@ def compare_clip(model: RelightNet, clip: dict, geometry, n_dirs: int = 64, prt_
     secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
     raw, a2, t2, a3, t3, al3 = [], [], [], [], [], []
     for t in range(T):
-        t0 = time.perf_counter()
-        pred, _ = predict_image(model, comp[t], mask[t], size=size)
-        raw.append(_resize(pred.light[0].float().cpu(), K))
+        c0 = time.perf_counter()
+        raw.append(_resize(predict.light(comp[t], mask[t]).float().cpu(), K))
         img = to_uint8(src[t]).permute(2, 0, 1)
-        p2, _ = predict_image(model, img, mask[t], size=size)
+        p2 = predict(img, mask[t])
         a2.append(p2.albedo[0].permute(1, 2, 0).float().cpu())
         t2.append(p2.transport[0].permute(1, 2, 0).float().cpu())
-        t1 = time.perf_counter()
+        c1 = time.perf_counter()
         Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=sh_order_from_count(K),
                               n_dirs=n_dirs, occlusion=True, bounces=bounces, seed=prt_seed,
                               threads=torch.get_num_threads())
-        t2_ = time.perf_counter()
+        c2 = time.perf_counter()
         rend = render_mesh(geometry.verts[t], geometry.faces, Tv, geometry.albedo, true[t], geometry.camera,
                            maps=True)
         a3.append(rend.albedo[0])
         t3.append(rend.transport[0])
         al3.append(rend.alpha[0])
-        t3_ = time.perf_counter()
-        secs["cnn"] += t1 - t0
-        secs["prt"] += t2_ - t1
-        secs["render"] += t3_ - t2_
+        c3 = time.perf_counter()
+        secs["cnn"] += c1 - c0
+        secs["prt"] += c2 - c1
+        secs["render"] += c3 - c2
         if tick is not None:
             tick()
     raw = torch.stack(raw)
-    smoothed, outliers, switches = smooth_estimates(raw, smoothing)
+    smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
     lights = {"true": true, "raw": raw, "smoothed": smoothed}
     a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
     renders = {}
@@ -281,6 +263,9 @@ def _open_data(data_dir, split: str):
     if not cfg.sequence_frames:
         raise InputError(f"{root}: a dataset of still samples (sequence_frames = 0), not of clips; make clips "
                          "with 'relightnet synth --sequence T'")
+    n_planned = int(manifest["splits"].get(split, {}).get("n_shards", len(files)))
+    if files and len(files) < n_planned:
+        logger.warning("%s: %d of %d shards of %s are made; comparing their clips", root, len(files), n_planned, split)
     if not files:
         planned = int(cfg.counts.get(split, 0))
         raise InputError(f"{root}: split {split!r} has no clips" + (" made yet" if planned else ""))
@@ -316,7 +301,8 @@ def _one_thread_geometry(cfg, split, index, T, assets):
 @torch.no_grad()
 def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int | None = None, n_dirs: int = 64,
             smoothing: str = "hermite", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
-            source: str = "studio", size: int | None = None, bounces: int = 0, body=None) -> CompareResult:
+            source: str = "studio", size: int | None = None, bounces: int = 0, backend: str = "torch",
+            body=None) -> CompareResult:
     """Compare the 2D and 3D paths on the clips of a sequence dataset and write a report (module docstring).
 
     Args:
@@ -324,7 +310,8 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         out_dir: the report folder (made if needed; the files of an earlier report are replaced).
             Everything is made in a hidden folder beside it and moved in at the end, so a failed
             run leaves nothing.
-        checkpoint: the CNN's checkpoint (default: the shipped model).
+        checkpoint: the CNN's checkpoint (default: the shipped model); with ``backend="onnx"`` also an
+            ``.onnx`` file (a checkpoint is exported once, :func:`~relightnet.pipeline.backends.make_predictor`).
         split: which split's clips.
         clips: the first N clips (default: all).
         n_dirs, prt_seed, bounces: the 3D path's PRT directions, their rotation seed, interreflections.
@@ -333,6 +320,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         progress: show a tqdm bar (frames/s).
         source: preset name of the 2D path's source light.
         size: the CNN's working size, a multiple of 16 (default: its training size).
+        backend: where the CNN runs, ``"torch"`` or ``"onnx"`` (CPU).
         body: an :class:`~relightnet.body.AnnyBody` or ``SynthAssets`` to reuse (default: a new one).
 
     Returns:
@@ -345,9 +333,10 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
 
     from ..data.sample import assets_for
     from ..io import VideoWriter
-    from ..model.checkpoint import load_model, shipped_checkpoint
+    from ..model.checkpoint import shipped_checkpoint
     from ..sh import preset_names
     from . import compare_report as R
+    from .backends import make_predictor
 
     t_start = time.perf_counter()
     if smoothing not in SMOOTHING_METHODS:
@@ -367,10 +356,12 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: exists and is not a folder")
-    model = load_model(checkpoint, device=dev)
-    size = int(getattr(model, "input_size", 256)) if size is None else int(size)
-    if size < 16 or size % model.config.multiple:
-        raise InputError(f"size: expected a positive multiple of {model.config.multiple}, got {size}")
+    if size is not None and (isinstance(size, bool) or not isinstance(size, int) or size < 16 or size % 16):
+        raise InputError(f"size: expected a positive multiple of 16, got {size!r}")
+    predictor = make_predictor(backend, checkpoint, str(dev))
+    if size is not None:
+        predictor.size = size
+    size = predictor.size if predictor.size is not None else int(getattr(predictor.model, "input_size", 256))
     assets = assets_for(body)
     T = cfg.sequence_frames
     n_total = sum(c for _, c in files) if clips is None else min(clips, sum(c for _, c in files))
@@ -385,7 +376,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
             for meta, clip in _clips(files, clips):
                 index = int(meta["seed"]["index"])
                 geo = _one_thread_geometry(cfg, split, index, T, assets)
-                out = compare_clip(model, clip, geo, n_dirs, prt_seed, smoothing, source, size, bounces,
+                out = compare_clip(predictor, clip, geo, n_dirs, prt_seed, smoothing, source, bounces,
                                    tick=lambda: bar.update(1))
                 for k in secs:
                     secs[k] += out.seconds[k]
@@ -394,6 +385,9 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                        "switch_frames": list(meta.get("switch_frames", [])),
                        "light_source": str(meta.get("light", {}).get("source", "?")),
                        "bounce": bool(meta.get("flags", {}).get("bounce", False))}
+                if rec["mask_iou_3d"] < 0.99:
+                    logger.warning("clip %d: the 3D path's mask differs from the clip's (IoU %.3f): was the data made "
+                                   "by another generator or body-model version?", index, rec["mask_iou_3d"])
                 records.append(rec)
                 R.add_clip(stage, video, clip, out, rec, light_arrays)
         R.plot_summary(stage / "plots" / "errors.png", stage / "plots" / "light_error.png", records)
@@ -403,8 +397,9 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         metrics = {
             "format": "relightnet-compare/1",
             "settings": {"data": str(Path(data_dir)), "split": split, "clips": [r["index"] for r in records],
-                         "checkpoint": ckpt, "size": size, "device": str(dev), "smoothing": smoothing,
-                         "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"}, "n_dirs": n_dirs,
+                         "checkpoint": ckpt, "backend": backend, "size": size, "device": str(dev),
+                         "smoothing": smoothing, "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"},
+                         "n_dirs": n_dirs,
                          "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
                          "dataset": cfg.to_dict()},
             "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,

@@ -12,7 +12,8 @@ A report folder holds:
 - ``plots/errors.png`` (RMSE and SSIM per frame, mean over the clips, for the six outputs),
   ``plots/light_error.png`` (light error per frame, raw vs smoothed), and per clip
   ``plots/clip{index:05d}_errors.png`` and ``plots/clip{index:05d}_light.png`` (the luminance
-  of SH coefficients 0–3 per frame: true, raw, smoothed);
+  of SH coefficients 0–3 per frame: raw, smoothed, true, with the smoother's outliers and switches,
+  :func:`relightnet.temporal.plot.light_curves_png`);
 - ``side_by_side.mp4``: every clip one after the other, each frame four panels —
   target frame (input of the light estimate) | 2D path | 3D path (both under the smoothed
   light) | ground truth, the renders composited over the clip's background.
@@ -33,12 +34,11 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write
-from ..io.image import to_uint8
+from ..io.image import linear_to_srgb
 
 __all__ = ["staging_dir", "publish", "summarize", "json_safe", "write_json", "write_lights", "side_by_side", "add_clip",
            "to_uint8_seq", "plot_clip", "plot_summary", "format_report"]
 
-_LUMA = (0.2126, 0.7152, 0.0722)
 _COLORS = {"true": "tab:green", "raw": "tab:red", "smoothed": "tab:blue"}
 _STYLES = {"2d": "-", "3d": "--"}
 
@@ -150,8 +150,8 @@ def add_clip(stage, video, clip: dict, out, record: dict, light_arrays: dict) ->
 
 
 def to_uint8_seq(x: torch.Tensor) -> torch.Tensor:
-    """(T, H, W, 3) linear → uint8 sRGB, frame by frame."""
-    return torch.stack([to_uint8(f) for f in x])
+    """(T, H, W, 3) linear → uint8 sRGB (what :func:`~relightnet.io.to_uint8` does to each frame)."""
+    return (linear_to_srgb(x.clamp(0, 1)) * 255).round().to(torch.uint8)
 
 
 def _figure(rows: int, cols: int, w: float = 4.2, h: float = 2.8):
@@ -170,6 +170,14 @@ def _save(fig, path) -> None:
         f.write(buf.getvalue())
 
 
+def _frames_axis(ax) -> None:
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel("frame")
+    ax.grid(alpha=0.3)
+
+
 def _vlines(ax, frames) -> None:
     for s in frames:
         ax.axvline(s - 0.5, color="0.5", lw=0.8, ls=":")
@@ -181,9 +189,8 @@ def _error_panels(axes, rows: list, key_label) -> None:
             y = np.asarray(r["per_frame"][key], float)
             ax.plot(np.arange(len(y)), y, _STYLES[r["path"]], color=_COLORS[r["light"]], lw=1.3,
                     label=f"{r['path'].upper()}, {r['light']} light")
-        ax.set_xlabel("frame")
+        _frames_axis(ax)
         ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, ncol=2)
 
 
@@ -202,24 +209,13 @@ def plot_clip(errors_path, light_path, record: dict, lights: dict, outliers, swi
     fig.suptitle(f"clip {record['index']}: error per frame (solid 2D, dashed 3D; dotted: light switch)")
     _save(fig, errors_path)
 
-    luma = torch.tensor(_LUMA, dtype=torch.float64)
-    k = min(4, lights["true"].shape[1])
-    fig, axes = _figure(1, k, w=3.3)
-    t = np.arange(lights["true"].shape[0])
-    out = np.asarray(outliers, bool)
-    for j, ax in enumerate(axes):
-        y = {n: (lights[n][:, j].double() @ luma).numpy() for n in ("true", "raw", "smoothed")}
-        ax.plot(t, y["true"], color="k", lw=1.5, label="true")
-        ax.plot(t, y["raw"], "o-", color=_COLORS["raw"], ms=3, lw=0.6, label="raw estimate")
-        ax.plot(t, y["smoothed"], color=_COLORS["smoothed"], lw=1.5, label="smoothed")
-        if out.any():
-            ax.plot(t[out], y["raw"][out], "x", color="k", ms=7, label="outlier")
-        _vlines(ax, [int(i) for i in np.nonzero(np.asarray(switches, bool))[0]])
-        ax.set_title(f"SH coefficient {j} (luminance)", fontsize=9)
-        ax.set_xlabel("frame")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
-    _save(fig, light_path)
+    from ..temporal.plot import light_curves_png
+
+    png = light_curves_png(lights["raw"], lights["smoothed"], lights["true"], torch.as_tensor(outliers),
+                           torch.as_tensor(switches), title=f"clip {record['index']}: light (luminance of SH "
+                           f"coefficients), true switches at {record['switch_frames'] or 'none'}")
+    with atomic_write(light_path) as f:
+        f.write(png)
 
 
 def plot_summary(errors_path, light_path, records: list) -> None:
@@ -238,10 +234,9 @@ def plot_summary(errors_path, light_path, records: list) -> None:
     for name in ("raw", "smoothed"):
         y = np.mean([np.asarray(c["light"][name]["per_frame"], float) for c in records], axis=0)
         axes[0].plot(np.arange(len(y)), y, color=_COLORS[name], lw=1.5, label=f"{name} estimate")
-    axes[0].set_xlabel("frame")
+    _frames_axis(axes[0])
     axes[0].set_ylabel("light error (irradiance L2)")
     axes[0].set_title(f"light error per frame, mean over {len(records)} clip(s)", fontsize=10)
-    axes[0].grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     _save(fig, light_path)
 
@@ -299,7 +294,8 @@ def format_report(m: dict) -> str:
         lines.append(f"| {names[name]} | {_f(li[name]['error'])} | {_f(li[name]['relative'])} | "
                      f"{_f(li[name]['jitter'])} |")
     lines.append(f"| true L_t | 0 | 0 | {_f(li['true']['jitter'])} |")
-    lines += ["", "Jitter: mean irradiance-L2 norm of the second difference over time (needs ≥ 3 frames).", "",
+    lines += ["", "Jitter: mean irradiance-L2 norm of the second difference over time (needs ≥ 3 frames); the true "
+              "light's includes its switches.", "",
               "## Per clip", "",
               "| clip | light | switch at | 2D RMSE (L̃) | 3D RMSE (L̃) | 3D RMSE (L) | light error L̂ | light error L̃ "
               "| 3D mask IoU |", "|---|---|---|---|---|---|---|---|---|"]

@@ -1,81 +1,130 @@
-"""``relightnet demo``: the most complete job available, on embedded defaults only.
+"""``relightnet demo``: the whole job on embedded defaults only (shipped CNN, Anny, shipped env maps).
 
-It uses only what ships with the package (the CC0 env maps, Anny, the pretrained CNN):
-
-1. ``lights/<preset>.png``: a preview of every preset light;
-2. ``estimate/``: a synthetic target photo of a person under a held-out light (``night`` or
-   ``sunrise``, made by the data generator), the light the CNN estimates from it, and the
-   Anny avatar rendered with PRT under the true and under the estimated light, side by side;
-3. ``avatar_walk.mp4``: the avatar walking under the estimated light turning about it.
+1. ``target.mp4``: a target clip made by the data generator — a person walking under a
+   turning light from a held-out env map (``night``) over a background — with its masks
+   (``target_masks.mp4``), its clean plate (``plate.mp4``) and its true lights;
+2. ``avatar.mp4`` (job 3, :func:`~relightnet.pipeline.avatar`): the Anny avatar walking,
+   lit by the light the CNN estimates from the person in the target, smoothed over time,
+   composited over the plate; ``side_by_side.mp4`` shows target | avatar;
+   ``lights.png`` compares raw, smoothed and true light curves;
+3. ``compare/`` (job 4, :func:`~relightnet.pipeline.compare`): 2D vs 3D path against the
+   ground truth on generated test sequences (``sequences/``): report.md, plots, side-by-side video;
+4. ``lights/<preset>.png``: previews of the preset lights.
 """
 
 from __future__ import annotations
 
+import json
 import logging
-import math
 from pathlib import Path
 
+import numpy as np
 import torch
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["run_demo"]
+__all__ = ["run_demo", "DEMO_CLIP"]
+
+#: The generated test clip used as the target: a walk under a turning ``night`` light.
+DEMO_CLIP = 7
 
 
-def _exposed(img: torch.Tensor, scale: float) -> torch.Tensor:
-    return (img * scale).clamp(0, 1)
+def _write_target(out: Path, sample) -> dict:
+    from ..io import VideoWriter
+    from ..io.image import to_uint8
+    from ..sh import save_light
+
+    a = sample.arrays
+    paths = {"target": out / "target.mp4", "masks": out / "target_masks.mp4", "plate": out / "plate.mp4"}
+    with VideoWriter(paths["target"], fps=sample.meta["fps"]) as v:
+        for f in a["image_composite"]:
+            v.write(f)
+    with VideoWriter(paths["masks"], fps=sample.meta["fps"]) as v:
+        for m in a["mask"]:
+            v.write(np.repeat((m[..., None] > 0.5).astype(np.uint8) * 255, 3, -1))
+    plate = to_uint8(torch.from_numpy(a["background"][0])).numpy()
+    with VideoWriter(paths["plate"], fps=sample.meta["fps"]) as v:
+        for _ in range(a["image_composite"].shape[0]):
+            v.write(plate)
+    paths["true_lights"] = save_light(out / "target_lights_true.npz", torch.from_numpy(a["light"]))
+    return paths
 
 
-def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int = 64) -> dict:
-    """Write the demo outputs into ``out_dir``; returns the paths written by name."""
-    from ..body import AnnyBody, default_albedo, make_motion
-    from ..data import SynthConfig, generate_sample
-    from ..io import VideoWriter, write_image
-    from ..model import estimate_light, load_model
-    from ..render import TexturedAlbedo, render_body_frames
-    from ..sh import light_preview, render_presets, rotate_sh_up
-    from ..sh.visualize import auto_exposure
+def _side_by_side(out: Path, left, right, fps: float) -> Path:
+    from ..io import VideoWriter, read_video
+
+    with VideoWriter(out, fps=fps) as v:
+        for a, b in zip(read_video(left), read_video(right), strict=False):
+            v.write(np.concatenate([a, b], axis=1))
+    return out
+
+
+def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int = 64, compare_clips: int = 2,
+             compare_size: int = 128, compare_frames: int = 24, progress: bool = True) -> dict:
+    """Write the demo into ``out_dir``; returns the paths written by name.
+
+    Args:
+        size: side of the target clip (square, a multiple of 16).
+        frames: frames of the target clip and the avatar video.
+        n_dirs: PRT directions of the avatar.
+        compare_clips, compare_size, compare_frames: the generated sequences of the comparison.
+    """
+    from ..body import AnnyBody
+    from ..data import SynthConfig, generate_sequence
+    from ..io import atomic_write
+    from ..model import load_model
+    from ..sh import render_presets
+    from ..temporal import light_error
+    from ..temporal.plot import light_curves_png
+    from .avatar import avatar
+    from .backends import TorchPredictor
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths: dict = {"lights": render_presets(out / "lights", size=size // 2)}
-
     body = AnnyBody()
-    # 1. A target photo with exact ground truth, under a light the CNN never saw in training.
-    sample = generate_sample(SynthConfig(res=size, n_dirs=128), "test", 0, body=body)
-    photo = torch.from_numpy(sample.arrays["image_srgb"]).permute(2, 0, 1)
-    mask = torch.from_numpy(sample.arrays["mask"])
-    true_light = torch.from_numpy(sample.arrays["light"])
     model = load_model()
-    est = estimate_light(model, photo, mask)
-    logger.info("target light source: %s", sample.meta.get("light", {}).get("source", "?"))
+    paths: dict = {}
 
-    # 2. The avatar under the true and the estimated light (same exposure for both).
-    alb = default_albedo(body)
-    tex = TexturedAlbedo(alb.texture, body.uv, body.uv_faces)
-    pose = {"pose": body.pose("arms_crossed")}
-    renders = []
-    for light in (true_light, est):
-        fr = next(render_body_frames(body, pose, light, tex, size=size, n_dirs=n_dirs))
-        renders.append(fr.render)
-    scale = auto_exposure(renders[0].image[0], renders[0].alpha[0] > 0)
-    est_dir = out / "estimate"
-    est_dir.mkdir(exist_ok=True)
-    paths["target"] = write_image(est_dir / "target_photo.png", photo.permute(1, 2, 0))
-    paths["avatar_true_vs_estimated"] = write_image(
-        est_dir / "avatar_true_vs_estimated_light.png",
-        torch.cat([_exposed(r.image[0], scale) for r in renders], 1),
-    )
-    paths["lights_true_vs_estimated"] = write_image(
-        est_dir / "light_true_vs_estimated.png",
-        torch.cat([light_preview(true_light, 128), light_preview(est, 128)], 0),
-    )
+    logger.info("demo 1/4: generating the target clip (%d frames at %d²)", frames, size)
+    sample = generate_sequence(SynthConfig(res=size, n_dirs=n_dirs), "test", DEMO_CLIP, frames, body=body)
+    paths.update(_write_target(out, sample))
 
-    # 3. A walk under the estimated light turning once about the up axis.
-    motion = make_motion("walk", frames, seed=0)
-    lights = torch.stack([rotate_sh_up(est, 2 * math.pi * t / frames) for t in range(frames)])
-    with VideoWriter(out / "avatar_walk.mp4", fps=24) as w:
-        for fr in render_body_frames(body, motion, lights, tex, size=size, n_dirs=n_dirs):
-            w.write(_exposed(fr.render.image[0], scale))
-    paths["walk"] = out / "avatar_walk.mp4"
+    logger.info("demo 2/4: avatar lit by the target's estimated light")
+    res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk", body=body,
+                 target_masks=paths["masks"], plate=paths["plate"], n_dirs=n_dirs, progress=progress)
+    paths["avatar"], paths["avatar_lights"] = res.video, res.lights_file
+    paths["side_by_side"] = _side_by_side(out / "side_by_side.mp4", paths["target"], res.video, sample.meta["fps"])
+    true = torch.from_numpy(sample.arrays["light"])
+    errors = {k: float(light_error(v, true)) for k, v in (("raw", res.lights_raw), ("smoothed", res.lights_smoothed))}
+    png = light_curves_png(res.lights_raw, res.lights_smoothed, true, res.outliers, res.switches,
+                           title=f"target light: raw error {errors['raw']:.3f}, smoothed {errors['smoothed']:.3f}")
+    with atomic_write(out / "lights.png") as f:
+        f.write(png)
+    paths["lights_plot"] = out / "lights.png"
+
+    logger.info("demo 3/4: 2D vs 3D comparison on %d generated sequences", compare_clips)
+    paths["compare"] = _run_compare(out / "compare", body, compare_clips, compare_size, compare_frames,
+                                    n_dirs, progress)
+
+    logger.info("demo 4/4: preset light previews")
+    paths["lights"] = render_presets(out / "lights", size=128)
+    summary = {"target_clip": {"split": "test", "index": DEMO_CLIP, "frames": frames, "size": size,
+                               "light": sample.meta["lights"]}, "light_error": errors}
+    with atomic_write(out / "summary.json", "w") as f:
+        f.write(json.dumps(summary, indent=1) + "\n")
+    paths["summary"] = out / "summary.json"
     return paths
+
+
+def _run_compare(out: Path, body, clips: int, size: int, frames: int, n_dirs: int, progress: bool) -> Path:
+    """Generate ``clips`` test sequences (held-out env maps) and compare the 2D and 3D paths on them."""
+    from ..data import SynthConfig
+    from ..data.synth import run_synth
+    from .compare import compare
+
+    data = out.parent / "sequences"
+    cfg = SynthConfig(seed=0, res=size, n_dirs=max(n_dirs, 64), shard_size=clips,
+                      counts={"train": 0, "val": 0, "test": clips}, sequence_frames=frames)
+    run_synth(data, cfg, workers=0, progress=progress, body=body)
+    compare(data, out, split="test", n_dirs=n_dirs, progress=progress, body=body)
+    return out

@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 
 import torch
-import torch.nn.functional as F
 
 from ..checks import InputError, ShapeError, check_shape
 
@@ -103,14 +102,22 @@ def gaussian_window(size: int = 11, sigma: float = 1.5) -> torch.Tensor:
     return g / g.sum()
 
 
+def _blur_matrix(n: int, g: torch.Tensor) -> torch.Tensor:
+    """(n, n) matrix B with ``B @ x`` = the 1D filter ``g`` along x's first axis, reflect padding."""
+    r = g.numel() // 2
+    if r >= n:
+        raise ShapeError(f"images: SSIM needs H, W > {r} (window {g.numel()}), got a side of {n}")
+    src = torch.arange(n)[:, None] + torch.arange(-r, r + 1)[None]  # (n, window) source rows
+    src = torch.where(src < 0, -src, torch.where(src > n - 1, 2 * (n - 1) - src, src))
+    B = torch.zeros(n, n, dtype=g.dtype, device=g.device)
+    return B.index_put_((torch.arange(n)[:, None].expand_as(src).to(g.device), src.to(g.device)),
+                        g.expand(n, -1).clone(), accumulate=True)
+
+
 def _blur(x: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
-    """Separable depthwise Gaussian filter of (N, C, H, W) with reflect padding (same size)."""
-    c, r = x.shape[1], g.numel() // 2
-    if r >= min(x.shape[-2:]):
-        raise ShapeError(f"images: SSIM needs H, W > {r} (window {g.numel()}), got {tuple(x.shape[-2:])}")
-    x = F.pad(x, (r, r, r, r), mode="reflect")
-    x = F.conv2d(x, g.view(1, 1, 1, -1).expand(c, 1, 1, -1), groups=c)
-    return F.conv2d(x, g.view(1, 1, -1, 1).expand(c, 1, -1, 1), groups=c)
+    """Separable Gaussian filter of (..., H, W) with reflect padding (same size), as two matmuls."""
+    h, w = x.shape[-2:]
+    return _blur_matrix(h, g) @ (x @ _blur_matrix(w, g).T)
 
 
 def ssim_map(pred: torch.Tensor, target: torch.Tensor, data_range: float = 1.0, window: int = 11,

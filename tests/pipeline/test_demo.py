@@ -1,15 +1,26 @@
+import json
+
 from relightnet.cli import main
-from relightnet.io import read_image, video_info
+from relightnet.io import read_video, video_info
 from relightnet.sh import preset_names
 
 
-def test_demo_runs_on_embedded_defaults(tmp_path):
+def test_demo_runs_on_embedded_defaults(tmp_path, capsys):
     out = tmp_path / "demo"
-    assert main(["-q", "demo", "--out", str(out), "--size", "64", "--frames", "3", "--n-dirs", "8"]) == 0
+    assert main(["demo", "--out", str(out), "--size", "64", "--frames", "5", "--n-dirs", "8",
+                 "--compare-clips", "1", "--compare-size", "32", "--compare-frames", "4"]) == 0
+    printed = capsys.readouterr().out
+    assert "where to look" in printed and str(out / "avatar.mp4") in printed
     assert sorted(p.stem for p in (out / "lights").iterdir()) == sorted(preset_names())
-    photo = read_image(out / "estimate" / "target_photo.png")
-    pair = read_image(out / "estimate" / "avatar_true_vs_estimated_light.png")
-    assert photo.shape == (64, 64, 3) and pair.shape == (64, 128, 3)
-    assert pair[:, :64].max() > 0.2 and pair[:, 64:].max() > 0.05  # both renders show the avatar
-    info = video_info(out / "avatar_walk.mp4")
-    assert info.n_frames == 3 and info.size == (64, 64)
+    for name in ("target", "target_masks", "plate", "avatar"):
+        info = video_info(out / f"{name}.mp4")
+        assert info.n_frames == 5 and info.size == (64, 64), name
+    sbs = list(read_video(out / "side_by_side.mp4"))
+    assert len(sbs) == 5 and sbs[0].shape == (64, 128, 3)
+    # The avatar half differs from the target half (the avatar was composited over the plate).
+    assert abs(sbs[0][:, 64:].astype(int) - sbs[0][:, :64].astype(int)).mean() > 1
+    assert (out / "lights.png").stat().st_size > 1000
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["light_error"]["raw"] >= 0 and summary["target_clip"]["frames"] == 5
+    report = (out / "compare" / "report.md").read_text()
+    assert "| 3D | true L_t |" in report and video_info(out / "compare" / "side_by_side.mp4").n_frames == 4
