@@ -285,7 +285,7 @@ def avatar(
         f.write(png)
 
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
-                                occlusion=occlusion, bounces=bounces, n_frames=n_motion)
+                                occlusion=occlusion, bounces=bounces, n_frames=n_motion, visible_only=not bounces)
     written = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
         pairs = zip(_plate_frames(plate, target, info.size), frames, strict=False)

@@ -17,7 +17,7 @@ import torch
 from ..checks import InputError
 from ..sh import fibonacci_sphere, light_to_world, random_fibonacci_sphere, sh_basis, sh_count
 from .interreflection import bounce_operator, check_albedo, interreflect
-from .mesh_checks import check_mesh, check_normals
+from .mesh_checks import check_mesh, check_normals, mesh_scale
 from .visibility import RayEngine, make_engine, vertex_rays
 
 __all__ = ["transport_directions", "vertex_transport"]
@@ -41,6 +41,17 @@ def transport_directions(n_dirs: int = 256, seed: int | None = 0) -> tuple[torch
     return random_fibonacci_sphere(int(n_dirs), generator=torch.Generator().manual_seed(int(seed)))
 
 
+def _vertex_subset(vertices, n: int, bounces: int) -> torch.Tensor | None:
+    if vertices is None:
+        return None
+    if bounces:
+        raise InputError("vertices: a vertex subset cannot be used with bounces (they need every vertex)")
+    idx = torch.as_tensor(vertices, dtype=torch.int64).flatten()
+    if idx.numel() and (int(idx.min()) < 0 or int(idx.max()) >= n):
+        raise InputError(f"vertices: expected indices in [0, {n}), got [{int(idx.min())}, {int(idx.max())}]")
+    return idx
+
+
 def vertex_transport(
     verts,
     faces,
@@ -54,6 +65,7 @@ def vertex_transport(
     engine: str | RayEngine = "auto",
     offset: float = 1e-4,
     threads: int | None = None,
+    vertices: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Per-vertex SH transport vectors of a mesh, with shadows and interreflections.
 
@@ -72,6 +84,10 @@ def vertex_transport(
         engine: ray engine (see :func:`relightnet.prt.make_engine`).
         offset: ray origin offset along the normal, relative to the bounding-box diagonal.
         threads: ray-casting threads.
+        vertices: (M,) indices of the only vertices whose transport is wanted (e.g. those of
+            the faces a camera sees); the others get 0. Rays still hit the whole mesh, so the
+            wanted rows equal those of the full computation. Not with ``bounces``, which
+            needs every vertex; ignored without ``occlusion`` (every row is cheap then).
 
     Returns:
         (V, K) float32 transport, or (V, K, 3) when ``bounces ≥ 1`` and the
@@ -88,10 +104,14 @@ def vertex_transport(
     dirs_light, weights = transport_directions(n_dirs, seed)
     dirs_world = light_to_world(dirs_light)
     Yw = sh_basis(dirs_light, lmax, check=False) * weights[:, None]  # (D, K)
-    if not occlusion:
+    idx = _vertex_subset(vertices, verts.shape[0], bounces)
+    if not occlusion:  # cheap: every vertex
         cos = (normals @ dirs_world.T).clamp_min(0)
         return (cos @ Yw).contiguous()
-    rays = vertex_rays(verts, normals, dirs_world, offset)
+    if idx is not None and idx.numel() == 0:
+        return torch.zeros(verts.shape[0], Yw.shape[1])
+    sub_v, sub_n = (verts, normals) if idx is None else (verts[idx], normals[idx])
+    rays = vertex_rays(sub_v, sub_n, dirs_world, offset, scale=mesh_scale(verts))
     eng = make_engine(verts, faces, engine, threads)
     if bounces:
         hits = eng.intersect(rays.origins, rays.dirs)
@@ -101,6 +121,8 @@ def vertex_transport(
     lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
     lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
     T = torch.from_numpy(lit) @ Yw
+    if idx is not None:
+        return torch.zeros(verts.shape[0], T.shape[1]).index_copy_(0, idx, T)
     if not bounces:
         return T
     op = bounce_operator(rays, hits, faces, weights, verts)

@@ -301,13 +301,15 @@ class VertexRays:
     n_dirs: int
 
 
-def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, offset: float = 1e-4) -> VertexRays:
+def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, offset: float = 1e-4,
+                scale: float | None = None) -> VertexRays:
     """Enumerate the rays (vertex, direction) with n·ω > 0, vertex-major.
 
     Args:
         verts: (V, 3) float32 (already validated). normals: (V, 3) unit.
         dirs: (D, 3) unit world-frame directions.
         offset: origin offset along the normal, relative to the bounding-box diagonal.
+        scale: that diagonal (default: of ``verts``; give the whole mesh's when ``verts`` is a subset).
     """
     if not (offset >= 0 and np.isfinite(offset)):
         raise InputError(f"offset: expected a finite value >= 0, got {offset!r}")
@@ -316,7 +318,7 @@ def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, 
     cos = normals @ d.T  # (V, D)
     up = cos > 0
     vi, di = up.nonzero(as_tuple=True)
-    org = verts + float(offset * mesh_scale(verts)) * normals
+    org = verts + float(offset * (mesh_scale(verts) if scale is None else scale)) * normals
     return VertexRays(
         vertex=vi.numpy(),
         direction=di.numpy(),

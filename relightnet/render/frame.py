@@ -97,6 +97,7 @@ def render_mesh(
     normals: torch.Tensor | None = None,
     light_frame: str = "camera",
     maps: bool = False,
+    frags: Fragments | None = None,
 ) -> RenderOutput:
     """Render a mesh with precomputed per-vertex transport under an SH light.
 
@@ -111,6 +112,8 @@ def render_mesh(
         normals: (V, 3) / (B, V, 3) world normals, needed only for the ``normals`` map.
         light_frame: ``"camera"`` (light relative to the camera, DESIGN.md) or ``"world"``.
         maps: also return the transport, albedo, normals, depth and shading maps.
+        frags: the :class:`Fragments` of ``rasterize(camera.transform(verts), faces, camera.size)``
+            when already computed (e.g. to find the visible vertices first); None rasterizes.
 
     Returns:
         :class:`RenderOutput`.
@@ -132,7 +135,8 @@ def render_mesh(
         L = L.expand(B, k, 3)
     check_shape(L, [B, k, 3], name="light")
 
-    frags = rasterize(camera.transform(verts), faces, camera.size)
+    if frags is None:
+        frags = rasterize(camera.transform(verts), faces, camera.size)
     # Per-vertex shading, batched over cameras: (B, V, 3).
     Tb = transport.expand(B, *transport.shape) if transport.dim() == len(tail) else transport
     S_v = torch.stack([shading(Tb[b], L[b]) for b in range(B)])

@@ -17,7 +17,7 @@ import torch
 from ..body.base import vertex_normals
 from ..checks import InputError, sh_order_from_count
 from ..prt import vertex_transport
-from ..raster import Camera, default_camera, look_at, perspective_camera
+from ..raster import Camera, default_camera, look_at, perspective_camera, rasterize
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
 
 logger = logging.getLogger(__name__)
@@ -140,6 +140,7 @@ def render_body_frames(
     vertex_albedo: torch.Tensor | None = None,
     n_frames: int | None = None,
     chunk: int = 16,
+    visible_only: bool = False,
 ) -> Iterator[BodyFrame]:
     """Pose a body model and render it frame by frame (streaming: one frame in memory at a time).
 
@@ -157,6 +158,9 @@ def render_body_frames(
         n_frames: T when ``params`` has a frame axis: the body is then posed ``chunk`` frames at
             a time (tensors with ≥ 2 dims and T rows are sliced), so memory does not grow with T.
             None poses all frames at once.
+        visible_only: compute the transport only at the vertices of faces the camera sees
+            (the image is the same; ``BodyFrame.transport`` is 0 elsewhere). About twice as
+            fast for a body; not with ``bounces``.
 
     Yields:
         :class:`BodyFrame` per frame.
@@ -183,9 +187,13 @@ def render_body_frames(
             raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
         for i in range(out.batch_size):
             v, nrm = out.verts[i], out.normals[i]
+            frags, seen = None, None
+            if visible_only and not bounces:
+                frags = rasterize(camera.transform(v), out.faces, camera.size)
+                seen = torch.unique(out.faces[torch.unique(frags.pix_face)])
             T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
-                                 albedo=bounce_albedo, seed=seed)
+                                 albedo=bounce_albedo, seed=seed, vertices=seen)
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
-            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps)
+            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags)
             yield BodyFrame(t, r, T, v)
             t += 1

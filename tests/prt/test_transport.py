@@ -125,3 +125,19 @@ def test_bad_inputs_raise():
         vertex_transport(v, f, n, bounces=1, albedo=1.5)
     with pytest.raises(ShapeError, match="albedo"):
         vertex_transport(v, f, n, bounces=1, albedo=torch.ones(len(v), 2))
+
+
+def test_vertex_subset_gives_the_same_rows_and_zero_elsewhere():
+    v, f, n, n_sphere = plane_under_sphere()
+    full = vertex_transport(v, f, n, n_dirs=64, seed=3)
+    idx = torch.tensor([n_sphere, 0, 5, n_sphere + 2, 17])
+    sub = vertex_transport(v, f, n, n_dirs=64, seed=3, vertices=idx)
+    torch.testing.assert_close(sub[idx], full[idx], rtol=0, atol=1e-6)  # same rays; BLAS blocking differs
+    rest = torch.ones(len(v), dtype=torch.bool)
+    rest[idx] = False
+    assert (sub[rest] == 0).all() and (full[rest] != 0).any()
+    assert (vertex_transport(v, f, n, n_dirs=16, vertices=torch.tensor([], dtype=torch.int64)) == 0).all()
+    with pytest.raises(InputError, match="bounces"):
+        vertex_transport(v, f, n, n_dirs=16, bounces=1, vertices=idx)
+    with pytest.raises(InputError, match="indices"):
+        vertex_transport(v, f, n, n_dirs=16, vertices=torch.tensor([len(v)]))

@@ -75,3 +75,19 @@ def test_render_body_frames_streams_a_motion(anny_body):
     seq = torch.stack([ambient_light(1.0)] * 2)
     with pytest.raises(InputError, match="2 frames but the motion has 3"):
         list(render_body_frames(anny_body, motion, seq, alb.vertex, size=32, n_dirs=8))
+
+
+def test_visible_only_transport_gives_the_same_frames(anny_body):
+    """Transport at the vertices the camera sees only: identical images, chunked posing too."""
+    motion = make_motion("arm_raise", 3, seed=2)
+    light = ambient_light(0.5) + directional_light([0.3, 0.8, 0.5])
+    alb = torch.full((anny_body.num_verts, 3), 0.6)
+    full = list(render_body_frames(anny_body, motion, light, alb, size=64, n_dirs=16))
+    fast = list(render_body_frames(anny_body, motion, light, alb, size=64, n_dirs=16, visible_only=True,
+                                   n_frames=3, chunk=2))
+    assert len(fast) == 3
+    for a, b in zip(full, fast, strict=True):
+        torch.testing.assert_close(b.render.image, a.render.image, rtol=0, atol=1e-6)
+        seen = b.transport.abs().sum(1) > 0
+        assert 0.02 < seen.float().mean() < 0.6  # only vertices of faces hit by a pixel (not the back)
+        torch.testing.assert_close(b.transport[seen], a.transport[seen], rtol=0, atol=1e-6)
