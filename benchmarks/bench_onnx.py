@@ -44,8 +44,10 @@ def main() -> None:
     net = load_model()
     tmp = Path(tempfile.mkdtemp())
     fp32 = export_onnx(net, tmp / "m.onnx", smoothing="ema")
-    int8 = quantize_int8(fp32, tmp / "m_int8.onnx")
-    sess = {"fp32": OnnxRelighter(fp32, threads=2), "int8": OnnxRelighter(int8, threads=2)}
+    int8 = quantize_int8(fp32, tmp / "m_int8.onnx", mode="static")
+    dyn = quantize_int8(fp32, tmp / "m_int8_dynamic.onnx", mode="dynamic")
+    sess = {"fp32": OnnxRelighter(fp32, threads=2), "int8": OnnxRelighter(int8, threads=2),
+            "int8 dynamic": OnnxRelighter(dyn, threads=2)}
     rows = []
     for size in (256, 512):
         img = np.random.default_rng(0).random((1, 3, size, size), dtype=np.float32)
@@ -55,19 +57,22 @@ def main() -> None:
         with torch.no_grad():
             eager = median_ms(lambda m=m, x=x: m(x), repeat=5)
         times = {k: median_ms(lambda r=r, img=img, mask=mask: r.step(img, mask), repeat=5) for k, r in sess.items()}
-        rows.append([f"{size}²", eager, times["fp32"], times["int8"], eager / times["fp32"], eager / times["int8"]])
+        rows.append([f"{size}²", eager, times["fp32"], times["int8"], times["int8 dynamic"], eager / times["fp32"],
+                     eager / times["int8"]])
     from relightnet.body import AnnyBody
     from relightnet.data import SynthConfig, generate_sample
 
     body = AnnyBody()
     samples = [generate_sample(SynthConfig(res=128, n_dirs=64), "test", i, body=body).arrays for i in range(12)]
     q = {k: relit_rmse(r, samples) for k, r in sess.items()}
-    print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 ms", "eager/fp32", "eager/int8"],
-                rows))
+    print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 dynamic ms",
+                 "eager/fp32", "eager/int8 static"], rows))
     print()
     print(table(["model", "relit RMSE (12 test samples, 128²)", "vs fp32"],
-                [["ORT fp32", q["fp32"], 1.0], ["ORT int8 (dynamic)", q["int8"], q["int8"] / q["fp32"]]]))
-    print(f"\nfile sizes: fp32 {fp32.stat().st_size / 1e6:.1f} MB, int8 {int8.stat().st_size / 1e6:.1f} MB")
+                [["ORT fp32", q["fp32"], 1.0], ["ORT int8 static (QDQ)", q["int8"], q["int8"] / q["fp32"]],
+                 ["ORT int8 dynamic", q["int8 dynamic"], q["int8 dynamic"] / q["fp32"]]]))
+    print(f"\nfile sizes: fp32 {fp32.stat().st_size / 1e6:.1f} MB, int8 static {int8.stat().st_size / 1e6:.1f} MB, "
+          f"int8 dynamic {dyn.stat().st_size / 1e6:.1f} MB")
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ from .onnx_export import INPUTS
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["OnnxRelighter", "quantize_int8", "run_video"]
+__all__ = ["OnnxRelighter", "calibration_set", "quantize_int8", "run_video"]
 
 
 class OnnxRelighter:
@@ -111,23 +111,80 @@ class OnnxRelighter:
         return {"albedo": albedo, "transport": transport, "light_raw": raw, "light_smoothed": smoothed}
 
 
-def quantize_int8(src, dst) -> Path:
-    """A second model file with int8 weights (ONNX Runtime dynamic quantisation: weights int8,
-    activations quantised on the fly).
+def calibration_set(n: int = 16, size: int = 128, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Inputs for static quantisation: ``n`` generated people (val split, held apart from training).
 
-    Static QDQ quantisation (calibrated activations) was tried: with onnxruntime 1.32 it
-    writes an invalid model for graphs from ``torch.onnx.export(dynamo=True)`` (a duplicated
-    value definition), so the dynamic form is what ships.
+    Returns:
+        ``n`` pairs (image (1, 3, size, size) float32 sRGB, mask (1, 1, size, size) float32).
     """
-    from onnxruntime.quantization import QuantType, quantize_dynamic
+    from ..body import AnnyBody
+    from ..data import SynthConfig, generate_sample
+
+    cfg, body = SynthConfig(seed=seed, res=size, n_dirs=16), AnnyBody()
+    out = []
+    for i in range(n):
+        a = generate_sample(cfg, "val", i, body=body).arrays
+        img = (a["image_composite"].astype(np.float32) / 255).transpose(2, 0, 1)[None]
+        out.append((np.ascontiguousarray(img), a["mask"][None, None].astype(np.float32)))
+    return out
+
+
+class _Reader:
+    """An onnxruntime CalibrationDataReader over (image, mask) pairs."""
+
+    def __init__(self, pairs, state_shape) -> None:
+        self._it = iter(pairs)
+        self._state_shape = state_shape
+
+    def get_next(self):
+        pair = next(self._it, None)
+        if pair is None:
+            return None
+        img, mask = pair
+        b = img.shape[0]
+        return {"image": img, "mask": mask, "light_state": np.zeros((b, *self._state_shape), np.float32),
+                "is_first": np.ones(b, bool)}
+
+
+def quantize_int8(src, dst, mode: str = "static", calibration=None) -> Path:
+    """A second model file in int8.
+
+    Args:
+        src: the fp32 model from :func:`~relightnet.model.export_onnx`.
+        dst: output path (written atomically).
+        mode: ``"static"`` (default): QDQ format, convolutions and matrix products in int8
+            (per-channel weights, uint8 activations with ranges calibrated on ``calibration``;
+            normalisation layers stay in float); ``"dynamic"``: int8 weights, activations
+            quantised on the fly (small file, but slow for convolutions).
+        calibration: (image (B, 3, H, W), mask (B, 1, H, W)) float32 pairs for ``static``
+            (default: :func:`calibration_set` at the model's training size).
+    """
+    import onnxruntime.quantization as q
+    from onnxruntime.quantization.shape_inference import quant_pre_process
 
     src, dst = Path(src), Path(dst)
+    if mode not in ("static", "dynamic"):
+        raise InputError(f"mode: expected 'static' or 'dynamic', got {mode!r}")
+    r = OnnxRelighter(src)  # validates the file
     tmp = dst.with_name(f".{dst.name}.tmp")
+    pre = dst.with_name(f".{dst.name}.pre")
     try:
-        quantize_dynamic(str(src), str(tmp), weight_type=QuantType.QInt8)
+        if mode == "dynamic":
+            q.quantize_dynamic(str(src), str(tmp), weight_type=q.QuantType.QInt8)
+        else:
+            if calibration is None:
+                calibration = calibration_set(size=int(r.metadata.get("relightnet.input_size", 128)))
+            # Pre-processing (shape inference, graph clean-up) makes graphs from the dynamo exporter
+            # quantisable: without it the QDQ pass duplicates a value name.
+            quant_pre_process(str(src), str(pre), skip_symbolic_shape=True)
+            q.quantize_static(str(pre), str(tmp), _Reader(calibration, (r.state_size, r.n_coeffs, 3)),
+                              quant_format=q.QuantFormat.QDQ, activation_type=q.QuantType.QUInt8,
+                              weight_type=q.QuantType.QInt8, per_channel=True,
+                              op_types_to_quantize=["Conv", "MatMul", "Gemm"])
         tmp.replace(dst)
     finally:
         tmp.unlink(missing_ok=True)
+        pre.unlink(missing_ok=True)
     return dst
 
 

@@ -80,12 +80,22 @@ def test_bad_inputs_and_files(exported, tmp_path):
         OnnxRelighter(tmp_path / "none.onnx")
 
 
-def test_int8_model_runs_close_to_fp32(exported, tmp_path):
+@pytest.mark.parametrize("mode", ["static", "dynamic"])
+def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
+    import onnx
+
     _, path = exported
-    q = quantize_int8(path, tmp_path / "m_int8.onnx")
+    calib = [tuple(t.numpy() for t in _inputs(1, 32, 32, seed=s)) for s in range(4)]
+    q = quantize_int8(path, tmp_path / "m_int8.onnx", mode=mode, calibration=calib)
     assert q.stat().st_size < path.stat().st_size
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+    ops = {n.op_type for n in onnx.load(str(q)).graph.node}
+    assert ("QuantizeLinear" in ops) if mode == "static" else ("DynamicQuantizeLinear" in ops or "MatMulInteger" in ops
+                                                                 or "ConvInteger" in ops)
     a, b = OnnxRelighter(path), OnnxRelighter(q)
     img, mask = _inputs(1, 32, 32, seed=9)
     fa, fb = a.step(img.numpy(), mask.numpy()), b.step(img.numpy(), mask.numpy())
     rel = np.abs(fa["albedo"] - fb["albedo"]).mean() / np.abs(fa["albedo"]).mean()
     assert rel < 0.1
+    with pytest.raises(InputError, match="mode"):
+        quantize_int8(path, tmp_path / "x.onnx", mode="int4")
