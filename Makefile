@@ -50,13 +50,16 @@ bench-deps: $(VENV)/.installed
 	$$SUDO apt-get update -q && $$SUDO apt-get install -y -q libegl1 libegl-mesa0 libgl1-mesa-dri libgles2
 	$(PIP) install -q moderngl==5.13.0
 
-$(VENV)/.installed: pyproject.toml requirements.lock
+$(VENV)/.installed: pyproject.toml requirements.lock requirements-blender.lock
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q --upgrade pip
 	# torch first and alone: the pinned CPU wheel unless TORCH_SPEC says otherwise,
 	# so nothing later can pull an unpinned multi-GB CUDA build.
 	$(PIP) install -q $(TORCH_SPEC)
 	$(PIP) install -q -r requirements.lock
+	# The Blender bridge's bpy (~370 MB wheel): its tests are part of the suite. --no-deps:
+	# bpy 5.0.1 declares numpy<2 but runs with the pinned numpy 2 (the bridge's tests check it).
+	$(PIP) install -q --no-deps -r requirements-blender.lock
 	$(PIP) install -q --no-deps -e .
 	touch $@
 

@@ -77,7 +77,7 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     rows.append(["decode frame", median_ms(lambda: next(iter(read_video(video))), repeat=5)])
     for backend in ("torch", "onnx"):
         p = make_predictor(backend)
-        rows.append([f"light estimate ({backend})", median_ms(lambda p=p: p(img, mask), repeat=7)])
+        rows.append([f"light estimate ({backend})", median_ms(lambda p=p: p.light(img, mask), repeat=7)])
     raw = torch.randn(48, 9, 3) * 0.1 + 1
     rows.append(["smoothing (48 frames, per frame)", median_ms(lambda: smooth_video_lights(raw), repeat=5) / 48])
     body = AnnyBody()

@@ -19,7 +19,7 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "compare", "demo",
+    "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "compare", "blender", "demo",
 ]
 
 

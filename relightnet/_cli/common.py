@@ -86,3 +86,13 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--backend", default="torch", choices=("torch", "onnx"),
                    help="run the CNN in PyTorch or in ONNX Runtime (exported once and cached; default: torch)")
     p.add_argument("--device", default="cpu", help="cpu or cuda (torch backend; default: cpu)")
+
+
+def _phenotypes():
+    from ..body import PHENOTYPES
+
+    return PHENOTYPES
+
+
+#: ``--phenotype NAME=VALUE`` for Anny (names from relightnet.body.PHENOTYPES).
+phenotype_arg = key_value_arg(_phenotypes, float, "NAME", "a number")

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, key_value_arg, load_single_light, nonneg_int, pos_int
+from .common import LIGHT_HELP, add_command, exposure_arg, load_single_light, nonneg_int, phenotype_arg, pos_int
 
 logger = logging.getLogger("relightnet.render")
 
@@ -125,15 +125,6 @@ def run_render_body(args: argparse.Namespace) -> int:
     return 0
 
 
-def _phenotypes():
-    from ..body import PHENOTYPES
-
-    return PHENOTYPES
-
-
-_phenotype = key_value_arg(_phenotypes, float, "NAME", "a number")
-
-
 def _prt_options(p: argparse.ArgumentParser, n_dirs: int) -> None:
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--lmax", type=nonneg_int, default=2, help="SH order of the light (default: 2)")
@@ -171,7 +162,7 @@ def register(sub) -> None:
                    "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
     p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
     p.add_argument("--fps", type=float, default=30.0, help="video frame rate (default: 30)")
-    p.add_argument("--phenotype", type=_phenotype, action="append", metavar="NAME=VALUE",
+    p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
                    help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")
     p.add_argument("--out", required=True, help="output PNG, or .mp4/.mkv when --motion is given")
     p.add_argument("--mask-out", help="also write the coverage mask as PNG (still images)")

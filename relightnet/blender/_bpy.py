@@ -1,0 +1,68 @@
+"""Access to Blender's Python module (``bpy``, the optional ``relightnet[blender]`` extra).
+
+``bpy`` is one global Blender session per process: every scene built here starts from
+:func:`reset` (factory settings, empty scene). Importing it prints a numpy-ABI warning of its
+sound module (audaspace, unused here) and Blender logs lines to stdout while saving and
+rendering; :func:`quiet` captures those file-descriptor writes and logs them at DEBUG level.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+
+from ..checks import InputError
+
+logger = logging.getLogger(__name__)
+
+#: The bpy release relightnet is tested with (PyPI wheel, Python 3.11 only).
+BPY_VERSION = "5.0.1"
+
+
+@contextlib.contextmanager
+def quiet(fds: tuple[int, ...] = (1, 2)) -> Iterator[None]:
+    """Capture writes to the given OS file descriptors (C code included); log them at DEBUG."""
+    for s in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            s.flush()
+    saved = {fd: os.dup(fd) for fd in fds}
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        try:
+            for fd in fds:
+                os.dup2(tmp.fileno(), fd)
+            yield
+        finally:
+            for fd, old in saved.items():
+                os.dup2(old, fd)
+                os.close(old)
+            tmp.seek(0)
+            text = tmp.read().decode("utf-8", "replace").strip()
+            if text:
+                logger.debug("blender output:\n%s", text)
+
+
+def import_bpy():
+    """Import ``bpy`` (quietly) or raise :class:`InputError` saying how to install it."""
+    if "bpy" in sys.modules:
+        return sys.modules["bpy"]
+    try:
+        with quiet():
+            import bpy
+    except ImportError as e:
+        raise InputError(
+            f"Blender support needs the 'bpy' module (pip install 'relightnet[blender]', bpy=={BPY_VERSION}, "
+            f"Python 3.11): {e}"
+        ) from None
+    return bpy
+
+
+def reset():
+    """Start an empty Blender session (factory settings, no objects); returns ``bpy``."""
+    bpy = import_bpy()
+    with quiet((1,)):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    return bpy

@@ -1,0 +1,263 @@
+"""Render an exported scene with Cycles on the CPU: linear EXR and 8-bit PNG frames.
+
+Settings (:func:`configure_cycles`): path tracing on the CPU with a fixed number of samples
+per pixel (no adaptive sampling, no denoising unless asked, no clamping — an unbiased
+reference), diffuse bounces only (``bounces`` = Cycles' ``max_bounces`` and
+``diffuse_bounces``: 0 is direct light with shadows, like relightnet's PRT without
+interreflection), caustics off, a transparent film (alpha = coverage, background 0 as in
+relightnet's renders), the "Standard" view transform (plain sRGB display, no AgX tone map).
+
+Radiometric scale: a relightnet render is ``albedo ⊙ (T·L)`` with T carrying no 1/π
+(DESIGN.md), i.e. albedo × irradiance; Cycles' diffuse BSDF returns radiance,
+albedo × irradiance / π. So for the same world, **relightnet = π × Cycles**, measured by the
+sphere test (a white-ish sphere under a constant world of radiance c renders as albedo·c in
+Cycles and albedo·π·c in relightnet).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import tempfile
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError
+from ._bpy import import_bpy, quiet
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["CYCLES_TO_RELIGHTNET", "CyclesFrame", "configure_cycles", "open_blend", "read_image_pixels",
+           "render_current", "render_blend"]
+
+#: relightnet's pixel values are π times Cycles' for the same scene (module docstring).
+CYCLES_TO_RELIGHTNET = float(np.pi)
+
+_SAMPLE = re.compile(r"Sample (\d+)/(\d+)")
+
+
+def configure_cycles(scene, spp: int | None = None, bounces: int | None = None, threads: int | None = None,
+                     denoise: bool | None = None, filter_width: float | None = None, seed: int | None = None) -> None:
+    """Set a Blender scene up for CPU Cycles; ``None`` leaves a setting as the scene has it.
+
+    Always set: CPU device, no adaptive sampling, no sample clamping, no caustics, glossy /
+    transmission / volume bounces 0, transparent film, Standard view transform.
+
+    Args:
+        scene: a ``bpy.types.Scene``.
+        spp: samples per pixel (≥ 1). bounces: diffuse bounces (≥ 0).
+        threads: CPU threads (None or 0: all cores). denoise: OpenImageDenoise.
+        filter_width: pixel filter width in pixels (Blender's default 1.5; 0.01 samples the
+            pixel centre only, as relightnet's rasterizer does). seed: noise pattern.
+    """
+    if spp is not None and int(spp) < 1:
+        raise InputError(f"spp: expected a positive number of samples, got {spp}")
+    if bounces is not None and int(bounces) < 0:
+        raise InputError(f"bounces: expected an integer >= 0, got {bounces}")
+    if filter_width is not None and not 0.01 <= float(filter_width) <= 10:
+        raise InputError(f"filter_width: expected a value in [0.01, 10] pixels, got {filter_width}")
+    scene.render.engine = "CYCLES"
+    c = scene.cycles
+    c.device = "CPU"
+    c.use_adaptive_sampling = False
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.caustics_reflective = c.caustics_refractive = False
+    c.glossy_bounces = c.transmission_bounces = c.volume_bounces = 0
+    if spp is not None:
+        c.samples = int(spp)
+    if bounces is not None:
+        c.max_bounces = c.diffuse_bounces = int(bounces)
+    if denoise is not None:
+        c.use_denoising = bool(denoise)
+    if filter_width is not None:
+        c.filter_width = float(filter_width)
+    if seed is not None:
+        c.seed = int(seed)
+    if threads is not None:
+        scene.render.threads_mode = "FIXED" if threads else "AUTO"
+        if threads:
+            scene.render.threads = int(threads)
+    scene.render.film_transparent = True
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    s = scene.render.image_settings
+    s.file_format = "OPEN_EXR"
+    s.color_mode = "RGBA"
+    s.color_depth = "32"
+    s.exr_codec = "ZIP"
+
+
+def read_image_pixels(image) -> np.ndarray:
+    """(H, W, C) float32 pixels of a ``bpy.types.Image``, row 0 at the top (Blender stores bottom-up)."""
+    w, h = image.size
+    c = image.channels
+    buf = np.empty(w * h * c, dtype=np.float32)
+    image.pixels.foreach_get(buf)
+    return np.ascontiguousarray(buf.reshape(h, w, c)[::-1])
+
+
+def open_blend(path) -> object:
+    """Open a .blend file as Blender's current session; returns its scene."""
+    bpy = import_bpy()
+    path = Path(path)
+    if path.suffix.lower() != ".blend":
+        raise InputError(f"{path}: expected a Blender .blend file")
+    if not path.is_file():
+        raise InputError(f"{path}: no such .blend file")
+    try:
+        with quiet((1,)):
+            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    except RuntimeError as e:
+        msg = str(e).strip().splitlines()[-1] if str(e).strip() else "unreadable"
+        raise InputError(f"{path}: cannot open with Blender ({msg})") from None
+    scene = bpy.context.scene
+    if scene.camera is None:
+        raise InputError(f"{path}: the scene has no camera")
+    return scene
+
+
+def render_current(exr_path, progress=None) -> tuple[np.ndarray, float]:
+    """Render the current frame of Blender's current scene to an EXR file.
+
+    Args:
+        exr_path: where the RGBA float32 EXR goes (written by Blender, then read back).
+        progress: optional callable ``(done_samples, total_samples)``, called while rendering.
+
+    Returns:
+        (H, W, 4) float32 linear RGBA (row 0 at the top) and the render time in seconds.
+    """
+    bpy = import_bpy()
+
+    def on_stats(*args):
+        m = _SAMPLE.search(str(args[0]) if args else "")
+        if m and progress is not None:
+            progress(int(m.group(1)), int(m.group(2)))
+
+    handlers = bpy.app.handlers.render_stats
+    handlers.append(on_stats)
+    try:
+        t0 = time.perf_counter()
+        with quiet((1,)):
+            bpy.ops.render.render()
+        seconds = time.perf_counter() - t0
+        with quiet((1,)):
+            bpy.data.images["Render Result"].save_render(filepath=str(exr_path))
+    finally:
+        handlers.remove(on_stats)
+    img = bpy.data.images.load(str(exr_path), check_existing=False)
+    try:
+        px = read_image_pixels(img)
+    finally:
+        bpy.data.images.remove(img)
+    if px.shape[-1] == 3:
+        px = np.concatenate([px, np.ones_like(px[..., :1])], axis=-1)
+    return px, seconds
+
+
+@dataclass(frozen=True, eq=False)
+class CyclesFrame:
+    """One rendered frame: relightnet frame index (Blender frame = index + frame_start),
+    (H, W, 4) linear RGBA, render seconds, and the files written (or None)."""
+
+    index: int
+    rgba: torch.Tensor
+    seconds: float
+    exr: Path | None = None
+    png: Path | None = None
+
+
+def _frame_range(scene, frames) -> range:
+    start, end = scene.frame_start, scene.frame_end
+    n = end - start + 1
+    if frames is None:
+        return range(n)
+    a, b = frames
+    a = 0 if a is None else int(a)
+    b = n if b is None else int(b)
+    if not 0 <= a < b <= n:
+        raise InputError(f"frames: expected START:END within 0:{n} (the scene has {n} frames), got {a}:{b}")
+    return range(a, b)
+
+
+def render_blend(
+    path,
+    out_dir=None,
+    spp: int | None = None,
+    bounces: int | None = None,
+    frames: tuple[int | None, int | None] | None = None,
+    threads: int | None = None,
+    denoise: bool | None = None,
+    filter_width: float | None = None,
+    seed: int | None = None,
+    exposure="auto",
+    progress: bool = False,
+) -> Iterator[CyclesFrame]:
+    """Render a .blend (from :func:`relightnet.blender.export_scene`) frame by frame with Cycles.
+
+    Args:
+        path: the .blend file.
+        out_dir: folder for ``frame_NNNNN.exr`` (linear RGBA float32, Blender's writer) and
+            ``frame_NNNNN.png`` (8-bit sRGB, black background, ``exposure`` applied); None
+            writes nothing (frames are only yielded).
+        spp, bounces, threads, denoise, filter_width, seed: :func:`configure_cycles`
+            (None keeps the file's settings).
+        frames: (start, end) relightnet frame indices, end exclusive (None: all frames).
+        exposure: ``"auto"`` (chosen on the first frame's covered pixels, then fixed) or a
+            linear multiplier for the PNGs.
+        progress: show a progress bar of samples on stderr.
+
+    Yields:
+        :class:`CyclesFrame` per frame.
+    """
+    from ..io import write_image
+    from ..sh.visualize import auto_exposure
+
+    out = None if out_dir is None else Path(out_dir)
+    if out is not None and out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a folder")
+    scene = open_blend(path)
+    configure_cycles(scene, spp, bounces, threads, denoise, filter_width, seed)
+    todo = _frame_range(scene, frames)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+    total = len(todo) * scene.cycles.samples
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, desc="cycles", unit="spp", leave=True)
+    scale = None if exposure == "auto" else float(exposure)
+    with tempfile.TemporaryDirectory(dir=out) as tmp:
+        try:
+            for k, t in enumerate(todo):
+                scene.frame_set(scene.frame_start + t)
+
+                def tick(done, n, base=k * scene.cycles.samples):
+                    if bar is not None:
+                        bar.n = base + min(done, n)
+                        bar.refresh()
+
+                raw = Path(tmp) / f"frame_{t:05d}.exr"
+                px, seconds = render_current(raw, tick)
+                rgba = torch.from_numpy(px)
+                exr = png = None
+                if out is not None:
+                    exr, png = out / raw.name, out / raw.with_suffix(".png").name
+                    os.replace(raw, exr)
+                    if scale is None:
+                        scale = auto_exposure(rgba[..., :3], rgba[..., 3] > 0.5)
+                    write_image(png, rgba[..., :3] * scale)
+                logger.debug("frame %d: %.2f s", t, seconds)
+                yield CyclesFrame(t, rgba, seconds, exr, png)
+        finally:
+            if bar is not None:
+                bar.close()

@@ -1,0 +1,1 @@
+"""Tests of relightnet.blender (a package: its basenames repeat those of tests/sh and tests/raster)."""
