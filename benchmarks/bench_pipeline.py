@@ -4,7 +4,7 @@ split of the avatar job per stage, at 512² by default.
 The target clip is a generated person (the data generator, a few frames played back and forth
 to the wanted length) written as a lossless mkv with a mask video beside it.
 
-    python benchmarks/bench_pipeline.py                      # 48 frames at 512², all jobs + stages
+    python benchmarks/bench_pipeline.py                      # 240 frames at 512², all jobs (3 runs) + stages
     python benchmarks/bench_pipeline.py --job avatar --frames 1000 --size 256   # one job (for /usr/bin/time -v)
 """
 
@@ -113,10 +113,11 @@ def stages(video, masks, n_dirs: int) -> list[list]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=512)
-    ap.add_argument("--frames", type=int, default=48)
+    ap.add_argument("--frames", type=int, default=240)
     ap.add_argument("--n-dirs", type=int, default=64)
     ap.add_argument("--job", choices=("all", "avatar", "relight-video"), default="all")
     ap.add_argument("--backend", choices=("torch", "onnx"), default="torch")
+    ap.add_argument("--repeat", type=int, default=3, help="runs of each job (the median is reported)")
     args = ap.parse_args()
     os.environ.setdefault("RELIGHTNET_CACHE", str(Path(tempfile.gettempdir()) / "relightnet-bench-cache"))
     with tempfile.TemporaryDirectory() as tmp:
@@ -131,11 +132,13 @@ def main() -> None:
         rows = []
         for job in ("relight-video", "avatar"):
             for backend in ("torch", "onnx"):
-                s = run_job(job, backend, video, masks, d, args.n_dirs)
-                rows.append([job, backend, args.frames, f"{args.frames / s:.2f}", f"{1000 * s / args.frames:.0f}"])
+                runs = sorted(run_job(job, backend, video, masks, d, args.n_dirs) for _ in range(args.repeat))
+                s = runs[len(runs) // 2]
+                rows.append([job, backend, args.frames, f"{args.frames / s:.2f}", f"{1000 * s / args.frames:.0f}",
+                             " / ".join(f"{args.frames / r:.2f}" for r in runs)])
         print(f"End to end, {args.size}², {args.frames} frames, PRT {args.n_dirs} directions, "
-              f"{torch.get_num_threads()} threads\n")
-        print(table(["job", "backend", "frames", "frames/s", "ms/frame"], rows))
+              f"{torch.get_num_threads()} threads, median of {args.repeat} runs\n")
+        print(table(["job", "backend", "frames", "frames/s", "ms/frame", "all runs (frames/s)"], rows))
         print(f"\nAvatar job per stage ({args.size}², median ms per frame)\n")
         print(table(["stage", "ms"], stages(video, masks, args.n_dirs)))
 
