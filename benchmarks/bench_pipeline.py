@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import os
 import resource
+import shutil
 import sys
 import tempfile
 import time
@@ -43,20 +44,28 @@ def make_clip(d: Path, size: int, frames: int, src_frames: int = 8):
 
 
 def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> float:
-    """Wall seconds of one job, end to end (loading the model and the body model excluded)."""
+    """Wall seconds of one job, end to end (loading the model and the body model excluded).
+
+    Every run writes a fresh output, so the avatar never reuses earlier light estimates.
+    """
     from relightnet.body import AnnyBody
     from relightnet.pipeline import avatar, make_predictor, relight_video
     from relightnet.sh import preset_light
 
     pred = make_predictor(backend)
     body = AnnyBody() if job == "avatar" else None
+    run = Path(tempfile.mkdtemp(dir=out))
     t0 = time.perf_counter()
     if job == "avatar":
-        avatar(video, out / f"avatar_{backend}.mkv", model=pred, body=body, target_masks=masks, n_dirs=n_dirs,
-               progress=False)
+        res = avatar(video, run / "avatar.mkv", model=pred, body=body, target_masks=masks, n_dirs=n_dirs,
+                     progress=False)
+        if res.reused_estimates:
+            raise RuntimeError("the benchmark must not reuse light estimates")
     else:
-        relight_video(pred, video, masks, preset_light("sunset"), out / f"relit_{backend}.mkv", progress=False)
-    return time.perf_counter() - t0
+        relight_video(pred, video, masks, preset_light("sunset"), run / "relit.mkv", progress=False)
+    seconds = time.perf_counter() - t0
+    shutil.rmtree(run)
+    return seconds
 
 
 def stages(video, masks, n_dirs: int) -> list[list]:
