@@ -34,7 +34,7 @@ from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import VideoWriter, atomic_write, read_video, video_info
 from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera
-from ..render import render_body_frames
+from ..render.jobs import frame_slice, render_body_frames
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, motion_params
 
@@ -284,8 +284,9 @@ def avatar(
     with atomic_write(plot) as f:
         f.write(png)
 
+    params = frame_slice(params, 0, n, n_motion)  # a motion longer than the video is cut
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
-                                occlusion=occlusion, bounces=bounces, n_frames=n_motion, visible_only=not bounces)
+                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=not bounces)
     written = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
         pairs = zip(_plate_frames(plate, target, info.size), frames, strict=False)

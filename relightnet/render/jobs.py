@@ -22,7 +22,8 @@ from .frame import RenderOutput, TexturedAlbedo, render_mesh
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["LoadedMesh", "load_mesh", "fit_camera", "render_mesh_file", "BodyFrame", "render_body_frames"]
+__all__ = ["LoadedMesh", "load_mesh", "fit_camera", "render_mesh_file", "BodyFrame", "frame_slice",
+           "render_body_frames"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,10 +117,11 @@ class BodyFrame:
     verts: torch.Tensor | None = None
 
 
-def _frame_slice(params, a: int, b: int, n: int):
-    """Frames a..b of body parameters: tensors with ≥ 2 dims and n rows are sliced, others kept."""
+def frame_slice(params, a: int, b: int, n: int):
+    """Frames a..b of body parameters with n frames: tensors with ≥ 2 dims and n rows are
+    sliced (recursively in mappings), the others (shape, phenotype) kept."""
     if isinstance(params, Mapping):
-        return {k: _frame_slice(v, a, b, n) for k, v in params.items()}
+        return {k: frame_slice(v, a, b, n) for k, v in params.items()}
     if isinstance(params, torch.Tensor) and params.dim() >= 2 and params.shape[0] == n:
         return params[a:b]
     return params
@@ -175,7 +177,7 @@ def render_body_frames(
                 yield body(params)
                 return
             for a in range(0, n_frames, chunk):
-                yield body(_frame_slice(params, a, min(a + chunk, n_frames), n_frames))
+                yield body(frame_slice(params, a, min(a + chunk, n_frames), n_frames))
 
     lmax = sh_order_from_count(light.shape[-2], "light")
     bounce_albedo = vertex_albedo if vertex_albedo is not None else albedo if isinstance(albedo, torch.Tensor) else None

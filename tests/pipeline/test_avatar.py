@@ -189,3 +189,17 @@ def test_avatar_over_a_clean_plate(target, anny_body, tmp_path):
         avatar(video, tmp_path / "q.mkv", light=true[0], body=anny_body, plate=tmp_path / "small.png",
                progress=False)
     assert not (tmp_path / "q.mkv").exists()
+
+
+@pytest.mark.parametrize("extra", [3, -1])
+def test_smpl_motion_longer_or_shorter_than_the_video(target, tmp_path, extra):
+    video, _, true = target
+    smpl = _smpl_file(tmp_path)
+    t = N + extra
+    motion = tmp_path / "m.npz"
+    g = np.random.default_rng(0)
+    np.savez(motion, poses=(0.1 * g.standard_normal((t, 72))).astype(np.float32), betas=np.zeros(10, np.float32),
+             trans=np.zeros((t, 3), np.float32))
+    res = avatar(video, tmp_path / "s.mkv", light=true[0], body=f"smpl:{smpl}", motion=str(motion), n_dirs=8,
+                 progress=False)
+    assert res.n_frames == min(N, t) == len(list(read_video(res.video)))
