@@ -1,6 +1,6 @@
 """Video files through PyAV: streaming reader and an atomic streaming writer.
 
-``.mp4`` is written with libx264 (yuv420p, CRF 18, even sizes only); ``.mkv`` with the
+``.mp4`` is written with libx264 (CRF 18; yuv420p, or yuv444p for odd sizes); ``.mkv`` with the
 lossless ffv1 codec (exact 8-bit RGB round trip, for tests and intermediate files).
 Frames are (H, W, 3) uint8 sRGB, or float linear RGB that the writer converts.
 """
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -20,6 +21,8 @@ import torch
 from ..checks import InputError, check_shape
 from .atomic import atomic_write
 from .image import to_uint8
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["VideoInfo", "video_info", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
 
@@ -111,7 +114,9 @@ class VideoWriter:
         codec, pix_fmt, opts = _CODECS[self.path.suffix.lower()]
         if self._stream is None:
             if codec == "libx264" and (h % 2 or w % 2):
-                raise InputError(f"{self.path}: mp4 (yuv420p) needs even frame sizes, got {h}x{w}")
+                # 4:2:0 chroma needs even sizes; 4:4:4 keeps odd-sized frames whole (fewer players read it).
+                pix_fmt = "yuv444p"
+                logger.warning("%s: odd frame size %dx%d: mp4 written as yuv444p (4:4:4)", self.path, h, w)
             fmt = "mp4" if codec == "libx264" else "matroska"
             self._container = av.open(self._file, mode="w", format=fmt)
             self._stream = self._container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
