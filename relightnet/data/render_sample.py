@@ -16,7 +16,7 @@ import torch
 from ..checks import InputError
 from ..io.image import to_uint8
 from ..prt import vertex_transport
-from ..raster import antialias, interpolate, perspective_camera
+from ..raster import antialias, interpolate, perspective_camera, silhouette_pixels
 from ..render.frame import TexturedAlbedo, render_mesh
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
@@ -116,17 +116,6 @@ def _light_schedule(rng, cfg: SynthConfig, split: str, n: int | None) -> tuple[l
         frames.append((i, d.angle + rates[i][0] * dt, d.level * math.exp(rates[i][1] * dt)))
     draws = [a, b] if switch is not None else [a]
     return draws, frames, ([switch] if switch is not None else [])
-
-
-def _silhouette(m: torch.Tensor) -> torch.Tensor:
-    """(H, W) bool: pixels with a 4-neighbour on the other side of the mask boundary.
-
-    Only these take the antialiased composite: between two triangles that share no edge,
-    ``antialias`` also blends inside the mask (at pixel-sized triangles, nearly everywhere).
-    """
-    p = torch.nn.functional.pad(m[None, None].float(), (1, 1, 1, 1), mode="replicate")[0, 0]
-    nb = torch.stack([p[:-2, 1:-1], p[2:, 1:-1], p[1:-1, :-2], p[1:-1, 2:]])
-    return (nb != m.float()).any(0)
 
 
 def _light_meta(d: LightDraw) -> dict:
@@ -302,7 +291,7 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
         mask = acc["mask"][t][..., None]
         lin = acc["image"][t] * mask + bg * (1 - mask)
         aa = antialias(lin[None], frs[t], clips[t], faces)[0]
-        lin = torch.where(_silhouette(mask[..., 0] > 0)[..., None], aa, lin)
+        lin = torch.where(silhouette_pixels(mask[..., 0] > 0)[..., None], aa, lin)
         if sigma > 0:
             noise = torch.from_numpy(r["noise"].normal(0.0, sigma, (cfg.res, cfg.res, 3)).astype(np.float32))
             acc["image"][t] = acc["image"][t] + noise * mask

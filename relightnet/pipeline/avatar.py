@@ -33,7 +33,8 @@ import torch
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import VideoWriter, atomic_write, read_video, video_info
 from ..io.image import linear_to_srgb
-from ..raster import Camera, default_camera
+from ..raster import Camera, default_camera, silhouette_pixels
+from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, motion_params
@@ -198,6 +199,7 @@ def avatar(
     n_dirs: int = 64,
     occlusion: bool = True,
     bounces: int = 0,
+    antialias: bool = False,
     model_name: str = "model",
     progress: bool = True,
 ) -> AvatarResult:
@@ -221,6 +223,8 @@ def avatar(
             video's size: full body, standing at the origin).
         smoothing: one of :data:`SMOOTHING`.
         n_dirs, occlusion, bounces: PRT options.
+        antialias: smooth the avatar's silhouette against the background (analytic edge
+            antialiasing at the silhouette pixels; about 24 ms per 512² frame).
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
 
     Returns:
@@ -296,7 +300,11 @@ def avatar(
             r = fr.render
             a = r.alpha[0][..., None]
             bgf = torch.from_numpy(bg).float() / 255
-            writer.write(linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a))
+            comp = linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a)
+            if antialias:
+                smooth = aa(comp[None], r.frags, camera.transform(fr.verts), body_model.faces)[0]
+                comp = torch.where(silhouette_pixels(a[..., 0] > 0)[..., None], smooth, comp)
+            writer.write(comp)
             written += 1
         if written < n:
             raise InputError(f"{plate or target}: only {written} frames decoded, {n} expected")

@@ -7,7 +7,7 @@ and :func:`to_channels_last` convert to and from the CNN layout (B, C, H, W).
 Texture coordinates have v = 0 at the bottom of the image (:mod:`.texture`).
 """
 
-from .antialias import antialias
+from .antialias import antialias, silhouette_pixels
 from .camera import (
     Camera,
     default_camera,
@@ -30,5 +30,5 @@ __all__ = [
     "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
     "Fragments", "rasterize",
     "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
-    "texture", "antialias",
+    "texture", "antialias", "silhouette_pixels",
 ]

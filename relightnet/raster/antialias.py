@@ -22,7 +22,7 @@ import torch
 from ..checks import check_shape
 from .fragments import Fragments
 
-__all__ = ["antialias"]
+__all__ = ["antialias", "silhouette_pixels"]
 
 
 def _lam(P, u, v):
@@ -120,3 +120,19 @@ def _crossing(pa, pb, fa, fb, depth, verts_clip, faces, V, H, W):
     a_front = oka & (sa < 1) & ((fb < 0) | ((la_b * za).sum(1) <= db))
     b_front = okb & (sb < 1) & ((fa < 0) | ((lb_a * zb).sum(1) <= da))
     return torch.where(interior, nan, torch.where(a_front, sa, torch.where(b_front, 1 - sb, nan)))
+
+
+def silhouette_pixels(mask: torch.Tensor) -> torch.Tensor:
+    """(H, W) bool: pixels with a 4-neighbour on the other side of the mask's boundary.
+
+    Where only the silhouette should be smoothed (an object composited over a photo), take
+    :func:`antialias`'s result at these pixels only: between two triangles that share no edge
+    it also blends inside the object (with pixel-sized triangles, nearly everywhere).
+
+    Args:
+        mask: (H, W) bool or {0, 1}.
+    """
+    check_shape(mask, ["H", "W"], name="mask")
+    p = torch.nn.functional.pad(mask[None, None].float(), (1, 1, 1, 1), mode="replicate")[0, 0]
+    nb = torch.stack([p[:-2, 1:-1], p[2:, 1:-1], p[1:-1, :-2], p[1:-1, 2:]])
+    return (nb != mask.float()).any(0)

@@ -203,3 +203,18 @@ def test_smpl_motion_longer_or_shorter_than_the_video(target, tmp_path, extra):
     res = avatar(video, tmp_path / "s.mkv", light=true[0], body=f"smpl:{smpl}", motion=str(motion), n_dirs=8,
                  progress=False)
     assert res.n_frames == min(N, t) == len(list(read_video(res.video)))
+
+
+def test_antialias_changes_only_the_silhouette(target, anny_body, tmp_path):
+    from relightnet.raster import silhouette_pixels
+
+    video, _, true = target
+    kw = dict(light=true[0], body=anny_body, motion="idle", n_dirs=8, progress=False)
+    hard = list(read_video(avatar(video, tmp_path / "h.mkv", **kw).video))
+    soft = list(read_video(avatar(video, tmp_path / "s.mkv", antialias=True, **kw).video))
+    src = list(read_video(video))
+    for h, s, b in zip(hard, soft, src, strict=True):
+        covered = torch.from_numpy((h != b).any(-1))
+        band = silhouette_pixels(covered).numpy()
+        np.testing.assert_array_equal(s[~band], h[~band])
+        assert (s[band] != h[band]).any()
