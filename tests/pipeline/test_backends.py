@@ -1,0 +1,60 @@
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.model import NetConfig, RelightNet
+from relightnet.pipeline.backends import BACKENDS, TorchPredictor, as_predictor, make_predictor
+
+
+def _photo():
+    img = torch.rand(3, 48, 40)
+    mask = torch.zeros(48, 40)
+    mask[6:44, 10:30] = 1
+    return img, mask
+
+
+def test_torch_predictor_light_is_the_prediction_light():
+    net = RelightNet(NetConfig(width=8, levels=2, mask_head=True)).eval()
+    p = as_predictor(net)
+    assert isinstance(p, TorchPredictor) and p.lmax == 2 and p.has_mask_head
+    assert as_predictor(p) is p
+    img, mask = _photo()
+    pred = p(img, mask)
+    assert pred.albedo.shape == (1, 3, 48, 40) and pred.transport.shape == (1, 9, 48, 40)
+    torch.testing.assert_close(p.light(img, mask), pred.light[0], rtol=1e-5, atol=1e-6)
+    assert (pred.albedo[0, :, mask == 0] == 0).all()  # maps only inside the person
+    assert p(img, None).mask.shape == (1, 1, 48, 40)  # the mask head finds a mask
+
+
+def test_make_predictor_and_bad_choices(tmp_path):
+    assert BACKENDS == ("torch", "onnx")
+    assert isinstance(make_predictor("torch"), TorchPredictor)
+    with pytest.raises(InputError, match="backend"):
+        make_predictor("tensorrt")
+    with pytest.raises(InputError, match="needs --backend onnx"):
+        make_predictor("torch", tmp_path / "m.onnx")
+    with pytest.raises(InputError, match="CPU"):
+        make_predictor("onnx", device="cuda")
+    with pytest.raises(InputError, match="checkpoint not found"):
+        make_predictor("onnx", tmp_path / "missing.pt")
+    with pytest.raises(InputError, match="RelightNet or a predictor"):
+        as_predictor("model.pt")
+
+
+def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
+    from relightnet.model.onnx_export import export_onnx
+    from relightnet.pipeline.backends import OnnxPredictor
+
+    net = RelightNet(NetConfig(width=8, levels=2)).eval()
+    net.input_size = 32
+    export_onnx(net, tmp_path / "t.onnx", smoothing="none", example_size=32)
+    onnx = OnnxPredictor(tmp_path / "t.onnx")
+    assert onnx.size == 32 and onnx.lmax == 2 and not onnx.has_mask_head
+    img, mask = _photo()
+    with pytest.raises(InputError, match="no mask head"):
+        onnx(img, None)
+    want = TorchPredictor(net, size=32)(img, mask)
+    got = onnx(img, mask)
+    torch.testing.assert_close(got.light, want.light, rtol=1e-4, atol=1e-4)
+    torch.testing.assert_close(got.transport, want.transport, rtol=1e-4, atol=1e-4)
+    torch.testing.assert_close(onnx.light(img, mask), want.light[0], rtol=1e-4, atol=1e-4)
