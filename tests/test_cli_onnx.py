@@ -32,6 +32,13 @@ def test_export_and_run_a_video(tiny_dataset, tmp_path):
     assert main(["-q", "export", "--checkpoint", str(run / "last.pt"), "--out", str(onnx),
                  "--smoothing", "one-euro"]) == 0
     assert OnnxRelighter(onnx).metadata["relightnet.smoothing"] == "one-euro"
+    # --int8: a statically quantised copy calibrated on generated people at the model's size.
+    q = tmp_path / "q.onnx"
+    assert main(["-q", "export", "--checkpoint", str(run / "last.pt"), "--out", str(q), "--int8"]) == 0
+    r8 = OnnxRelighter(tmp_path / "q_int8.onnx")
+    img = np.random.default_rng(0).random((1, 3, 32, 32), dtype=np.float32)
+    out8 = r8.step(img, np.ones((1, 1, 32, 32), np.float32))
+    assert out8["albedo"].shape == (1, 3, 32, 32) and np.isfinite(out8["light_raw"]).all()
     video, masks = _clip(tmp_path)
     assert main(["-q", "onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
                  "--out-dir", str(tmp_path / "out"), "--size", "32"]) == 0

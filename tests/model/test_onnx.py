@@ -99,3 +99,14 @@ def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
     assert rel < 0.1
     with pytest.raises(InputError, match="mode"):
         quantize_int8(path, tmp_path / "x.onnx", mode="int4")
+
+
+def test_calibration_set_draws_generated_people():
+    from relightnet.model.onnx_serving import calibration_set
+
+    pairs = calibration_set(n=2, size=32)
+    assert len(pairs) == 2
+    for img, mask in pairs:
+        assert img.shape == (1, 3, 32, 32) and img.dtype == np.float32 and 0 <= img.min() and img.max() <= 1
+        assert mask.shape == (1, 1, 32, 32) and 0 < mask.mean() < 1
+    assert not np.array_equal(pairs[0][0], pairs[1][0])
