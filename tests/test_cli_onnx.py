@@ -3,28 +3,13 @@ from pathlib import Path
 import numpy as np
 
 from relightnet.cli import main
-from relightnet.io import VideoWriter, write_image
 from relightnet.model.onnx_serving import OnnxRelighter
 from relightnet.sh import load_light
 
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _clip(tmp_path, n=4, h=48, w=64):
-    frames, masks = tmp_path / "clip.mkv", tmp_path / "masks"
-    masks.mkdir()
-    with VideoWriter(frames, fps=10) as v:
-        for t in range(n):
-            img = np.zeros((h, w, 3), np.uint8)
-            img[8:40, 20 + t : 36 + t] = 200
-            m = np.zeros((h, w, 3), np.uint8)
-            m[8:40, 20 + t : 36 + t] = 255
-            v.write(img)
-            write_image(masks / f"{t:04d}.png", m)
-    return frames, masks
-
-
-def test_export_and_run_a_video(tiny_dataset, tmp_path):
+def test_export_and_run_a_video(tiny_dataset, tmp_path, masked_clip):
     run = tmp_path / "run"
     assert main(["-q", "train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tiny_dataset),
                  "--out", str(run)]) == 0
@@ -39,14 +24,14 @@ def test_export_and_run_a_video(tiny_dataset, tmp_path):
     img = np.random.default_rng(0).random((1, 3, 32, 32), dtype=np.float32)
     out8 = r8.step(img, np.ones((1, 1, 32, 32), np.float32))
     assert out8["albedo"].shape == (1, 3, 32, 32) and np.isfinite(out8["light_raw"]).all()
-    video, masks = _clip(tmp_path)
+    video, masks = masked_clip(tmp_path, n=4, h=48, w=64)
     assert main(["-q", "onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
                  "--out-dir", str(tmp_path / "out"), "--size", "32"]) == 0
     raw, smooth = load_light(tmp_path / "out" / "lights_raw.npz"), load_light(tmp_path / "out" / "lights_smoothed.npz")
     assert raw.shape == (4, 9, 3) and smooth.shape == (4, 9, 3)
     assert (tmp_path / "out" / "albedo.mp4").is_file()
     # Too few masks: one clear error, nothing written.
-    (masks / "0003.png").unlink()
+    (masks / "003.png").unlink()
     assert main(["onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
                  "--out-dir", str(tmp_path / "out2")]) == 1
     assert not (tmp_path / "out2" / "lights_raw.npz").exists()

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, nonneg_int, phenotype_arg, pos_int
+from .common import LIGHT_HELP, add_body_args, add_command, exposure_arg, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.blender")
 
@@ -101,15 +101,8 @@ def register(sub) -> None:
         "  relightnet blender-export --body smpl:SMPL_NEUTRAL.npz --motion clip.npz --albedo skin.png "
         "--light sky.exr --camera cam.json --out clip.blend\n",
     )
-    p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
-    p.add_argument("--pose", default="arms_down", help="pose preset of a still avatar (default: arms_down)")
-    p.add_argument("--motion", help="procedural motion for Anny (walk, turn, idle, arm_raise) or an SMPL-style motion "
-                   "file (.npz/.pkl) for --body smpl:PATH; one Blender frame per video frame")
-    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
-    p.add_argument("--fps", type=float, default=30.0, help="frame rate of the scene (default: 30)")
+    add_body_args(p, fps_help="frame rate of the scene (default: 30); a motion gives one Blender frame per frame")
     p.add_argument("--seed", type=int, default=0, help="seed of procedural motions")
-    p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
-                   help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")
     p.add_argument("--albedo", default="default",
                    help="albedo texture image (sRGB, in the body's UV layout) or 'default' (Anny's outfit)")
     p.add_argument("--light", required=True, help=LIGHT_HELP)

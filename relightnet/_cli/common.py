@@ -79,6 +79,13 @@ def load_single_light(arg: str, lmax: int | None = None):
     return light
 
 
+def add_checkpoint_args(p: argparse.ArgumentParser, device: bool = True) -> None:
+    """--checkpoint (and --device): which CNN, on which torch device."""
+    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    if device:
+        p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+
+
 def add_model_args(p: argparse.ArgumentParser) -> None:
     """--checkpoint, --backend and --device: where the CNN comes from and runs."""
     p.add_argument("--checkpoint", help="model checkpoint (.pt; or .onnx with --backend onnx; "
@@ -96,3 +103,15 @@ def _phenotypes():
 
 #: ``--phenotype NAME=VALUE`` for Anny (names from relightnet.body.PHENOTYPES).
 phenotype_arg = key_value_arg(_phenotypes, float, "NAME", "a number")
+
+
+def add_body_args(p: argparse.ArgumentParser, fps_help: str = "video frame rate (default: 30)") -> None:
+    """--body, --pose, --motion, --frames, --fps, --phenotype: the posed body of render-body and blender-export."""
+    p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
+    p.add_argument("--pose", default="arms_down", help="pose preset of a still body (default: arms_down)")
+    p.add_argument("--motion", help="procedural motion for Anny (walk, turn, idle, arm_raise) or an SMPL-style "
+                   "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
+    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
+    p.add_argument("--fps", type=float, default=30.0, help=fps_help)
+    p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
+                   help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")

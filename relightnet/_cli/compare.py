@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from .common import add_command, nonneg_int, pos_int
+from .common import add_command, add_model_args, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.compare")
 
@@ -40,7 +40,6 @@ def register(sub) -> None:
                    help="a dataset of clips made by 'relightnet synth --sequence T' (or sequence_frames > 0)")
     p.add_argument("--out", required=True, metavar="REPORT_DIR",
                    help="report folder (made if needed; nothing is written there unless the run succeeds)")
-    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
     p.add_argument("--split", default="test", choices=("train", "val", "test"), help="split to use (default: test)")
     p.add_argument("--clips", type=pos_int, metavar="N", help="only the first N clips (default: all)")
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT directions of the 3D path (default: 64)")
@@ -53,8 +52,5 @@ def register(sub) -> None:
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")
     p.add_argument("--size", type=pos_int, help="CNN working size, a multiple of 16 (default: its training size)")
-    p.add_argument("--backend", default="torch", choices=("torch", "onnx"),
-                   help="where the CNN runs: PyTorch, or ONNX Runtime on the CPU (the checkpoint is exported "
-                        "once and cached; a .onnx --checkpoint is used as is) (default: torch)")
-    p.add_argument("--device", default="cpu", help="cpu or cuda, for the CNN with --backend torch (default: cpu)")
+    add_model_args(p)
     p.set_defaults(func=run)

@@ -7,7 +7,7 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_command
+from .common import add_checkpoint_args, add_command
 
 logger = logging.getLogger("relightnet.model")
 
@@ -63,11 +63,6 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     return 0
 
 
-def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
-    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
-
-
 def register(sub) -> None:
     p = add_command(sub, "train", "Train the inverse-rendering CNN on a synthetic dataset (resumable; torchrun-ready).",
                     "  relightnet train --config train/configs/small.yaml --data data/synth --out runs/small\n"
@@ -84,7 +79,7 @@ def register(sub) -> None:
     p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines.",
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"
                     "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n")
-    _common(p)
+    add_checkpoint_args(p)
     p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
     p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
     p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png")
@@ -99,5 +94,5 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
     p.add_argument("--size", type=int, default=None,
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")
-    _common(p)
+    add_checkpoint_args(p)
     p.set_defaults(func=run_estimate_light)

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command
+from .common import add_checkpoint_args, add_command
 
 logger = logging.getLogger("relightnet.onnx")
 
@@ -43,7 +43,7 @@ def register(sub) -> None:
                     "  relightnet export --out relightnet.onnx\n"
                     "  relightnet export --checkpoint runs/small/last.pt --out m.onnx --smoothing one-euro\n"
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
-    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
+    add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
     p.add_argument("--smoothing", choices=SMOOTHERS, default="ema", help="light smoothing in the graph (default: ema)")
     p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")

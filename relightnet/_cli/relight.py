@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, add_model_args, load_single_light
+from .common import LIGHT_HELP, add_checkpoint_args, add_command, add_model_args, load_single_light
 
 logger = logging.getLogger("relightnet.relight")
 
@@ -74,8 +74,7 @@ def register(sub) -> None:
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
     p.add_argument("--absolute", action="store_true",
                    help="use the light at its own scale (default: keep the photo's exposure)")
-    p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")
-    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    add_checkpoint_args(p)
     p.set_defaults(func=run)
 
     p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",

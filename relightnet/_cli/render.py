@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, load_single_light, nonneg_int, phenotype_arg, pos_int
+from .common import LIGHT_HELP, add_body_args, add_command, exposure_arg, load_single_light, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.render")
 
@@ -156,14 +156,7 @@ def register(sub) -> None:
                     "  relightnet render-body --motion walk --frames 60 --light courtyard --res 256 --out walk.mp4\n"
                     "  relightnet render-body --body smpl:SMPL_NEUTRAL.npz --motion clip.npz "
                     "--light city --out c.mp4\n")
-    p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
-    p.add_argument("--pose", default="arms_down", help="pose preset for a still image (default: arms_down)")
-    p.add_argument("--motion", help="procedural motion for Anny (walk, turn, idle, arm_raise) or an SMPL-style "
-                   "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
-    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
-    p.add_argument("--fps", type=float, default=30.0, help="video frame rate (default: 30)")
-    p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
-                   help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")
+    add_body_args(p)
     p.add_argument("--out", required=True, help="output PNG, or .mp4/.mkv when --motion is given")
     p.add_argument("--mask-out", help="also write the coverage mask as PNG (still images)")
     p.add_argument("--save-maps", metavar="DIR", help="also write transport/albedo/normal/depth maps here")

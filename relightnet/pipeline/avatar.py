@@ -36,6 +36,7 @@ from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
+from ..temporal.smoothers import METHODS
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, motion_params
 
@@ -44,7 +45,7 @@ logger = logging.getLogger(__name__)
 __all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "smooth_video_lights", "avatar"]
 
 #: Light smoothing over time: offline methods of relightnet.temporal, or none.
-SMOOTHING = ("hermite", "poly", "savgol", "none")
+SMOOTHING = (*METHODS, "none")
 
 
 @dataclass(frozen=True, eq=False)
@@ -244,7 +245,7 @@ def avatar(
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
     motion_params(motion, body_model, 1, info.fps)  # a bad motion fails now, not after the light pass
-    _plate_frames(plate, target, info.size)  # likewise a bad plate
+    backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     reused = False
     raw = outliers = switches = None
@@ -293,7 +294,7 @@ def avatar(
                                 occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=not bounces)
     written = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
-        pairs = zip(_plate_frames(plate, target, info.size), frames, strict=False)
+        pairs = zip(backgrounds, frames, strict=False)
         for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
             if written == n:
                 break

@@ -55,11 +55,9 @@ from .backends import as_predictor
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["SMOOTHING_METHODS", "PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "source_light",
+__all__ = ["PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "source_light",
            "compare_clip", "clip_metrics", "compare"]
 
-#: Values of ``smoothing`` (those of ``relightnet avatar``).
-SMOOTHING_METHODS = SMOOTHING
 #: The two paths and the three lights each is shaded with (the row order of the tables).
 PATHS = ("2d", "3d")
 LIGHTS = ("true", "raw", "smoothed")
@@ -137,7 +135,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
         n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections; a
             bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default).
-        smoothing: one of :data:`SMOOTHING_METHODS`.
+        smoothing: one of :data:`SMOOTHING`.
         source: preset name of the 2D path's source light.
         tick: optional callable, called after every frame.
 
@@ -339,8 +337,8 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     from .backends import make_predictor
 
     t_start = time.perf_counter()
-    if smoothing not in SMOOTHING_METHODS:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING_METHODS)}, got {smoothing!r}")
+    if smoothing not in SMOOTHING:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {smoothing!r}")
     for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):
         if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < lo):
             raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")

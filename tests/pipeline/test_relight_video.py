@@ -1,26 +1,11 @@
 import numpy as np
 
 from relightnet.cli import main
-from relightnet.io import VideoWriter, read_video, video_info, write_image
+from relightnet.io import read_video, video_info
 
 
-def _clip(tmp_path, n=3, h=64, w=48):
-    video, masks = tmp_path / "clip.mkv", tmp_path / "masks"
-    masks.mkdir()
-    g = np.random.default_rng(0)
-    with VideoWriter(video, fps=12) as v:
-        for t in range(n):
-            img = g.integers(40, 90, (h, w, 3), dtype=np.uint8)
-            img[8:56, 14 + t : 30 + t] = 180
-            m = np.zeros((h, w, 3), np.uint8)
-            m[8:56, 14 + t : 30 + t] = 255
-            v.write(img)
-            write_image(masks / f"{t:03d}.png", m)
-    return video, masks
-
-
-def test_relight_video_streams_all_frames(tmp_path):
-    video, masks = _clip(tmp_path)
+def test_relight_video_streams_all_frames(tmp_path, masked_clip):
+    video, masks = masked_clip(tmp_path)
     out = tmp_path / "relit.mkv"
     assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--turntable", "90",
                  "--out", str(out)]) == 0
@@ -32,8 +17,8 @@ def test_relight_video_streams_all_frames(tmp_path):
     assert video_info(out).fps == 12
 
 
-def test_relight_video_bad_inputs_leave_nothing(tmp_path, capsys):
-    video, masks = _clip(tmp_path)
+def test_relight_video_bad_inputs_leave_nothing(tmp_path, capsys, masked_clip):
+    video, masks = masked_clip(tmp_path)
     (masks / "002.png").unlink()
     out = tmp_path / "r.mp4"
     assert main(["relight-video", str(video), "--masks", str(masks), "--light", "studio", "--out", str(out)]) == 1

@@ -36,15 +36,7 @@ def rotating(t_len=120, seed=0, step=None, noise=0.0, dtype=torch.float32):
     return truth, noisy
 
 
-def poly_lights(t_len, degree, seed=0):
-    """(T, 9, 3) lights whose every coefficient is a random polynomial of ``degree`` in t."""
-    g = torch.Generator().manual_seed(seed)
-    c = torch.randn(degree + 1, 9, 3, generator=g, dtype=torch.float64)
-    t = torch.linspace(-1.3, 0.7, t_len, dtype=torch.float64)
-    return sum(c[i] * t[:, None, None] ** i for i in range(degree + 1))
-
-
-def test_polynomial_data_is_not_flagged_and_kept_exactly():
+def test_polynomial_data_is_not_flagged_and_kept_exactly(poly_lights):
     x = poly_lights(50, 3)
     res = smooth_poly(x, degree=3, outlier_eps="3mad", switches="auto")
     torch.testing.assert_close(res.smoothed, x, rtol=0, atol=1e-10)

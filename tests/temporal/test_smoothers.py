@@ -11,14 +11,6 @@ from relightnet.temporal import hermite_basis, hermite_matrix, poly_matrix, savg
 EIN = "ts,skc->tkc"
 
 
-def poly_lights(t_len, degree, seed=0):
-    """(T, 9, 3) lights whose every coefficient is a random polynomial of ``degree`` in t."""
-    g = torch.Generator().manual_seed(seed)
-    c = torch.randn(degree + 1, 9, 3, generator=g, dtype=torch.float64)
-    t = torch.linspace(-1.3, 0.7, t_len, dtype=torch.float64)
-    return sum(c[i] * t[:, None, None] ** i for i in range(degree + 1))
-
-
 def test_savgol_matches_scipy():
     x = np.random.default_rng(0).normal(size=(41, 2))
     for window, degree in [(9, 2), (7, 3), (5, 0)]:
@@ -27,7 +19,7 @@ def test_savgol_matches_scipy():
 
 
 @pytest.mark.parametrize("degree", [1, 2, 3])
-def test_polynomial_data_is_reproduced_exactly(degree):
+def test_polynomial_data_is_reproduced_exactly(degree, poly_lights):
     x = poly_lights(50, degree)
     for S in [poly_matrix(50, degree), poly_matrix(50, degree, window=11), savgol_matrix(50, 11, degree)]:
         torch.testing.assert_close(torch.einsum(EIN, S, x), x, rtol=0, atol=1e-10)
@@ -35,7 +27,7 @@ def test_polynomial_data_is_reproduced_exactly(degree):
     assert (torch.einsum(EIN, poly_matrix(50, degree - 1), x) - x).abs().max() > 1e-3
 
 
-def test_hermite_exact_properties():
+def test_hermite_exact_properties(poly_lights):
     n = 61
     for tangents in ("catmull-rom", "free"):
         S = hermite_matrix(n, 8, tangents)
