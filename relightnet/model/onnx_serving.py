@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..checks import InputError, ShapeError
+from ..checks import InputError, ShapeError, check_shape
 from .onnx_export import INPUTS
 
 logger = logging.getLogger(__name__)
@@ -110,6 +110,33 @@ class OnnxRelighter:
         albedo, transport, raw, smoothed, self._state = outs
         return {"albedo": albedo, "transport": transport, "light_raw": raw, "light_smoothed": smoothed}
 
+    def step_photo(self, image: torch.Tensor, mask: torch.Tensor, size: int):
+        """Run one frame of any size: crop around the mask (KE18 framing), resize to ``size``, :meth:`step`.
+
+        Args:
+            image: (3, H, W) sRGB in [0, 1] (or uint8).
+            mask: (H, W) person mask.
+            size: working size, a multiple of 16.
+
+        Returns:
+            (the :meth:`step` outputs at ``size``, the :class:`~relightnet.model.inference.CropBox`
+            to paste them back with).
+        """
+        import torch.nn.functional as F
+
+        from .inference import _crop, mask_crop_box
+
+        check_shape(image, [3, "H", "W"], name="image")
+        check_shape(mask, image.shape[1:], name="mask")
+        if image.dtype == torch.uint8:
+            image = image.float() / 255
+        mask = mask.float()
+        box = mask_crop_box(mask)
+        s = (int(size), int(size))
+        x = F.interpolate(_crop(image[None].float(), box), size=s, mode="bilinear", align_corners=False)
+        m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
+        return self.step(x.contiguous().numpy(), (m > 0.5).float().numpy()), box
+
 
 def calibration_set(n: int = 16, size: int = 128, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
     """Inputs for static quantisation: ``n`` generated people (val split, held apart from training).
@@ -199,11 +226,9 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     Returns:
         ``{"raw": (T, K, 3), "smoothed": (T, K, 3)}`` numpy arrays.
     """
-    import torch.nn.functional as F
-
     from ..io import VideoWriter, frames_with_masks
     from ..sh import save_light
-    from .inference import _crop, _paste, mask_crop_box
+    from .inference import _paste
 
     r = OnnxRelighter(model_path, threads=threads)
     size = int(r.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
@@ -215,11 +240,7 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     raw, smooth = [], []
     with VideoWriter(out / "albedo.mp4", fps=info.fps) as writer:
         for _, img, mask in pairs:
-            box = mask_crop_box(mask)
-            x = F.interpolate(_crop(img[None], box), size=(size, size), mode="bilinear", align_corners=False)
-            m = F.interpolate(_crop(mask.float()[None, None], box), size=(size, size), mode="bilinear",
-                              align_corners=False)
-            res = r.step(x.numpy(), (m > 0.5).float().numpy())
+            res, box = r.step_photo(img, mask, size)
             raw.append(res["light_raw"][0])
             smooth.append(res["light_smoothed"][0])
             albedo = _paste(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask

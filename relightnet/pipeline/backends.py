@@ -14,9 +14,8 @@ import os
 from pathlib import Path
 
 import torch
-from torch.nn import functional as F
 
-from ..checks import InputError, check_shape
+from ..checks import InputError, sh_order_from_count
 from ..model.network import Prediction, RelightNet
 
 logger = logging.getLogger(__name__)
@@ -69,25 +68,13 @@ class OnnxPredictor:
         self.size = int(self.relighter.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
         if self.size % 16:
             raise InputError(f"size: expected a multiple of 16, got {self.size}")
-        k = self.relighter.n_coeffs
-        self.lmax = int(round(k**0.5)) - 1
+        self.lmax = sh_order_from_count(self.relighter.n_coeffs, "ONNX model light")
         self.has_mask_head = False
 
     def _step(self, image: torch.Tensor, mask: torch.Tensor | None):
-        from ..model.inference import _crop, mask_crop_box
-
         if mask is None:
             raise InputError("mask: the ONNX backend has no mask head; give the person's masks")
-        check_shape(image, [3, "H", "W"], name="image")
-        check_shape(mask, image.shape[1:], name="mask")
-        if image.dtype == torch.uint8:
-            image = image.float() / 255
-        mask = mask.float()
-        box = mask_crop_box(mask)
-        s = (self.size, self.size)
-        x = F.interpolate(_crop(image[None].float(), box), size=s, mode="bilinear", align_corners=False)
-        m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
-        return self.relighter.step(x.contiguous().numpy(), (m > 0.5).float().numpy()), box, mask
+        return self.relighter.step_photo(image, mask, self.size)
 
     def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
         """Only the light (K, 3) (the maps are not pasted back)."""
@@ -97,9 +84,9 @@ class OnnxPredictor:
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
         from ..model.inference import _paste
 
-        res, box, mask = self._step(image, mask)
+        res, box = self._step(image, mask)
         h, w = image.shape[-2:]
-        inside = mask[None, None]
+        inside = mask.float()[None, None]
         return Prediction(
             albedo=_paste(torch.from_numpy(res["albedo"]), box, h, w) * inside,
             transport=_paste(torch.from_numpy(res["transport"]), box, h, w) * inside,
