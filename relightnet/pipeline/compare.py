@@ -48,6 +48,7 @@ import torch
 
 from ..checks import InputError, sh_order_from_count
 from ..io.image import linear_to_srgb, to_uint8
+from ..sh.io import resize_sh
 from ..temporal import jitter, light_distance, light_error
 from . import metrics as M
 from .avatar import SMOOTHING, smooth_video_lights
@@ -113,12 +114,6 @@ def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> tor
     return (sh * (level / light_level(sh))).float()
 
 
-def _resize(sh: torch.Tensor, k: int) -> torch.Tensor:
-    from ..sh.io import resize_sh
-
-    return resize_sh(sh, sh_order_from_count(k))
-
-
 def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) -> torch.Tensor:
     """(T, H, W, 3) albedo ⊙ (transport (T, H, W, K) · lights (T, K, 3))."""
     return albedo * torch.einsum("thwk,tkc->thwc", transport, lights.to(transport))
@@ -147,26 +142,26 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
 
     true = torch.from_numpy(np.asarray(clip["light"], np.float32))
     T, K = true.shape[0], true.shape[1]
+    lmax = sh_order_from_count(K)
     predict = as_predictor(model)
-    km = (predict.lmax + 1) ** 2
     mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
     comp = torch.from_numpy(np.asarray(clip["image_composite"])).permute(0, 3, 1, 2)
     albedo = torch.from_numpy(np.asarray(clip["albedo"], np.float32))
     src = _shade(albedo, torch.from_numpy(np.asarray(clip["transport"], np.float32)),
-                 source_light(source, sh_order_from_count(K))[None].expand(T, -1, -1))
+                 source_light(source, lmax)[None].expand(T, -1, -1))
     if geometry.verts.shape[0] != T:
         raise InputError(f"geometry: {geometry.verts.shape[0]} frames for a clip of {T}")
     secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
     raw, a2, t2, a3, t3, al3 = [], [], [], [], [], []
     for t in range(T):
         c0 = time.perf_counter()
-        raw.append(_resize(predict.light(comp[t], mask[t]).float().cpu(), K))
+        raw.append(resize_sh(predict.light(comp[t], mask[t]).float().cpu(), lmax))
         img = to_uint8(src[t]).permute(2, 0, 1)
         p2 = predict(img, mask[t])
         a2.append(p2.albedo[0].permute(1, 2, 0).float().cpu())
         t2.append(p2.transport[0].permute(1, 2, 0).float().cpu())
         c1 = time.perf_counter()
-        Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=sh_order_from_count(K),
+        Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=lmax,
                               n_dirs=n_dirs, occlusion=True, bounces=bounces, seed=prt_seed,
                               threads=torch.get_num_threads())
         c2 = time.perf_counter()
@@ -187,7 +182,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
     a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
     renders = {}
     for name, L in lights.items():
-        renders[("2d", name)] = _shade(a2, t2, _resize(L, km))
+        renders[("2d", name)] = _shade(a2, t2, resize_sh(L, predict.lmax))
         renders[("3d", name)] = _shade(a3, t3, L) * al3[..., None]
     return ClipOutputs(lights, renders, al3, src, outliers, switches, secs)
 
