@@ -68,14 +68,15 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
     Args:
         pred: network output.
         batch: ``image`` (B, 3, H, W) linear, ``mask`` (B, 1, H, W), ``albedo`` (B, 3, H, W),
-            ``transport`` (B, K, H, W), ``light`` (B, K, 3).
+            ``transport`` (B, K, H, W), ``light`` (B, K, 3); optional ``render`` (B, 3, H, W): the
+            image the rendering terms aim at (default ``image``).
         weights: per-term weights (0 disables a term).
 
     Returns:
         dict of scalar tensors, including ``total``.
     """
     M = batch["mask"]
-    I, A, T, L = batch["image"], batch["albedo"], batch["transport"], batch["light"]
+    I, A, T, L = batch.get("render", batch["image"]), batch["albedo"], batch["transport"], batch["light"]
     Ah, Th, Lh = pred.albedo, pred.transport, pred.light
     S = shading_map(T, L)
     S_tl = shading_map(Th, Lh)

@@ -27,7 +27,7 @@ from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
-from .network import NetConfig, RelightNet, normalize_input
+from .network import NetConfig, RelightNet, normalize_input, shading_map
 
 logger = logging.getLogger(__name__)
 
@@ -37,8 +37,12 @@ __all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "Train
 @dataclass(frozen=True)
 class TrainConfig:
     """A training run. ``target`` selects the transport field: ``transport`` (occlusion-aware)
-    or ``transport_unoccluded`` (the ablation "occlusion ignored"); ``init`` starts from the
-    weights of a checkpoint (fine-tuning) instead of a random initialisation."""
+    or ``transport_unoccluded`` (the ablation "occlusion ignored"); ``render_target`` is what the
+    rendering losses compare Â ⊙ (T̂·L̂) etc. with: ``image`` (the input photo, KE18) or ``model``
+    (A ⊙ (T·L) with the target transport, so that the rendering terms agree with the transport the
+    network learns — for ``transport_unoccluded`` the photo's occlusion shading would otherwise leak
+    into the albedo); ``init`` starts from the weights of a checkpoint (fine-tuning) instead of a
+    random initialisation."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -49,6 +53,7 @@ class TrainConfig:
     checkpoint_every: int = 100
     log_every: int = 10
     target: str = "transport"
+    render_target: str = "image"
     net: dict = field(default_factory=dict)
     loss: dict = field(default_factory=dict)
     augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.875, 0.875],
@@ -66,6 +71,8 @@ class TrainConfig:
             raise InputError(
                 f"train config target: expected 'transport' or 'transport_unoccluded', got {self.target!r}"
             )
+        if self.render_target not in ("image", "model"):
+            raise InputError(f"train config render_target: expected 'image' or 'model', got {self.render_target!r}")
         NetConfig(**self.net)
         LossWeights(**self.loss)
         cs = self.augment.get("crop_scale") if self.augment else None
@@ -220,6 +227,8 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         idx, epoch = _indices(len(data), step, cfg.batch_size, cfg.seed, world, rank)
         gens = [torch.Generator().manual_seed(cfg.seed * 7919 + epoch * 104729 + int(i)) for i in idx]
         batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
+        if cfg.render_target == "model":
+            batch["render"] = batch["albedo"] * shading_map(batch["transport"], batch["light"])
         pred = ddp(batch_to_input(batch))
         terms = relight_losses(pred, batch, weights)
         opt.zero_grad(set_to_none=True)

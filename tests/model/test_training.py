@@ -9,6 +9,8 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import load_checkpoint, load_model
+from relightnet.model.losses import relight_losses
+from relightnet.model.network import Prediction, shading_map
 from relightnet.model.training import TrainConfig, load_train_config, train
 
 REPO = Path(__file__).resolve().parents[2]
@@ -67,13 +69,15 @@ def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
         load_model(truncated)
     with pytest.raises(InputError, match="target"):
         TrainConfig(target="normals")
+    with pytest.raises(InputError, match="render_target"):
+        TrainConfig(render_target="photo")
     (tmp_path / "c.yaml").write_text("steps: 3\nbogus: 1\n")
     with pytest.raises(InputError, match="unknown keys"):
         load_train_config(tmp_path / "c.yaml")
 
 
 def test_the_shipped_recipes_parse():
-    for name in ("small.yaml", "tiny.yaml"):
+    for name in ("small.yaml", "tiny.yaml", "medium.yaml", "medium_unoccluded.yaml", "small_unoccluded.yaml"):
         load_train_config(REPO / "train" / "configs" / name)
 
 
@@ -101,3 +105,28 @@ def test_init_from_a_checkpoint_fine_tunes_it(tiny_dataset, tmp_path):
     other = TrainConfig(steps=1, batch_size=2, warmup=1, net={**NET, "width": 16}, init=str(tmp_path / "a" / "last.pt"))
     with pytest.raises(InputError, match="network configuration differs"):
         train(other, tiny_dataset, tmp_path / "c")
+
+
+def test_render_target_model_aims_the_rendering_terms_at_the_learned_transport():
+    g = torch.Generator().manual_seed(0)
+    B, K, H, W = 2, 9, 8, 8
+    A = torch.rand(B, 3, H, W, generator=g)
+    Tu = torch.rand(B, K, H, W, generator=g)
+    L = torch.rand(B, K, 3, generator=g)
+    occluded = A * shading_map(0.6 * Tu, L)  # the photo: darker than A*(Tu.L) where occluded
+    batch = {"image": occluded, "mask": torch.ones(B, 1, H, W), "albedo": A, "transport": Tu, "light": L}
+    pred = Prediction(albedo=A, transport=Tu, light=L, mask=None)  # a perfect "occlusion ignored" net
+    photo = relight_losses(pred, batch)
+    model = relight_losses(pred, {**batch, "render": A * shading_map(Tu, L)})
+    for k in ("render_al", "render_a", "render_tl"):
+        assert photo[k] > 0.05 and float(model[k]) < 1e-6
+    for k in ("transport", "albedo", "light", "shading_tl"):
+        assert float(model[k]) == float(photo[k]) == 0.0
+
+
+def test_training_with_render_target_model_runs_on_unoccluded_transport(tiny_dataset, tmp_path):
+    cfg = TrainConfig(steps=2, batch_size=2, warmup=1, log_every=1, net=NET, threads=1,
+                      target="transport_unoccluded", render_target="model")
+    last = train(cfg, tiny_dataset, tmp_path / "u")
+    assert last["step"] == 2 and torch.isfinite(torch.tensor(last["total"]))
+    assert load_checkpoint(tmp_path / "u" / "last.pt")["train_config"]["render_target"] == "model"
