@@ -244,7 +244,8 @@ def avatar(
     h, w = info.size
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
-    motion_params(motion, body_model, 1, info.fps)  # a bad motion fails now, not after the light pass
+    # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
+    early = motion_params(motion, body_model, 1, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     reused = False
@@ -266,7 +267,10 @@ def avatar(
         fp = ""
         n = _count_frames(target)
         smoothed = _given_light(light, n)
-    params, n_motion = motion_params(motion, body_model, n, info.fps)
+    from ..body import MOTION_KINDS
+
+    preset = isinstance(motion, str) and motion in MOTION_KINDS  # made as long as the video
+    params, n_motion = motion_params(motion, body_model, n, info.fps) if preset else early
     if n_motion < n:
         logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
     n = min(n, n_motion)

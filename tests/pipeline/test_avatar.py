@@ -177,6 +177,20 @@ def test_avatar_cli_and_every_bad_input(target, tmp_path, capsys):
         "-q", "avatar", "--target", str(video), "--light", "studio", "--out", str(tmp_path / "o.gif")])
 
 
+def test_avatar_with_an_smpl_motion_file_shorter_than_the_video(target, tmp_path):
+    video, _, true = target
+    smpl = _smpl_file(tmp_path)
+    motion = tmp_path / "walk.npz"
+    rng = np.random.default_rng(0)
+    np.savez(motion, poses=(0.1 * rng.standard_normal((N - 1, 72))).astype(np.float32),
+             betas=np.zeros(10, np.float32), trans=np.zeros((N - 1, 3), np.float32))
+    res = avatar(video, tmp_path / "s.mkv", light=true[0], body=f"smpl:{smpl}", motion=motion, n_dirs=8,
+                 progress=False)
+    frames = list(read_video(res.video))
+    assert len(frames) == N - 1
+    assert np.load(tmp_path / "s.lights.npz")["smoothed"].shape == (N - 1, 9, 3)
+
+
 def test_avatar_over_a_clean_plate(target, anny_body, tmp_path):
     video, _, true = target
     plate = tmp_path / "plate.png"
