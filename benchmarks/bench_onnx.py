@@ -39,6 +39,35 @@ def relit_rmse(r: OnnxRelighter, samples) -> float:
     return float(np.mean(errs))
 
 
+def conv_share_ms(path: Path, img: np.ndarray, mask: np.ndarray, runs: int = 5) -> tuple[float, float]:
+    """(convolution kernels, whole graph) ms per frame from ONNX Runtime's profiler (2 threads)."""
+    import json
+
+    import onnxruntime as ort
+
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = 2
+    opts.enable_profiling = True
+    opts.profile_file_prefix = str(path.with_suffix(""))
+    sess = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
+    r = OnnxRelighter(path, threads=2)
+    feeds = {"image": img, "mask": mask, "light_state": np.zeros((1, r.state_size, r.n_coeffs, 3), np.float32),
+             "is_first": np.ones((1,), np.bool_)}
+    sess.run(None, feeds)  # warm-up (excluded below by its run index)
+    for _ in range(runs):
+        sess.run(None, feeds)
+    events = json.loads(Path(sess.end_profiling()).read_text())
+    runs_ev = [e for e in events if e.get("name") == "model_run"][1:]
+    nodes = [e for e in events if e.get("cat") == "Node" and e["name"].endswith("_kernel_time")]
+    t_first = runs_ev[0]["ts"]
+    conv = sum(e["dur"] for e in nodes if e["ts"] >= t_first and e["args"].get("op_name") in _CONV_OPS)
+    total = sum(e["dur"] for e in runs_ev)
+    return conv / 1e3 / len(runs_ev), total / 1e3 / len(runs_ev)
+
+
+_CONV_OPS = {"Conv", "QLinearConv", "ConvInteger", "FusedConv", "NhwcFusedConv"}
+
+
 def main() -> None:
     torch.set_num_threads(2)
     net = load_model()
@@ -65,12 +94,17 @@ def main() -> None:
     body = AnnyBody()
     samples = [generate_sample(SynthConfig(res=128, n_dirs=64), "test", i, body=body).arrays for i in range(12)]
     q = {k: relit_rmse(r, samples) for k, r in sess.items()}
+    img = np.random.default_rng(0).random((1, 3, 256, 256), dtype=np.float32)
+    share = {k: conv_share_ms(p, img, np.ones((1, 1, 256, 256), np.float32)) for k, p in (("fp32", fp32), ("int8", int8))}
     print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 dynamic ms",
                  "eager/fp32", "eager/int8 static"], rows))
     print()
     print(table(["model", "relit RMSE (12 test samples, 128²)", "vs fp32"],
                 [["ORT fp32", q["fp32"], 1.0], ["ORT int8 static (QDQ)", q["int8"], q["int8"] / q["fp32"]],
                  ["ORT int8 dynamic", q["int8 dynamic"], q["int8 dynamic"] / q["fp32"]]]))
+    print()
+    print(table(["256², ORT profiler", "convolution kernels ms", "whole graph ms", "convolutions / eager 256²"],
+                [[k, c, t, c / rows[0][1]] for k, (c, t) in share.items()]))
     print(f"\nfile sizes: fp32 {fp32.stat().st_size / 1e6:.1f} MB, int8 static {int8.stat().st_size / 1e6:.1f} MB, "
           f"int8 dynamic {dyn.stat().st_size / 1e6:.1f} MB")
 
