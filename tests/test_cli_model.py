@@ -22,6 +22,12 @@ def test_train_evaluate_estimate_light(tiny_dataset, tmp_path, capsys):
     metrics = json.loads((tmp_path / "rep" / "metrics.json").read_text())
     assert metrics["n"] == 3 and "relit_rmse" in metrics["model"]
     assert "| metric |" in (tmp_path / "rep" / "report.md").read_text()
+    assert main(["-q", "evaluate", "--checkpoint", str(ckpt), "--ablation", str(ckpt), "--no-baseline",
+                 "--data", str(tiny_dataset), "--out", str(tmp_path / "abl")]) == 0
+    metrics = json.loads((tmp_path / "abl" / "metrics.json").read_text())
+    assert metrics["ablation"] == metrics["model"]  # the same checkpoint twice
+    assert metrics["occlusion_floor"]["relit_rmse_concave"] > 0
+    assert "| occlusion-aware lower by | 0.0% | 0.0% |" in (tmp_path / "abl" / "report.md").read_text()
     # A photo-like input of any size with a mask.
     img = np.zeros((90, 70, 3), np.uint8)
     img[10:80, 20:50] = 180
