@@ -95,7 +95,8 @@ def main() -> None:
     samples = [generate_sample(SynthConfig(res=128, n_dirs=64), "test", i, body=body).arrays for i in range(12)]
     q = {k: relit_rmse(r, samples) for k, r in sess.items()}
     img = np.random.default_rng(0).random((1, 3, 256, 256), dtype=np.float32)
-    share = {k: conv_share_ms(p, img, np.ones((1, 1, 256, 256), np.float32)) for k, p in (("fp32", fp32), ("int8", int8))}
+    ones = np.ones((1, 1, 256, 256), np.float32)
+    share = {k: conv_share_ms(p, img, ones) for k, p in (("fp32", fp32), ("int8", int8))}
     print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 dynamic ms",
                  "eager/fp32", "eager/int8 static"], rows))
     print()
