@@ -24,10 +24,16 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
-    from ..model.checkpoint import load_model
     from ..io import atomic_write
-    from ..model.evaluate import (baseline_from_train, evaluate, format_ablation, format_table, occlusion_floor,
-                                  write_report)
+    from ..model.checkpoint import load_model
+    from ..model.evaluate import (
+        baseline_from_train,
+        evaluate,
+        format_ablation,
+        format_table,
+        occlusion_floor,
+        write_report,
+    )
 
     model = load_model(args.checkpoint, device=args.device)
     twin = load_model(args.ablation, device=args.device) if args.ablation else None

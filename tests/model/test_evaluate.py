@@ -59,6 +59,6 @@ def test_occlusion_floor_is_the_oracle_that_ignores_occlusion(tiny_dataset):
     assert floor["relit_rmse_concave"] > floor["relit_rmse"] > 0  # occlusion matters, most in the creases
     for k in ("relit_rmse", "relit_rmse_concave"):
         assert abs(floor[k] - ignoring[k]) < 1e-6
-    table = format_ablation({"relit_rmse": 0.08, "relit_rmse_concave": 0.06}, {"relit_rmse": 0.1, "relit_rmse_concave": 0.1},
-                            floor)
+    aware = {"relit_rmse": 0.08, "relit_rmse_concave": 0.06}
+    table = format_ablation(aware, {"relit_rmse": 0.1, "relit_rmse_concave": 0.1}, floor)
     assert "| occlusion-aware lower by | 20.0% | 40.0% |" in table

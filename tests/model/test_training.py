@@ -77,7 +77,8 @@ def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
 
 
 def test_the_shipped_recipes_parse():
-    for name in ("small.yaml", "tiny.yaml", "medium.yaml", "medium_unoccluded.yaml", "small_unoccluded.yaml"):
+    for name in ("small.yaml", "tiny.yaml", "small_unoccluded.yaml", "medium.yaml", "medium_unoccluded.yaml",
+                 "medium_ft.yaml", "medium_unoccluded_ft.yaml"):
         load_train_config(REPO / "train" / "configs" / name)
 
 
