@@ -211,7 +211,8 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     ckpt = out / "last.pt"
     if resume:
         state = load_checkpoint(ckpt, map_location=device)
-        if state["train_config"] != cfg.to_dict():
+        # Keys added to TrainConfig later take their defaults in older checkpoints.
+        if {**TrainConfig().to_dict(), **state["train_config"]} != cfg.to_dict():
             raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
         model.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])

@@ -46,6 +46,13 @@ def test_resume_continues_bit_identically(tiny_dataset, tmp_path):
     other = TrainConfig(steps=5, batch_size=2, warmup=1, net=NET)
     with pytest.raises(InputError, match="different training config"):
         train(other, tiny_dataset, tmp_path / "cut", resume=True)
+    # A checkpoint written before a config key existed resumes with that key's default.
+    train(cfg, tiny_dataset, tmp_path / "old", stop_after=1)
+    state = load_checkpoint(tmp_path / "old" / "last.pt")
+    del state["train_config"]["render_target"]
+    torch.save(state, tmp_path / "old" / "last.pt")
+    train(cfg, tiny_dataset, tmp_path / "old", resume=True)
+    assert load_checkpoint(tmp_path / "old" / "last.pt")["step"] == 4
 
 
 def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
