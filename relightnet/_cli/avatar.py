@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
+from ..temporal.smoothers import SMOOTHING
 from .common import LIGHT_HELP, add_command, add_model_args, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.avatar")
@@ -54,7 +55,7 @@ def register(sub) -> None:
                    + "; or a light sequence file with one light per frame")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
                    "(default: full body at the origin)")
-    p.add_argument("--smoothing", default="hermite", choices=("hermite", "poly", "savgol", "none"),
+    p.add_argument("--smoothing", default="hermite", choices=SMOOTHING,
                    help="light smoothing over time (default: robust Hermite with outlier correction)")
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
+from ..temporal.smoothers import SMOOTHING
 from .common import add_command, add_model_args, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.compare")
@@ -46,7 +47,7 @@ def register(sub) -> None:
     p.add_argument("--prt-seed", type=nonneg_int, default=0,
                    help="rotation seed of the 3D path's PRT directions (default: 0)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces of the 3D path (default: 0)")
-    p.add_argument("--smoothing", default="hermite", choices=("hermite", "poly", "savgol", "none"),
+    p.add_argument("--smoothing", default="hermite", choices=SMOOTHING,
                    help="light smoothing over time, with 3-MAD outlier correction and switch detection "
                         "(default: hermite)")
     p.add_argument("--source-light", default="studio", metavar="PRESET",

@@ -26,25 +26,17 @@ def run_train(args: argparse.Namespace) -> int:
 def run_evaluate(args: argparse.Namespace) -> int:
     from ..io import atomic_write
     from ..model.checkpoint import load_model
-    from ..model.evaluate import (
-        baseline_from_train,
-        evaluate,
-        format_ablation,
-        format_table,
-        occlusion_floor,
-        write_report,
-    )
+    from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
     model = load_model(args.checkpoint, device=args.device)
     twin = load_model(args.ablation, device=args.device) if args.ablation else None
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     base = baseline_from_train(args.data) if not args.no_baseline else None
-    result = evaluate(model, args.data, split=args.split, baseline=base, sheet=out / "contact_sheet.png")
+    result = evaluate(model, args.data, split=args.split, baseline=base, sheet=out / "contact_sheet.png", twin=twin,
+                      floor=twin is not None)
     extra = ""
     if twin is not None:
-        result["ablation"] = evaluate(twin, args.data, split=args.split)["model"]
-        result["occlusion_floor"] = occlusion_floor(args.data, args.split)
         extra = ("\n\nOcclusion ablation (KE18): --ablation " + str(args.ablation) + " against this model\n\n"
                  + format_ablation(result["model"], result["ablation"], result["occlusion_floor"]))
     write_report(result, out / "report.md", extra)

@@ -61,11 +61,10 @@ def masked_rel_rmse(pred: torch.Tensor, ref: torch.Tensor, mask: torch.Tensor) -
 
 def comparison_mask(alpha_a: torch.Tensor, alpha_b: torch.Tensor, erode: int = 1) -> torch.Tensor:
     """(H, W) bool: pixels fully covered in both (H, W) coverage maps, eroded by ``erode`` pixels."""
-    m = (alpha_a > 0.999) & (alpha_b > 0.999)
-    if erode > 0:
-        k = 2 * erode + 1
-        m = -torch.nn.functional.max_pool2d(-m[None, None].float(), k, stride=1, padding=erode)[0, 0] > 0.5
-    return m
+    from ..model.losses import erode as erode_mask
+
+    m = ((alpha_a > 0.999) & (alpha_b > 0.999)).float()
+    return erode_mask(m[None, None], erode)[0, 0] > 0.5
 
 
 def front_facing(normals: torch.Tensor, camera: Camera) -> torch.Tensor:

@@ -17,9 +17,7 @@ from ..io import atomic_write, linear_to_srgb, write_image
 from .network import RelightNet, shading_map
 from .training import TrainData, batch_to_input
 
-__all__ = ["evaluate", "baseline_from_train", "format_table", "occlusion_floor", "format_ablation"]
-
-_FIELDS = ("image", "mask", "albedo", "light", "transport", "transport_unoccluded")
+__all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation"]
 
 
 def _rmse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> float:
@@ -55,7 +53,8 @@ def baseline_from_train(data_dir, target: str = "transport") -> dict:
 
 @torch.no_grad()
 def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "transport", batch: int = 4,
-             baseline: dict | None = None, sheet: str | Path | None = None, concave_threshold: float = 0.1) -> dict:
+             baseline: dict | None = None, sheet: str | Path | None = None, concave_threshold: float = 0.1,
+             twin: RelightNet | None = None, floor: bool = False) -> dict:
     """Masked RMSEs, PSNR and SSIM of the model (and of the baseline, when given) on a split.
 
     Args:
@@ -67,15 +66,25 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
         sheet: write a contact sheet PNG (input | albedo | shading | relit, prediction over truth).
         concave_threshold: "concave" pixels are those where occluded and unoccluded DC transport
             differ by more than this fraction; relit RMSE is also reported there.
+        twin: KE18's occlusion ablation: a second network (trained on ``transport_unoccluded``)
+            scored on the same items, as ``"ablation"``.
+        floor: also score what ignoring occlusion costs at best — the true albedo with the true
+            *unoccluded* transport — as ``"occlusion_floor"``.
 
     Returns:
-        ``{"model": {metric: value}, "baseline": {...}}``.
+        ``{"model": {metric: value}, "baseline": {...}, "ablation": {...}, "occlusion_floor": {...}}``
+        (the last three when asked for).
     """
-    fields = _FIELDS
-    items = _items(data_dir, split)
-    n = len(items)
+    from ..data.dataset import SynthDataset
+
+    fields = ("image", "mask", "albedo", "light", "transport", "transport_unoccluded")
+    ds = SynthDataset(data_dir, split, fields=fields, cache_shards=1)
+    n = len(ds)
+    if n < 2:
+        raise InputError(f"{data_dir}: the {split} split needs at least 2 items to evaluate relighting")
+    items = [ds[i] for i in range(n)]
     dev = next(model.parameters()).device
-    sums: dict = {"model": {}, "baseline": {}}
+    sums: dict = {"model": {}, "baseline": {}, "ablation": {}, "occlusion_floor": {}}
     rows = []
 
     def add(who, key, value):
@@ -87,7 +96,8 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
         novel = torch.stack([items[(s + j + 1) % n]["light"] for j in range(len(chunk))]).to(dev)
         M = b["mask"]
         T_gt = b[target]
-        concave = _concave(b, concave_threshold)
+        dc = b["transport"][:, :1], b["transport_unoccluded"][:, :1]
+        concave = M * ((dc[0] - dc[1]).abs() > concave_threshold * dc[1].abs().clamp_min(1e-6)).float()
         gt_s = shading_map(T_gt, b["light"])
         gt_relit = b["albedo"] * shading_map(T_gt, novel)
         pred = model(batch_to_input(b))
@@ -97,6 +107,11 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             cands["baseline"] = (baseline["albedo"].to(dev).view(1, 3, 1, 1).expand(B, 3, H, W),
                                  baseline["transport"].to(dev).view(1, -1, 1, 1).expand(B, -1, H, W),
                                  baseline["light"].to(dev).expand(B, -1, 3))
+        if twin is not None:
+            p = twin(batch_to_input(b))
+            cands["ablation"] = (p.albedo, p.transport, p.light)
+        if floor:
+            cands["occlusion_floor"] = (b["albedo"], b["transport_unoccluded"], b["light"])
         for who, (A, T, L) in cands.items():
             relit = A * shading_map(T, novel)
             S_pred = shading_map(T, L)
@@ -124,46 +139,9 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
     return result
 
 
-def _items(data_dir, split: str) -> list[dict]:
-    from ..data.dataset import SynthDataset
-
-    ds = SynthDataset(data_dir, split, fields=_FIELDS, cache_shards=1)
-    if len(ds) < 2:
-        raise InputError(f"{data_dir}: the {split} split needs at least 2 items to evaluate relighting")
-    return [ds[i] for i in range(len(ds))]
-
-
-def _concave(b: dict, threshold: float) -> torch.Tensor:
-    """(B, 1, H, W) person pixels where occluded and unoccluded DC transport differ by > threshold."""
-    dc, dcu = b["transport"][:, :1], b["transport_unoccluded"][:, :1]
-    return b["mask"] * ((dc - dcu).abs() > threshold * dcu.abs().clamp_min(1e-6)).float()
-
-
-def occlusion_floor(data_dir, split: str = "test", concave_threshold: float = 0.1) -> dict:
-    """What ignoring occlusion costs at best: the true albedo with the true *unoccluded* transport,
-    relit like :func:`evaluate` does, against the true (occluded) relit image.
-
-    Returns:
-        ``{"relit_rmse": float, "relit_rmse_concave": float}`` (means over items).
-    """
-    items = _items(data_dir, split)
-    n = len(items)
-    out: dict = {"relit_rmse": [], "relit_rmse_concave": []}
-    for i, it in enumerate(items):
-        b = {k: v[None] for k, v in it.items() if k in _FIELDS}
-        novel = items[(i + 1) % n]["light"][None]
-        gt = b["albedo"] * shading_map(b["transport"], novel)
-        ignored = b["albedo"] * shading_map(b["transport_unoccluded"], novel)
-        out["relit_rmse"].append(_rmse(ignored, gt, b["mask"]))
-        concave = _concave(b, concave_threshold)
-        if concave.sum() > 0:
-            out["relit_rmse_concave"].append(_rmse(ignored, gt, concave))
-    return {k: float(np.mean(v)) for k, v in out.items()}
-
-
 def format_ablation(aware: dict, ignored: dict, floor: dict) -> str:
     """Markdown table of KE18's occlusion ablation: relit RMSE overall and on concave pixels of the
-    occlusion-aware model, its occlusion-ignoring twin, and the floor of :func:`occlusion_floor`."""
+    occlusion-aware model, its occlusion-ignoring twin, and the floor (``evaluate(..., floor=True)``)."""
     lines = ["| model | relit RMSE | relit RMSE, concave pixels |", "|---|---|---|"]
     for name, r in (("occlusion-aware", aware), ("occlusion ignored (twin)", ignored),
                     ("true albedo + true unoccluded transport", floor)):

@@ -66,6 +66,16 @@ def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
     return out
 
 
+def _crop_resize(image: torch.Tensor, mask: torch.Tensor, size: int, pad: float = 0.05):
+    """KE18 framing of a photo: (3, H, W) float image and (H, W) float mask cropped around the mask
+    and resized to size² → (image (1, 3, s, s), binary mask (1, 1, s, s), :class:`CropBox`)."""
+    box = mask_crop_box(mask, pad)
+    s = (int(size), int(size))
+    x = F.interpolate(_crop(image[None], box), size=s, mode="bilinear", align_corners=False)
+    m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
+    return x, (m > 0.5).float(), box
+
+
 def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None, size: int | None,
                    pad: float) -> tuple[torch.Tensor, CropBox, torch.Tensor]:
     """(normalised network input (1, 4, s, s), crop box, mask (H, W)) of a photo (see predict_image)."""
@@ -90,10 +100,8 @@ def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
             raise InputError("image: the mask head found no person in the image")
     check_shape(mask, [h, w], name="mask")
     mask = mask.to(dev).float()
-    box = mask_crop_box(mask, pad)
-    x = F.interpolate(_crop(image[None], box), size=(size, size), mode="bilinear", align_corners=False)
-    mk = F.interpolate(_crop(mask[None, None], box), size=(size, size), mode="bilinear", align_corners=False)
-    return normalize_input(x, (mk > 0.5).float()), box, mask
+    x, mk, box = _crop_resize(image, mask, size, pad)
+    return normalize_input(x, mk), box, mask
 
 
 @torch.no_grad()

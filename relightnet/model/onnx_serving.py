@@ -122,20 +122,13 @@ class OnnxRelighter:
             (the :meth:`step` outputs at ``size``, the :class:`~relightnet.model.inference.CropBox`
             to paste them back with).
         """
-        import torch.nn.functional as F
-
-        from .inference import _crop, mask_crop_box
+        from .inference import _crop_resize
 
         check_shape(image, [3, "H", "W"], name="image")
         check_shape(mask, image.shape[1:], name="mask")
-        if image.dtype == torch.uint8:
-            image = image.float() / 255
-        mask = mask.float()
-        box = mask_crop_box(mask)
-        s = (int(size), int(size))
-        x = F.interpolate(_crop(image[None].float(), box), size=s, mode="bilinear", align_corners=False)
-        m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
-        return self.step(x.contiguous().numpy(), (m > 0.5).float().numpy()), box
+        image = image.float() / 255 if image.dtype == torch.uint8 else image.float()
+        x, m, box = _crop_resize(image, mask.float(), size)
+        return self.step(x.contiguous().numpy(), m.numpy()), box
 
 
 def calibration_set(n: int = 16, size: int = 128, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -36,16 +36,13 @@ from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
-from ..temporal.smoothers import METHODS
+from ..temporal.smoothers import SMOOTHING
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, motion_params
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "smooth_video_lights", "avatar"]
-
-#: Light smoothing over time: offline methods of relightnet.temporal, or none.
-SMOOTHING = (*METHODS, "none")
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,7 +292,7 @@ def avatar(
 
     params = frame_slice(params, 0, n, n_motion)  # a motion longer than the video is cut
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
-                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=not bounces)
+                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True)
     written = 0
     with VideoWriter(out, fps=info.fps, srgb=False) as writer:
         pairs = zip(backgrounds, frames, strict=False)

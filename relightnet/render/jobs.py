@@ -162,7 +162,7 @@ def render_body_frames(
             None poses all frames at once.
         visible_only: compute the transport only at the vertices of faces the camera sees
             (the image is the same; ``BodyFrame.transport`` is 0 elsewhere). About twice as
-            fast for a body; not with ``bounces``.
+            fast for a body; ignored with ``bounces`` (which need every vertex).
 
     Yields:
         :class:`BodyFrame` per frame.

@@ -28,11 +28,14 @@ import torch
 from ..checks import InputError
 
 __all__ = [
-    "METHODS", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
+    "METHODS", "SMOOTHING", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
 ]
 
 #: Offline methods: keys of :func:`smoothing_matrix`.
 METHODS = ("hermite", "poly", "savgol")
+#: What the video jobs (avatar, compare) accept for their light smoothing: a method, or none.
+SMOOTHING = (*METHODS, "none")
+
 _F64 = torch.float64
 
 

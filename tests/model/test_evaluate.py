@@ -1,7 +1,7 @@
 import torch
 
 from relightnet.model import NetConfig, RelightNet, shading_map
-from relightnet.model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, occlusion_floor
+from relightnet.model.evaluate import baseline_from_train, evaluate, format_ablation, format_table
 
 
 class Oracle(torch.nn.Module):
@@ -54,8 +54,8 @@ def test_occlusion_floor_is_the_oracle_that_ignores_occlusion(tiny_dataset):
     ds = SynthDataset(tiny_dataset, "test", fields=("albedo", "transport_unoccluded", "light"))
     items = {k: torch.stack([ds[i][k] for i in range(len(ds))]) for k in ("albedo", "transport_unoccluded", "light")}
     items["transport"] = items.pop("transport_unoccluded")
-    ignoring = evaluate(Oracle(items), tiny_dataset, "test", batch=8)["model"]
-    floor = occlusion_floor(tiny_dataset, "test")
+    r = evaluate(Oracle(items), tiny_dataset, "test", batch=8, floor=True)
+    ignoring, floor = r["model"], r["occlusion_floor"]
     assert floor["relit_rmse_concave"] > floor["relit_rmse"] > 0  # occlusion matters, most in the creases
     for k in ("relit_rmse", "relit_rmse_concave"):
         assert abs(floor[k] - ignoring[k]) < 1e-6
