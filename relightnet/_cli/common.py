@@ -79,6 +79,33 @@ def load_single_light(arg: str, lmax: int | None = None):
     return light
 
 
+def read_photo(image: str, mask: str | None):
+    """A photo and its person mask for the photo commands: ((3, H, W) sRGB in [0, 1], (H, W) or None).
+
+    The mask is ``--mask`` (its alpha where it has transparency, else white = person); without
+    one, a cut-out photo's own alpha; else None (the model's mask head finds the person).
+    """
+    import logging
+
+    from ..io import read_alpha, read_image, read_mask
+
+    img = read_image(image).permute(2, 0, 1)
+    if mask:
+        m = read_mask(mask)
+        what = f"--mask {mask}"
+    else:
+        a = read_alpha(image)
+        if a is None:
+            return img, None
+        m, what = (a > 0.5).float(), f"{image}: alpha channel"
+        logging.getLogger("relightnet").info("no --mask: using the alpha channel of %s as the person's mask", image)
+    if tuple(m.shape) != tuple(img.shape[1:]):
+        raise ValueError(f"{what}: size {tuple(m.shape)} differs from the image's {tuple(img.shape[1:])}")
+    if not m.any():
+        raise ValueError(f"{what}: empty mask (no person pixel): expected the person's mask")
+    return img, m
+
+
 def add_checkpoint_args(p: argparse.ArgumentParser, device: bool = True) -> None:
     """--checkpoint (and --device): which CNN, on which torch device."""
     p.add_argument("--checkpoint", help="model checkpoint (default: the shipped model)")

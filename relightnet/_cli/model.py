@@ -7,7 +7,7 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command
+from .common import add_checkpoint_args, add_command, read_photo
 
 logger = logging.getLogger("relightnet.model")
 
@@ -47,19 +47,11 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 
 def run_estimate_light(args: argparse.Namespace) -> int:
-    from ..io import read_image
     from ..model.checkpoint import load_model
     from ..model.inference import estimate_light
     from ..sh import save_light
 
-    image = read_image(args.image).permute(2, 0, 1)
-    mask = None
-    if args.mask:
-        m = read_image(args.mask)
-        mask = (m.mean(-1) > 0.5).float()
-        if mask.shape != image.shape[1:]:
-            raise ValueError(f"--mask {args.mask}: size {tuple(mask.shape)} differs from the image's "
-                             f"{tuple(image.shape[1:])}")
+    image, mask = read_photo(args.image, args.mask)
     model = load_model(args.checkpoint, device=args.device)
     if mask is None:
         logger.info("no --mask: using the model's mask head to find the person")
@@ -101,7 +93,8 @@ def register(sub) -> None:
                     "  relightnet estimate-light person.jpg --mask person_mask.png --out light.npz\n"
                     "  relightnet estimate-light person.png --out light_ke18.npy    # Kanamori-Endo format (BGR)\n")
     p.add_argument("image", help="image file (PNG/JPEG)")
-    p.add_argument("--mask", help="mask of the person (white = person); default: the model's mask head")
+    p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "
+                   "if it has one, else the model's mask head")
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
     p.add_argument("--size", type=int, default=None,
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")

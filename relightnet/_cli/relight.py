@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_checkpoint_args, add_command, add_model_args, load_single_light
+from .common import LIGHT_HELP, add_checkpoint_args, add_command, add_model_args, load_single_light, read_photo
 
 logger = logging.getLogger("relightnet.relight")
 
@@ -15,20 +15,12 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from ..io import atomic_write, read_image, write_image
+    from ..io import atomic_write, write_image
     from ..model.checkpoint import load_model
     from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
-    image = read_image(args.image).permute(2, 0, 1)
-    mask = None
-    if args.mask:
-        mask = (read_image(args.mask).mean(-1) > 0.5).float()
-        if tuple(mask.shape) != tuple(image.shape[1:]):
-            raise ValueError(f"--mask {args.mask}: size {tuple(mask.shape)} differs from the image's "
-                             f"{tuple(image.shape[1:])}")
-        if not mask.any():
-            raise ValueError(f"--mask {args.mask}: empty mask (no white pixel): expected the person's mask")
+    image, mask = read_photo(args.image, args.mask)
     light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute)
@@ -68,7 +60,8 @@ def register(sub) -> None:
                     "  relightnet relight-image person.jpg --light light.npy --out relit.png --save-maps maps/\n"
                     "  relightnet relight-image person.png --mask m.png --light studio.exr --absolute --out r.png\n")
     p.add_argument("image", help="photo (PNG/JPEG)")
-    p.add_argument("--mask", help="person mask (white = person); default: the model's mask head")
+    p.add_argument("--mask", help="person mask (white = person, or its alpha); default: the photo's alpha if it "
+                   "has one, else the model's mask head")
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="relit image (PNG)")
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")

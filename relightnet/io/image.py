@@ -3,7 +3,9 @@
 Images are channels-last ``(H, W, C)`` tensors. Linear float images are
 gamma-encoded (exact piecewise sRGB) only when written to 8-bit files.
 Encoding and decoding use PyAV (FFmpeg's ``png`` encoder and its decoders), so
-the project needs no other image library; files are written atomically.
+the project needs no other image library; files are written atomically. Decoded
+images are turned upright as their metadata says (a phone photo's EXIF
+orientation, a phone video's rotation), so every reader returns what a viewer shows.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import torch
 from ..checks import InputError, ShapeError, check_finite
 from .atomic import atomic_write
 
-__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image"]
+__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_alpha", "read_mask"]
 
 
 def linear_to_srgb(x: torch.Tensor) -> torch.Tensor:
@@ -149,10 +151,37 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True) -> Path:
     return path
 
 
-def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
-    """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats.
+def upright(arr: np.ndarray, rotation: float) -> np.ndarray:
+    """Turn a decoded frame the way its display matrix says (EXIF orientation, video rotation).
 
-    Gray images are repeated to three channels; alpha is dropped.
+    Args:
+        arr: (H, W, ...) decoded pixels.
+        rotation: the frame's counter-clockwise display rotation in degrees (PyAV's
+            ``VideoFrame.rotation``, FFmpeg's ``av_display_rotation_get``); multiples of 90.
+
+    Returns:
+        (H, W, ...) or (W, H, ...) pixels as they are meant to be seen.
+    """
+    k = round(float(rotation) / 90) % 4
+    return np.ascontiguousarray(np.rot90(arr, k)) if k else arr
+
+
+def _read_rgba(path: str | os.PathLike) -> torch.Tensor:
+    """(H, W, 4) float32 RGBA in [0, 1], upright; alpha is 1 for images without one."""
+    frame = _decode_frame(path, "an image")
+    fmt = frame.format
+    if _is_float_format(fmt.name):
+        raise InputError(f"{path}: is a floating-point (HDR) image; read it with read_envmap")
+    deep = max(c.bits for c in fmt.components) > 8
+    arr = upright(frame.to_ndarray(format="rgba64le" if deep else "rgba"), frame.rotation)
+    return torch.from_numpy(arr.astype(np.float32) / (65535.0 if deep else 255.0))
+
+
+def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
+    """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats, upright.
+
+    Gray images are repeated to three channels; alpha is dropped (see :func:`read_alpha`).
+    EXIF orientation (rotations) is applied.
 
     Args:
         path: image file.
@@ -165,11 +194,27 @@ def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
         InputError: missing, unreadable, or a floating-point (HDR) image
             (read those with :func:`relightnet.io.read_envmap`).
     """
-    frame = _decode_frame(path, "an image")
-    fmt = frame.format
-    if _is_float_format(fmt.name):
-        raise InputError(f"{path}: is a floating-point (HDR) image; read it with read_envmap")
-    deep = max(c.bits for c in fmt.components) > 8
-    arr = frame.to_ndarray(format="rgb48le" if deep else "rgb24")
-    x = torch.from_numpy(arr.astype(np.float32) / (65535.0 if deep else 255.0))
+    x = _read_rgba(path)[..., :3].contiguous()
     return srgb_to_linear(x) if linear else x
+
+
+def read_alpha(path: str | os.PathLike) -> torch.Tensor | None:
+    """The alpha channel of an image with transparency (e.g. a cut-out person), else None.
+
+    Returns:
+        (H, W) float32 in [0, 1], or None when the image has no alpha or is fully opaque.
+    """
+    a = _read_rgba(path)[..., 3]
+    return a if bool((a < 1).any()) else None
+
+
+def read_mask(path: str | os.PathLike) -> torch.Tensor:
+    """A person mask from an image file: its alpha where it has transparency, else white = person.
+
+    Returns:
+        (H, W) float32 in {0, 1} (alpha or gray level above 0.5).
+    """
+    rgba = _read_rgba(path)
+    a = rgba[..., 3]
+    level = a if bool((a < 1).any()) else rgba[..., :3].mean(-1)
+    return (level > 0.5).float()

@@ -20,7 +20,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from .atomic import atomic_write
-from .image import to_uint8
+from .image import to_uint8, upright
 
 logger = logging.getLogger(__name__)
 
@@ -55,15 +55,25 @@ def _open(path):
 
 
 def video_info(path) -> VideoInfo:
-    """Frame count, frame rate and size of a video file."""
+    """Frame count, frame rate and size (H, W) of a video file, as displayed (rotation applied)."""
+    import av
+
     with contextlib.closing(_open(path)) as c:
         s = c.streams.video[0]
         fps = float(s.average_rate or s.guessed_rate or 30)
-        return VideoInfo(int(s.frames or 0), fps, (s.codec_context.height, s.codec_context.width))
+        size = (s.codec_context.height, s.codec_context.width)
+        try:  # a phone video stored sideways says so in its display matrix, seen on the frames
+            first = next(iter(c.decode(video=0)), None)
+        except av.error.FFmpegError as e:
+            raise InputError(f"{path}: corrupt video ({e})") from None
+        if first is not None and round(float(first.rotation) / 90) % 2:
+            size = size[::-1]
+        return VideoInfo(int(s.frames or 0), fps, size)
 
 
 def read_video(path) -> Iterator[np.ndarray]:
-    """Yield the frames of a video one at a time (memory does not grow with length).
+    """Yield the frames of a video one at a time (memory does not grow with length), upright
+    (a display rotation stored by the camera is applied).
 
     Yields:
         (H, W, 3) uint8 RGB frames.
@@ -73,7 +83,7 @@ def read_video(path) -> Iterator[np.ndarray]:
     with contextlib.closing(_open(path)) as c:
         try:
             for frame in c.decode(video=0):
-                yield frame.to_ndarray(format="rgb24")
+                yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
         except av.error.FFmpegError as e:
             raise InputError(f"{path}: corrupt video ({e})") from None
 
@@ -163,18 +173,21 @@ class VideoWriter:
 def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
     """Per-frame person masks from a folder of images (sorted by name) or from a mask video.
 
+    An image's alpha is the mask where it has transparency; otherwise white = person (see
+    :func:`~relightnet.io.read_mask`).
+
     Returns:
         (count, iterator of (H, W) float32 masks in {0, 1}); count is 0 when a mask video's
         container does not store its frame count.
     """
-    from .image import read_image
+    from .image import read_mask
 
     p = Path(masks)
     if p.is_dir():
         files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
         if not files:
             raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
-        return len(files), ((read_image(f).mean(-1) > 0.5).float() for f in files)
+        return len(files), (read_mask(f) for f in files)
     return video_info(p).n_frames, (
         (torch.from_numpy(f).float().mean(-1) > 127).float() for f in read_video(p)
     )
