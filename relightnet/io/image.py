@@ -166,6 +166,45 @@ def upright(arr: np.ndarray, rotation: float) -> np.ndarray:
     return np.ascontiguousarray(np.rot90(arr, k)) if k else arr
 
 
+def _exif_orientation(path: str | os.PathLike) -> int | None:
+    """The EXIF orientation tag (1..8) of a JPEG file, or None (not a JPEG, no EXIF, no tag).
+
+    FFmpeg reports an EXIF orientation as a display rotation only, which loses the mirrored
+    orientations (2, 4, 5, 7); the tag itself keeps them.
+    """
+    import struct
+
+    with open(path, "rb") as f:
+        head = f.read(1 << 17)
+    if head[:2] != b"\xff\xd8":
+        return None
+    i = 2
+    while i + 4 <= len(head) and head[i] == 0xFF:
+        marker, size = head[i + 1], struct.unpack(">H", head[i + 2:i + 4])[0]
+        if marker == 0xDA:  # start of scan: no EXIF block before the pixels
+            return None
+        seg = head[i + 4:i + 2 + size]
+        if marker == 0xE1 and seg[:6] == b"Exif\x00\x00" and seg[6:8] in (b"II", b"MM"):
+            tiff, end = seg[6:], "<" if seg[6:8] == b"II" else ">"
+            try:
+                ifd = struct.unpack(end + "I", tiff[4:8])[0]
+                for k in range(struct.unpack(end + "H", tiff[ifd:ifd + 2])[0]):
+                    tag, _, _, value = struct.unpack(end + "HHIH", tiff[ifd + 2 + 12 * k:ifd + 12 + 12 * k])
+                    if tag == 0x0112:
+                        return value if 1 <= value <= 8 else None
+            except struct.error:  # a truncated EXIF block: ignore it as viewers do
+                return None
+        i += 2 + size
+    return None
+
+
+def _orient(arr: np.ndarray, orientation: int) -> np.ndarray:
+    """Apply an EXIF orientation (1..8) to (H, W, C) pixels."""
+    turn = {1: arr, 2: arr[:, ::-1], 3: arr[::-1, ::-1], 4: arr[::-1], 5: arr.swapaxes(0, 1),
+            6: np.rot90(arr, -1), 7: arr[::-1, ::-1].swapaxes(0, 1), 8: np.rot90(arr, 1)}[orientation]
+    return np.ascontiguousarray(turn)
+
+
 def _read_rgba(path: str | os.PathLike) -> torch.Tensor:
     """(H, W, 4) float32 RGBA in [0, 1], upright; alpha is 1 for images without one."""
     frame = _decode_frame(path, "an image")
@@ -173,7 +212,9 @@ def _read_rgba(path: str | os.PathLike) -> torch.Tensor:
     if _is_float_format(fmt.name):
         raise InputError(f"{path}: is a floating-point (HDR) image; read it with read_envmap")
     deep = max(c.bits for c in fmt.components) > 8
-    arr = upright(frame.to_ndarray(format="rgba64le" if deep else "rgba"), frame.rotation)
+    arr = frame.to_ndarray(format="rgba64le" if deep else "rgba")
+    exif = _exif_orientation(path)
+    arr = _orient(arr, exif) if exif is not None else upright(arr, frame.rotation)
     return torch.from_numpy(arr.astype(np.float32) / (65535.0 if deep else 255.0))
 
 
@@ -181,7 +222,7 @@ def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
     """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats, upright.
 
     Gray images are repeated to three channels; alpha is dropped (see :func:`read_alpha`).
-    EXIF orientation (rotations) is applied.
+    The EXIF orientation (rotations and mirrors) is applied.
 
     Args:
         path: image file.

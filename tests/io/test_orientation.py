@@ -31,17 +31,19 @@ def _jpeg_with_orientation(path, img, orientation):
     return path
 
 
-@pytest.mark.parametrize(("orientation", "white"), [(1, "left"), (6, "top"), (3, "right"), (8, "bottom")])
-def test_exif_orientation_turns_photos_upright(tmp_path, orientation, white):
-    img = read_image(_jpeg_with_orientation(tmp_path / "p.jpg", _half_white(), orientation))
-    turned = orientation in (6, 8)
-    assert img.shape == ((60, 40, 3) if turned else (40, 60, 3))
+@pytest.mark.parametrize(("orientation", "corner"), [(1, "tl"), (2, "tr"), (3, "br"), (4, "bl"),
+                                                   (5, "tl"), (6, "tr"), (7, "br"), (8, "bl")])
+def test_exif_orientation_turns_photos_upright(tmp_path, orientation, corner):
+    img = np.zeros((40, 60, 3), np.uint8)
+    img[:20, :30] = 255  # the top-left quarter is white
+    img = read_image(_jpeg_with_orientation(tmp_path / "p.jpg", img, orientation))
+    assert img.shape == ((60, 40, 3) if orientation >= 5 else (40, 60, 3))
     g = img.mean(-1)
     h, w = g.shape
-    halves = {"left": g[:, : w // 2], "right": g[:, w // 2:], "top": g[: h // 2], "bottom": g[h // 2:]}
-    assert halves[white].mean() > 0.9
-    other = {"left": "right", "right": "left", "top": "bottom", "bottom": "top"}[white]
-    assert halves[other].mean() < 0.1
+    quarters = {"tl": g[: h // 2, : w // 2], "tr": g[: h // 2, w // 2:], "bl": g[h // 2:, : w // 2],
+                "br": g[h // 2:, w // 2:]}
+    for name, q in quarters.items():
+        assert (q.mean() > 0.9) if name == corner else (q.mean() < 0.1), (name, float(q.mean()))
 
 
 def _png_rgba(path, rgba):
