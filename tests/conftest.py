@@ -56,3 +56,35 @@ def masked_clip():
         return video, masks
 
     return make
+
+
+@pytest.fixture
+def clip_with_sound():
+    """``clip_with_sound(path, acodec="aac", fmt="mp4")`` → a 2 s, 10 fps, 64x48 clip with a 440 Hz
+    stereo tone."""
+    import av
+    import numpy as np
+
+    def make(path, acodec="aac", fmt="mp4", seconds=2.0, fps=10, rate=22050):
+        """A 64x48 clip at ``fps`` with a 440 Hz stereo tone encoded with ``acodec``."""
+        c = av.open(str(path), "w", format=fmt)
+        v = c.add_stream("libx264", rate=fps)
+        v.width, v.height, v.pix_fmt = 64, 48, "yuv420p"
+        a = c.add_stream(acodec, rate=rate, layout="stereo")
+        for i in range(int(seconds * fps)):
+            for p in v.encode(av.VideoFrame.from_ndarray(np.full((48, 64, 3), 10 * i, np.uint8), format="rgb24")):
+                c.mux(p)
+        tone = (0.3 * np.sin(2 * np.pi * 440 * np.arange(int(seconds * rate)) / rate)).astype(np.float32)
+        resampler = av.AudioResampler(format=a.codec_context.format.name, layout="stereo", rate=rate)
+        for k in range(0, len(tone), 1024):
+            frame = av.AudioFrame.from_ndarray(np.stack([tone[k:k + 1024]] * 2), format="fltp", layout="stereo")
+            frame.sample_rate, frame.pts = rate, k
+            for f in resampler.resample(frame):
+                for p in a.encode(f):
+                    c.mux(p)
+        for p in [*a.encode(None), *v.encode(None)]:
+            c.mux(p)
+        c.close()
+        return path
+
+    return make

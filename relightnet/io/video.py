@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import logging
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -91,20 +92,30 @@ def read_video(path) -> Iterator[np.ndarray]:
 class VideoWriter:
     """Streaming, atomic video writer: the file appears only when ``close()`` succeeds.
 
+    ``audio_from``: a media file whose audio track goes under the video (see
+    :func:`relightnet.io.audio.add_audio`); ignored when it has none.
+
     Example:
         >>> with VideoWriter("out.mp4", fps=30) as w:  # doctest: +SKIP
         ...     for frame in frames:
         ...         w.write(frame)  # (H, W, 3) uint8, or float linear RGB
     """
 
-    def __init__(self, path, fps: float = 30.0, srgb: bool = True) -> None:
+    def __init__(self, path, fps: float = 30.0, srgb: bool = True, audio_from=None) -> None:
+        from .audio import has_audio
+
         self.path = Path(path)
         if self.path.suffix.lower() not in _CODECS:
             raise InputError(f"{self.path}: expected a video suffix in {sorted(_CODECS)}")
         if not fps > 0:
             raise InputError(f"fps: expected a positive frame rate, got {fps}")
         self.fps, self.srgb = fps, srgb
-        self._ctx = atomic_write(self.path)
+        # With a sound track to carry over, the video goes to a hidden file first and
+        # close() muxes the two into ``path``.
+        self._audio_from = audio_from if audio_from is not None and has_audio(audio_from) else None
+        self._video_path = (self.path.with_name(f".{self.path.stem}.{os.getpid()}.video{self.path.suffix}")
+                            if self._audio_from is not None else self.path)
+        self._ctx = atomic_write(self._video_path)
         self._file = self._ctx.__enter__()
         self._container = None
         self._stream = None
@@ -142,7 +153,9 @@ class VideoWriter:
         self.n_frames += 1
 
     def close(self) -> Path:
-        """Flush the encoder and move the file into place."""
+        """Flush the encoder and move the file into place (with the sound of ``audio_from``)."""
+        import av
+
         if self._stream is None:
             self.abort()
             raise InputError(f"{self.path}: no frames were written")
@@ -150,6 +163,17 @@ class VideoWriter:
             self._container.mux(packet)
         self._container.close()
         self._ctx.__exit__(None, None, None)
+        if self._audio_from is not None:
+            from .audio import add_audio
+
+            try:
+                add_audio(self._video_path, self._audio_from, self.path, duration=self.n_frames / self.fps)
+            except (InputError, av.FFmpegError, ValueError) as e:
+                logger.warning("%s: written without sound: the audio of %s could not be added (%s)",
+                               self.path, self._audio_from, e)
+                self._video_path.replace(self.path)
+            finally:
+                self._video_path.unlink(missing_ok=True)
         return self.path
 
     def abort(self) -> None:

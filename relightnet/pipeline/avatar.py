@@ -204,7 +204,7 @@ def avatar(
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
     Args:
-        target: target video file (its frame rate and size are kept).
+        target: target video file (its frame rate, size and sound are kept).
         out: output video (.mp4/.mkv), written atomically; side files next to it (module docstring).
         model: a :class:`~relightnet.model.RelightNet` or a predictor; needed unless ``light`` is given.
         motion: a motion preset (``walk``, ``turn``, ``idle``, ``arm_raise``; made as long as the
@@ -294,7 +294,7 @@ def avatar(
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
                                 occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True)
     written = 0
-    with VideoWriter(out, fps=info.fps, srgb=False) as writer:
+    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=target) as writer:
         pairs = zip(backgrounds, frames, strict=False)
         for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
             if written == n:

@@ -36,7 +36,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
 
     Args:
         model: the CNN: a :class:`RelightNet` or a predictor (:mod:`relightnet.pipeline.backends`).
-        video: input video file.
+        video: input video file (its sound, if any, is carried over to ``out``).
         masks: folder of per-frame mask images (sorted) or a mask video, one per frame.
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
@@ -55,7 +55,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     light = resize_sh(light, predict.lmax)
     src = None
     n = 0
-    with VideoWriter(out, fps=info.fps, srgb=False) as writer:
+    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks, desc="relight-video", unit="frame", disable=not progress):
             pred = predict(img, mask)
             est = pred.light[0]

@@ -26,3 +26,20 @@ def test_relight_video_bad_inputs_leave_nothing(tmp_path, capsys, masked_clip):
     assert main(["relight-video", str(tmp_path / "nope.mp4"), "--masks", str(masks), "--light", "studio",
                  "--out", str(out)]) == 1
     assert "not found" in capsys.readouterr().err
+
+
+def test_relight_video_keeps_the_sound(tmp_path, masked_clip, clip_with_sound):
+    import av
+
+    from relightnet.io.audio import add_audio
+
+    video, masks = masked_clip(tmp_path)
+    tone = clip_with_sound(tmp_path / "tone.mp4")
+    with_sound = add_audio(video, tone, tmp_path / "clip_sound.mkv", duration=3 / 12)
+    out = tmp_path / "relit.mp4"
+    assert main(["-q", "relight-video", str(with_sound), "--masks", str(masks), "--light", "sunset",
+                 "--out", str(out)]) == 0
+    assert len(list(read_video(out))) == 3
+    with av.open(str(out)) as c:
+        assert c.streams.audio and c.streams.audio[0].codec_context.name == "aac"
+        assert sum(f.samples for f in c.decode(audio=0)) > 0

@@ -1,0 +1,121 @@
+"""Sound for the videos relightnet writes: the source video's audio track carried over.
+
+The relit or composited video is encoded first (video only); :func:`add_audio` then muxes
+the source's audio under it, stream-copied where the container accepts the codec (AAC, MP3,
+Opus, ... in ``.mp4``; anything in ``.mkv``) and re-encoded to AAC otherwise (e.g. PCM into
+``.mp4``). Audio past the end of the video is dropped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import heapq
+import logging
+from pathlib import Path
+
+from ..checks import InputError
+from .atomic import atomic_write
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["has_audio", "add_audio"]
+
+#: Audio codecs the mp4 muxer takes as they are.
+_MP4_AUDIO = {"aac", "mp3", "alac", "opus", "ac3", "eac3", "flac"}
+
+
+def has_audio(path) -> bool:
+    """True when the media file has an audio stream (False for unreadable files)."""
+    import av
+
+    try:
+        with av.open(str(path)) as c:
+            return bool(c.streams.audio)
+    except (av.FFmpegError, OSError):
+        return False
+
+
+def _packets(container, stream, end: float | None):
+    """(time, n, packet) of one stream in decode order, up to ``end`` seconds."""
+    for n, p in enumerate(container.demux(stream)):
+        if p.dts is None:  # the demuxer's flush packet
+            continue
+        t = float(p.dts * p.time_base)
+        if end is not None and t > end:
+            break
+        yield t, n, p
+
+
+def _aac_packets(src, a_in, out_stream, end: float):
+    """Decode the source audio and encode it to AAC for ``out_stream``, up to ``end`` seconds."""
+    import av
+
+    resampler = av.AudioResampler(format="fltp", layout=out_stream.layout, rate=out_stream.rate)
+    n = 0
+    for frame in src.decode(a_in):
+        if frame.time is not None and frame.time > end:
+            break
+        for f in resampler.resample(frame):
+            for p in out_stream.encode(f):
+                n += 1
+                yield float(p.dts * p.time_base) if p.dts is not None else 0.0, n, p
+    for f in resampler.resample(None):
+        for p in out_stream.encode(f):
+            n += 1
+            yield float(p.dts * p.time_base) if p.dts is not None else end, n, p
+    for p in out_stream.encode(None):
+        n += 1
+        yield float(p.dts * p.time_base) if p.dts is not None else end, n, p
+
+
+def add_audio(video, audio_from, out, duration: float | None = None) -> Path:
+    """Write ``out``: the video stream of ``video`` (copied) with the audio of ``audio_from``.
+
+    Args:
+        video: a video file (its first video stream is copied bit for bit).
+        audio_from: media file whose first audio stream is added (trimmed to the video's length).
+        out: destination (``.mp4`` or ``.mkv``), written atomically.
+        duration: the video's length in seconds (default: as its container says; audio is not
+            trimmed when it says nothing).
+
+    Returns:
+        The path written.
+
+    Raises:
+        InputError: ``audio_from`` has no audio stream or cannot be read.
+    """
+    import av
+
+    out = Path(out)
+    fmt = "mp4" if out.suffix.lower() == ".mp4" else "matroska"
+    with contextlib.ExitStack() as stack:
+        try:
+            vin = stack.enter_context(av.open(str(video)))
+            src = stack.enter_context(av.open(str(audio_from)))
+        except (av.FFmpegError, OSError) as e:
+            raise InputError(f"{audio_from}: cannot read its audio ({e})") from None
+        if not src.streams.audio:
+            raise InputError(f"{audio_from}: no audio stream")
+        v_in, a_in = vin.streams.video[0], src.streams.audio[0]
+        end = duration if duration is not None else (
+            float(v_in.duration * v_in.time_base) if v_in.duration else None)
+        f = stack.enter_context(atomic_write(out))
+        dst = stack.enter_context(av.open(f, mode="w", format=fmt))
+        v_out = dst.add_stream_from_template(v_in)
+        copy = fmt == "matroska" or a_in.codec_context.name in _MP4_AUDIO
+        if copy:
+            a_out = dst.add_stream_from_template(a_in)
+            audio = _packets(src, a_in, end)
+        else:
+            stereo = a_in.codec_context.layout.nb_channels != 1
+            a_out = dst.add_stream("aac", rate=a_in.codec_context.sample_rate or 48000,
+                                   layout="stereo" if stereo else "mono")
+            audio = _aac_packets(src, a_in, a_out, end if end is not None else float("inf"))
+            logger.info("%s: audio %s re-encoded to AAC for %s", audio_from, a_in.codec_context.name, out.name)
+        streams = {0: v_out, 1: a_out}
+        video_packets = (((t, 0, n), p) for t, n, p in _packets(vin, v_in, None))
+        audio_packets = (((t, 1, n), p) for t, n, p in audio)
+        for (_, k, _), p in heapq.merge(video_packets, audio_packets, key=lambda kp: kp[0]):
+            p.stream = streams[k]
+            dst.mux(p)
+    return out
