@@ -7,12 +7,12 @@ from .compare import ClipOutputs, CompareResult, clip_metrics, compare, compare_
 from .demo import run_demo
 from .relight_image import RelitImage, match_exposure, relight_image
 from .relight_video import relight_video
-from .scene import avatar_albedo, load_body, load_camera, motion_params
+from .scene import avatar_albedo, load_body, load_camera, motion_params, open_motion
 
 __all__ = [
     "SMOOTHING", "AvatarResult", "avatar", "estimate_video_lights", "smooth_video_lights",
     "BACKENDS", "OnnxPredictor", "TorchPredictor", "as_predictor", "make_predictor",
     "ClipOutputs", "CompareResult", "clip_metrics", "compare", "compare_clip", "source_light",
     "run_demo", "RelitImage", "match_exposure", "relight_image", "relight_video",
-    "avatar_albedo", "load_body", "load_camera", "motion_params",
+    "avatar_albedo", "load_body", "load_camera", "motion_params", "open_motion",
 ]

@@ -38,7 +38,7 @@ from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.smoothers import SMOOTHING
 from .backends import as_predictor
-from .scene import avatar_albedo, load_body, motion_params
+from .scene import avatar_albedo, load_body, open_motion
 
 logger = logging.getLogger(__name__)
 
@@ -242,7 +242,7 @@ def avatar(
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
-    early = motion_params(motion, body_model, 1, info.fps)
+    motion_frames = open_motion(motion, body_model, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     reused = False
@@ -264,10 +264,7 @@ def avatar(
         fp = ""
         n = _count_frames(target)
         smoothed = _given_light(light, n)
-    from ..body import MOTION_KINDS
-
-    preset = isinstance(motion, str) and motion in MOTION_KINDS  # made as long as the video
-    params, n_motion = motion_params(motion, body_model, n, info.fps) if preset else early
+    params, n_motion = motion_frames(n)  # a preset is made as long as the video
     if n_motion < n:
         logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
     n = min(n, n_motion)

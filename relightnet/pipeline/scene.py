@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import torch
@@ -16,7 +16,7 @@ import torch
 from ..checks import InputError, ShapeError
 from ..raster import Camera, look_at, perspective_camera
 
-__all__ = ["load_body", "motion_params", "avatar_albedo", "load_camera"]
+__all__ = ["load_body", "open_motion", "motion_params", "avatar_albedo", "load_camera"]
 
 _MOTION_FILES = (".npz", ".pkl")
 
@@ -35,37 +35,49 @@ def load_body(spec="anny"):
     raise InputError(f"body: expected 'anny' or 'smpl:PATH', got {spec!r}")
 
 
-def motion_params(motion, body, n_frames: int, fps: float = 30.0, seed: int = 0) -> tuple[dict, int]:
-    """Per-frame body parameters and their frame count.
+def open_motion(motion, body, fps: float = 30.0, seed: int = 0) -> Callable[[int], tuple[dict, int]]:
+    """Check a motion against its body now (reading a motion file once); frames come later.
 
     Args:
-        motion: a preset name (:data:`relightnet.body.MOTION_KINDS`, made ``n_frames`` long at
-            ``fps``; Anny only), an SMPL-style motion file (.npz/.pkl: poses (T, 72), betas (10,),
-            trans (T, 3); SMPL bodies only), or a mapping of parameters with a frame axis of T.
+        motion: a preset name (:data:`relightnet.body.MOTION_KINDS`; Anny only), an SMPL-style
+            motion file (.npz/.pkl: poses (T, 72), betas (10,), trans (T, 3); SMPL bodies only),
+            or a mapping of parameters with a frame axis of T.
         body: the body model they drive.
-        n_frames: frames wanted (presets are made this long).
+        fps: frame rate presets are made at.
 
     Returns:
-        (params, T).
+        ``frames(n_frames) -> (params, T)``: a preset is made ``n_frames`` long; a file or a
+        mapping has its own T.
     """
     from ..body import MOTION_KINDS, AnnyBody, load_motion, make_motion
 
     is_anny = isinstance(body, AnnyBody)
     if isinstance(motion, Mapping):
-        return dict(motion), _mapping_frames(motion)
+        fixed = dict(motion), _mapping_frames(motion)
+        return lambda n_frames: fixed
     motion = str(motion)
     if Path(motion).suffix.lower() in _MOTION_FILES:
         if is_anny:
             raise InputError(f"--motion {motion}: SMPL-style motion files drive an SMPL body (--body smpl:MODEL.npz); "
                              f"for Anny use a preset: {', '.join(MOTION_KINDS)}")
         m = load_motion(motion)
-        return m.body_params(), m.n_frames
+        fixed = m.body_params(), m.n_frames
+        return lambda n_frames: fixed
     if motion not in MOTION_KINDS:
         raise InputError(f"--motion {motion}: expected a preset ({', '.join(MOTION_KINDS)}) or a motion file "
                          f"({'/'.join(_MOTION_FILES)})")
     if not is_anny:
         raise InputError(f"--motion {motion}: presets drive Anny; an SMPL body needs a motion file")
-    return make_motion(motion, n_frames, fps=fps, seed=seed), n_frames
+    return lambda n_frames: (make_motion(motion, n_frames, fps=fps, seed=seed), n_frames)
+
+
+def motion_params(motion, body, n_frames: int, fps: float = 30.0, seed: int = 0) -> tuple[dict, int]:
+    """Per-frame body parameters and their frame count: :func:`open_motion` made ``n_frames`` long.
+
+    Returns:
+        (params, T).
+    """
+    return open_motion(motion, body, fps, seed)(n_frames)
 
 
 def _mapping_frames(params: Mapping) -> int:
