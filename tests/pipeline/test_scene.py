@@ -6,7 +6,7 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.io import write_image
-from relightnet.pipeline.scene import avatar_albedo, load_body, load_camera, motion_params
+from relightnet.pipeline.scene import avatar_albedo, load_body, load_camera, motion_params, open_motion
 from relightnet.render import TexturedAlbedo
 
 
@@ -28,6 +28,18 @@ def test_motion_params(anny_body, tmp_path):
     np.savez(tmp_path / "m.npz", poses=np.zeros((3, 72), np.float32))
     with pytest.raises(InputError, match="SMPL body"):
         motion_params(str(tmp_path / "m.npz"), anny_body, 5)
+
+
+def test_open_motion_checks_now_and_makes_frames_later(anny_body):
+    with pytest.raises(InputError, match="moonwalk"):
+        open_motion("moonwalk", anny_body)  # before any frame is asked for
+    frames = open_motion("arm_raise", anny_body, fps=24)
+    for n in (3, 11):  # a preset is made as long as asked, the same as motion_params
+        params, t = frames(n)
+        ref, _ = motion_params("arm_raise", anny_body, n, fps=24)
+        assert t == n and all(torch.equal(params["pose"][k], ref["pose"][k]) for k in ref["pose"])
+    given = {"pose": {"root": torch.zeros(5, 3)}, "trans": torch.zeros(5, 3)}
+    assert open_motion(given, anny_body)(99)[1] == 5  # a mapping keeps its own length
 
 
 def test_avatar_albedo(anny_body, tmp_path):
