@@ -23,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
     image, mask = read_photo(args.image, args.mask)
     light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
-    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute)
+    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
     write_image(args.out, res.image, srgb=False)
@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
         d = Path(args.save_maps)
         d.mkdir(parents=True, exist_ok=True)
         p = res.prediction
-        write_image(d / "albedo.png", p.albedo[0].permute(1, 2, 0))
+        write_image(d / "albedo.png", res.albedo.permute(1, 2, 0))
         s = p.shading()[0].permute(1, 2, 0) * p.mask[0].permute(1, 2, 0)
         write_image(d / "shading.png", s / s.amax().clamp_min(1e-8))
         write_image(d / "mask.png", p.mask[0].permute(1, 2, 0).expand(-1, -1, 3), srgb=False)
@@ -50,7 +50,7 @@ def run_video(args: argparse.Namespace) -> int:
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
     relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
-                  smoothing=args.smoothing, progress=not args.quiet)
+                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo)
     return 0
 
 
@@ -67,6 +67,9 @@ def register(sub) -> None:
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
     p.add_argument("--absolute", action="store_true",
                    help="use the light at its own scale (default: keep the photo's exposure)")
+    p.add_argument("--cnn-albedo", action="store_true",
+                   help="relight the CNN's albedo (at its working size) instead of the photo divided by the "
+                        "predicted shading (the default, which keeps the photo's detail)")
     add_checkpoint_args(p)
     p.set_defaults(func=run)
 
@@ -80,5 +83,7 @@ def register(sub) -> None:
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
     p.add_argument("--smoothing", type=float, default=0.3,
                    help="EMA weight of the newest frame in the source-light estimate (1 = no smoothing)")
+    p.add_argument("--cnn-albedo", action="store_true",
+                   help="relight the CNN's albedo instead of each frame divided by the predicted shading")
     add_model_args(p)
     p.set_defaults(func=run_video)

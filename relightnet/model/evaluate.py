@@ -2,6 +2,9 @@
 
 Relighting is measured under a *novel* light: test item i is relit with the ground-truth
 light of item (i + 1) mod n, so a prediction cannot score by echoing its own input.
+``relit_*`` relight the CNN's albedo (KE18); ``relit_rmse_photo_albedo`` relights the photo
+divided by the predicted shading (:func:`~relightnet.model.photo_albedo`), as
+``relight-image`` does by default.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb, write_image
-from .network import RelightNet, shading_map
+from .network import Prediction, RelightNet, photo_albedo, shading_map
 from .training import TrainData, batch_to_input
 
 __all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation"]
@@ -114,6 +117,8 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             cands["occlusion_floor"] = (b["albedo"], b["transport_unoccluded"], b["light"])
         for who, (A, T, L) in cands.items():
             relit = A * shading_map(T, novel)
+            # As relight-image does by default: the photo divided by the predicted shading is relit.
+            relit_photo = photo_albedo(b["image"], Prediction(A, T, L, M)) * shading_map(T, novel)
             S_pred = shading_map(T, L)
             for j in range(len(chunk)):
                 sl = slice(j, j + 1)
@@ -122,6 +127,7 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
                 add(who, "light_rmse", float(((L[sl] - b["light"][sl]) ** 2).mean()) ** 0.5)
                 add(who, "shading_rmse", _rmse(S_pred[sl], gt_s[sl], M[sl]))
                 add(who, "relit_rmse", _rmse(relit[sl], gt_relit[sl], M[sl]))
+                add(who, "relit_rmse_photo_albedo", _rmse(relit_photo[sl], gt_relit[sl], M[sl]))
                 if concave[sl].sum() > 0:
                     add(who, "relit_rmse_concave", _rmse(relit[sl], gt_relit[sl], concave[sl]))
                 psnr, ssim = _psnr_ssim(relit[j].cpu(), gt_relit[j].cpu(), M[j].cpu())
@@ -165,7 +171,7 @@ def _contact_sheet(rows: list, path) -> None:
 def format_table(result: dict) -> str:
     """Markdown table of :func:`evaluate`'s result (model vs baseline, lower RMSE is better)."""
     keys = ["transport_rmse", "albedo_rmse", "light_rmse", "shading_rmse", "relit_rmse", "relit_rmse_concave",
-            "relit_psnr", "relit_ssim"]
+            "relit_psnr", "relit_ssim", "relit_rmse_photo_albedo"]
     who = [w for w in ("model", "baseline") if w in result]
     lines = ["| metric | " + " | ".join(who) + " |", "|---|" + "---|" * len(who)]
     for k in keys:

@@ -25,7 +25,8 @@ from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError, check_shape
 
-__all__ = ["NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "pad_to_multiple", "shading_map"]
+__all__ = ["NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "photo_albedo", "pad_to_multiple",
+           "shading_map"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +99,34 @@ def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
         (B, 3, H, W).
     """
     return pred.albedo * shading_map(pred.transport, new_light)
+
+
+def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05) -> torch.Tensor:
+    """Albedo at the photo's own resolution: the photo divided by the predicted shading T · L̂.
+
+    The CNN works at a small size (128² for the shipped model), so its albedo pasted back on a
+    large photo is blurred; dividing the photo by the (smooth) predicted shading keeps every
+    detail of the photo in the albedo — relighting then changes the shading only, as with ratio
+    images (Wen, Liu & Huang, "Face relighting with radiance environment maps", CVPR 2003).
+    Where the shading is darker than ``floor`` × its mean over the person (deep shadow, or
+    negative SH ringing) there is nothing to divide by and the CNN's albedo is blended in.
+
+    Args:
+        image: (B, 3, H, W) the photo, *linear* RGB, at the prediction's size.
+        pred: :class:`Prediction` at the same size (its mask, when present, sets the mean).
+        floor: fraction of the mean shading below which the CNN's albedo takes over.
+
+    Returns:
+        (B, 3, H, W) albedo (non-negative; above 1 where the photo has highlights).
+    """
+    dims = check_shape(image, ["B", 3, "H", "W"], name="image")
+    check_shape(pred.albedo, [dims["B"], 3, dims["H"], dims["W"]], name="prediction albedo")
+    shading = pred.shading()
+    m = pred.mask if pred.mask is not None else torch.ones_like(shading[:, :1])
+    mean = (shading * m).sum((2, 3), keepdim=True) / m.sum((2, 3), keepdim=True).clamp_min(1e-8)
+    tau = (floor * mean).clamp_min(1e-6)
+    w = (shading / tau).clamp(0, 1)
+    return (w * image.to(shading).clamp_min(0) / torch.maximum(shading, tau) + (1 - w) * pred.albedo).clamp_min(0)
 
 
 def normalize_input(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:

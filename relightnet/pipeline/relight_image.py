@@ -1,7 +1,10 @@
 """Job 1 of the pipeline: relight a photo of a person with any light (2D path).
 
-predict (albedo, transport, light) at the model's working size around the person, relight
-with the new light, paste back at the original resolution over the untouched background.
+predict (albedo, transport, light) at the model's working size around the person, paste
+back at the original resolution, relight with the new light over the untouched background.
+The albedo that is relit is the photo divided by the predicted shading
+(:func:`~relightnet.model.photo_albedo`), so the photo keeps its detail; ``detail=False``
+relights the CNN's own albedo (blurred to the working size on a large photo).
 """
 
 from __future__ import annotations
@@ -11,9 +14,9 @@ from dataclasses import dataclass
 import torch
 
 from ..checks import check_finite, check_shape, sh_order_from_count
-from ..io.image import linear_to_srgb
+from ..io.image import linear_to_srgb, srgb_to_linear
 from ..model.inference import predict_image
-from ..model.network import Prediction, RelightNet, shading_map
+from ..model.network import Prediction, RelightNet, photo_albedo, shading_map
 from ..sh.io import resize_sh
 
 __all__ = ["RelitImage", "relight_image", "match_exposure"]
@@ -22,12 +25,14 @@ __all__ = ["RelitImage", "relight_image", "match_exposure"]
 @dataclass(frozen=True, eq=False)
 class RelitImage:
     """Result of :func:`relight_image`: ``image`` (H, W, 3) sRGB in [0, 1], ``prediction``,
-    the ``light`` actually used (K, 3) and whether the mask came from the model."""
+    the ``light`` actually used (K, 3), whether the mask came from the model, and the
+    ``albedo`` that was relit (3, H, W) linear."""
 
     image: torch.Tensor
     prediction: Prediction
     light: torch.Tensor
     mask_predicted: bool
+    albedo: torch.Tensor
 
 
 def match_exposure(new_light: torch.Tensor, pred: Prediction) -> torch.Tensor:
@@ -49,7 +54,7 @@ def match_exposure(new_light: torch.Tensor, pred: Prediction) -> torch.Tensor:
 
 @torch.no_grad()
 def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
-                  keep_exposure: bool = True, size: int | None = None) -> RelitImage:
+                  keep_exposure: bool = True, size: int | None = None, detail: bool = True) -> RelitImage:
     """Relight a photo.
 
     Args:
@@ -59,6 +64,8 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
         mask: (H, W) person mask; None uses the model's mask head.
         keep_exposure: scale the light so the person keeps the photo's exposure.
         size: working size (default: the model's training size).
+        detail: relight the photo's own albedo (photo / predicted shading, full detail); False
+            relights the CNN's albedo.
 
     Returns:
         :class:`RelitImage`; outside the mask the photo is unchanged.
@@ -71,8 +78,10 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
         image = image.float() / 255
     pred, _ = predict_image(model, image, mask, size=size)
     new = match_exposure(light, pred) if keep_exposure else light
-    relit = (pred.albedo * shading_map(pred.transport, new.to(pred.albedo)))[0]
+    image = image.to(pred.albedo)
+    albedo = photo_albedo(srgb_to_linear(image)[None], pred) if detail else pred.albedo
+    relit = (albedo * shading_map(pred.transport, new.to(pred.albedo)))[0]
     m = pred.mask[0]
-    out = linear_to_srgb(relit.clamp(0, 1)) * m + image.to(relit) * (1 - m)  # background kept as shot
-    return RelitImage(out.permute(1, 2, 0).cpu(), pred, new, mask is None)
+    out = linear_to_srgb(relit.clamp(0, 1)) * m + image * (1 - m)  # background kept as shot
+    return RelitImage(out.permute(1, 2, 0).cpu(), pred, new, mask is None, albedo[0].cpu())
 

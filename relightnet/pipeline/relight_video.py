@@ -4,6 +4,8 @@ Frames and masks are read one at a time and the output is written as it goes, so
 does not depend on the video's length. The light estimated from each source frame is
 smoothed causally (EMA) before it sets the exposure reference, so the relit person does
 not flicker with the per-frame estimate; the new light can turn about the up axis over time.
+As for photos, the albedo relit is the frame divided by the predicted shading, so the
+frames keep their detail.
 """
 
 from __future__ import annotations
@@ -17,8 +19,8 @@ import torch
 
 from ..checks import InputError
 from ..io import VideoWriter, frames_with_masks
-from ..io.image import linear_to_srgb
-from ..model.network import shading_map
+from ..io.image import linear_to_srgb, srgb_to_linear
+from ..model.network import photo_albedo, shading_map
 from ..sh import rotate_sh_up
 from ..sh.io import resize_sh
 from .backends import as_predictor
@@ -31,7 +33,7 @@ __all__ = ["relight_video"]
 
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
-                  smoothing: float = 0.3, progress: bool = True) -> int:
+                  smoothing: float = 0.3, progress: bool = True, detail: bool = True) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -42,6 +44,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
         smoothing: EMA weight of the newest frame in the source-light estimate (1 = none).
+        detail: relight each frame's own albedo (frame / predicted shading under the smoothed
+            source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
 
     Returns:
         The number of frames written.
@@ -62,8 +66,10 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
             # Exposure reference: the smoothed source light, not this frame's raw estimate.
-            new = match_exposure(new, dataclasses.replace(pred, light=src[None]))
-            relit = (pred.albedo * shading_map(pred.transport, new))[0]
+            before = dataclasses.replace(pred, light=src[None])
+            new = match_exposure(new, before)
+            albedo = photo_albedo(srgb_to_linear(img.to(pred.albedo))[None], before) if detail else pred.albedo
+            relit = (albedo * shading_map(pred.transport, new))[0]
             m = pred.mask[0]
             writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
             n += 1

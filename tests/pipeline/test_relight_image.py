@@ -57,3 +57,19 @@ def test_cli_relight_image_and_errors(photo, tmp_path, capsys):
                  str(bad), "--out", str(tmp_path / "x.png")]) == 1
     assert "NaN" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
+    img, mask = photo
+    model = load_model()
+    est = relight_image(model, img, preset_light("studio"), mask).prediction.light[0]
+    orig = img.permute(1, 2, 0).float() / 255
+    inside = mask > 0.5
+    # The photo's own albedo (photo / predicted shading) under the light it was seen in is the
+    # photo, detail included; the CNN's albedo is not.
+    same = relight_image(model, img, est, mask, keep_exposure=False)
+    err = (same.image[inside] - orig[inside]).abs()
+    assert float(err.mean()) < 1e-4
+    cnn = relight_image(model, img, est, mask, keep_exposure=False, detail=False)
+    assert float((cnn.image[inside] - orig[inside]).abs().mean()) > 0.01
+    assert same.albedo.shape == (3, 120, 150)
