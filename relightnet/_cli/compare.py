@@ -17,7 +17,7 @@ def run(args: argparse.Namespace) -> int:
     res = compare(args.data, args.out, checkpoint=args.checkpoint, split=args.split, clips=args.clips,
                   n_dirs=args.n_dirs, smoothing=args.smoothing, device=args.device, progress=not args.quiet,
                   prt_seed=args.prt_seed, source=args.source_light, size=args.size, bounces=args.bounces,
-                  backend=args.backend)
+                  backend=args.backend, cnn_albedo=args.cnn_albedo)
     s = res.metrics["summary"]["rows"]
     best = {(r["path"], r["light"]): r["rmse"] for r in s}
     logger.info("smoothed light: RMSE 2D %.4f, 3D %.4f (true light: 2D %.4f, 3D %.4f)", best[("2d", "smoothed")],
@@ -53,5 +53,8 @@ def register(sub) -> None:
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")
     p.add_argument("--size", type=pos_int, help="CNN working size, a multiple of 16 (default: its training size)")
+    p.add_argument("--cnn-albedo", action="store_true",
+                   help="the 2D path relights the CNN's albedo (default: the photo divided by the predicted "
+                        "shading, as relight-video does)")
     add_model_args(p)
     p.set_defaults(func=run)

@@ -15,7 +15,9 @@ outside ``mask``. Per clip:
 2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
    photo" under a fixed *source* light: I_src,t = albedo_t ⊙ (transport_t · L_src), exact from
    the clip's stored albedo and transport, L_src the ``studio`` preset scaled to level 1
-   (:func:`source_light`), 8-bit sRGB. It predicts Â_t and T̂_t; output = Â_t ⊙ (T̂_t · L).
+   (:func:`source_light`), 8-bit sRGB. It predicts Â_t, T̂_t and L̂_src; output = Â_t ⊙ (T̂_t · L)
+   with Â_t the photo's albedo I_src,t / (T̂_t · L̂_src) as ``relight-video`` relights
+   (:func:`~relightnet.model.photo_albedo`), or the CNN's own albedo (``cnn_albedo``).
 3. **3D path.** The clip's own mesh (:func:`relightnet.data.render_sample.clip_geometry`:
    the same body, motion, camera and albedo texture), per-vertex transport by our PRT
    (:func:`relightnet.prt.vertex_transport`, occlusion, ``n_dirs`` directions rotated by
@@ -47,7 +49,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError, sh_order_from_count
-from ..io.image import linear_to_srgb, to_uint8
+from ..io.image import linear_to_srgb, srgb_to_linear, to_uint8
+from ..model.network import photo_albedo
 from ..sh.io import resize_sh
 from ..temporal import jitter, light_distance, light_error
 from . import metrics as M
@@ -120,7 +123,7 @@ def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) 
 
 
 def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "hermite",
-                 source: str = "studio", bounces: int = 0, tick=None) -> ClipOutputs:
+                 source: str = "studio", bounces: int = 0, tick=None, cnn_albedo: bool = False) -> ClipOutputs:
     """Run both paths on one clip (module docstring).
 
     Args:
@@ -133,6 +136,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         smoothing: one of :data:`SMOOTHING`.
         source: preset name of the 2D path's source light.
         tick: optional callable, called after every frame.
+        cnn_albedo: the 2D path relights the CNN's albedo, not the photo's (module docstring).
 
     Returns:
         :class:`ClipOutputs`.
@@ -158,7 +162,8 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         raw.append(resize_sh(predict.light(comp[t], mask[t]).float().cpu(), lmax))
         img = to_uint8(src[t]).permute(2, 0, 1)
         p2 = predict(img, mask[t])
-        a2.append(p2.albedo[0].permute(1, 2, 0).float().cpu())
+        a = p2.albedo if cnn_albedo else photo_albedo(srgb_to_linear(img.float() / 255)[None].to(p2.albedo), p2)
+        a2.append(a[0].permute(1, 2, 0).float().cpu())
         t2.append(p2.transport[0].permute(1, 2, 0).float().cpu())
         c1 = time.perf_counter()
         Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=lmax,
@@ -295,7 +300,7 @@ def _one_thread_geometry(cfg, split, index, T, assets):
 def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int | None = None, n_dirs: int = 64,
             smoothing: str = "hermite", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
             source: str = "studio", size: int | None = None, bounces: int = 0, backend: str = "torch",
-            body=None) -> CompareResult:
+            body=None, cnn_albedo: bool = False) -> CompareResult:
     """Compare the 2D and 3D paths on the clips of a sequence dataset and write a report (module docstring).
 
     Args:
@@ -315,6 +320,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         size: the CNN's working size, a multiple of 16 (default: its training size).
         backend: where the CNN runs, ``"torch"`` or ``"onnx"`` (CPU).
         body: an :class:`~relightnet.body.AnnyBody` or ``SynthAssets`` to reuse (default: a new one).
+        cnn_albedo: the 2D path relights the CNN's albedo (default: the photo's, as relight-video).
 
     Returns:
         :class:`CompareResult`.
@@ -370,7 +376,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                 index = int(meta["seed"]["index"])
                 geo = _one_thread_geometry(cfg, split, index, T, assets)
                 out = compare_clip(predictor, clip, geo, n_dirs, prt_seed, smoothing, source, bounces,
-                                   tick=lambda: bar.update(1))
+                                   tick=lambda: bar.update(1), cnn_albedo=cnn_albedo)
                 for k in secs:
                     secs[k] += out.seconds[k]
                 mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
@@ -394,6 +400,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                          "smoothing": smoothing, "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"},
                          "n_dirs": n_dirs,
                          "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
+                         "albedo_2d": "cnn" if cnn_albedo else "photo",
                          "dataset": cfg.to_dict()},
             "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,
                        **{f"{k}_s": v for k, v in secs.items()}},

@@ -266,8 +266,9 @@ def format_report(m: dict) -> str:
         f"{', '.join(str(c['index']) for c in clips)}.",
         f"- Checkpoint: `{s['checkpoint']}` (CNN working size {s['size']}, device {s['device']}).",
         f"- Light: CNN estimate per target frame; smoothing {smooth}.",
-        f"- 2D path: CNN albedo and transport from the subject under the `{s['source_light']}` preset "
-        "(level 1), shaded with each light.",
+        f"- 2D path: CNN transport from the subject under the `{s['source_light']}` preset (level 1), "
+        + ("the CNN's albedo" if s.get("albedo_2d") == "cnn" else "the photo's albedo (photo / predicted shading)")
+        + ", shaded with each light.",
         f"- 3D path: the clip's mesh, PRT with occlusion, {s['n_dirs']} directions (seed {s['prt_seed']}), "
         f"{s['bounces']} bounce(s); the true albedo texture.",
         f"- Run: {tm['frames']} frames in {tm['total_s']:.1f} s ({tm['frames_per_s']:.2f} frames/s): CNN "

@@ -111,6 +111,11 @@ def test_compare_clip_outputs(clip0, model):
     # The Hermite smoother returns a sequence of the same shape.
     sm = compare_clip(model, clip, geo, n_dirs=16, smoothing="hermite")
     assert sm.lights["smoothed"].shape == (T, 9, 3) and torch.isfinite(sm.lights["smoothed"]).all()
+    # The 2D path relights the photo's albedo by default; cnn_albedo relights the CNN's. The 3D path
+    # does not change.
+    cnn = compare_clip(model, clip, geo, n_dirs=16, smoothing="none", cnn_albedo=True)
+    torch.testing.assert_close(cnn.renders[("3d", "true")], out.renders[("3d", "true")])
+    assert not torch.allclose(cnn.renders[("2d", "true")], out.renders[("2d", "true")])
 
 
 def test_clip_metrics_are_exact_for_a_perfect_output(clip0):
@@ -149,6 +154,7 @@ def test_command_writes_the_report(seq_dir, tmp_path):
     assert "| 3D | smoothed L̃_t |" in text and "| 2D | true L_t |" in text and "relightnet_small.pt" in text
     m = json.loads((out / "metrics.json").read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
     assert len(m["summary"]["rows"]) == 6 and m["settings"]["clips"] == [0, 1] and len(m["clips"]) == 2
+    assert m["settings"]["albedo_2d"] == "photo" and "the photo's albedo" in text
     for c in m["clips"]:
         assert len(c["rows"]) == 6 and all(len(r["per_frame"]["ssim"]) == T for r in c["rows"])
         assert c["mask_iou_3d"] == 1.0 and len(c["light"]["raw"]["per_frame"]) == T
