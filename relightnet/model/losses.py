@@ -8,6 +8,8 @@ masked by the person mask M and averaged over masked pixels:
 - rendering: |Â ⊙ S(T̂, L̂) − I|, |Â ⊙ S(T, L) − I|, |A ⊙ S(T̂, L̂) − I|. KE18's released
   code computed one rendering term with the shading of a different term (a copy-paste of
   the wrong shading variable); here every term uses its own shading;
+- relighting (off by default): |Â ⊙ S(T̂, L′) − A ⊙ S(T, L′)| with L′ the light of another
+  item of the batch (rolled by one), what the model is used for: a new light;
 - total variation of T̂ and Â inside the eroded mask;
 - mask: binary cross-entropy of the mask head against M (when present).
 """
@@ -35,6 +37,7 @@ class LossWeights:
     render_al: float = 1.0
     render_a: float = 1.0
     render_tl: float = 1.0
+    relit_novel: float = 0.0
     tv: float = 0.05
     mask: float = 0.5
 
@@ -91,6 +94,9 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
         "render_a": masked_l1(Ah * S, I, M),
         "render_tl": masked_l1(A * S_tl, I, M),
     }
+    if weights.relit_novel:
+        L_new = L.roll(1, 0)  # another item's light (its own when the batch has one item)
+        terms["relit_novel"] = masked_l1(Ah * shading_map(Th, L_new), A * shading_map(T, L_new), M)
     inner = erode(M)
     terms["tv"] = total_variation(Th, inner) + total_variation(Ah, inner)
     if pred.mask is not None:

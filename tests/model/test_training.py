@@ -85,7 +85,7 @@ def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
 
 def test_the_shipped_recipes_parse():
     for name in ("small.yaml", "tiny.yaml", "small_unoccluded.yaml", "medium.yaml", "medium_unoccluded.yaml",
-                 "medium_ft.yaml", "medium_unoccluded_ft.yaml"):
+                 "medium_ft.yaml", "medium_unoccluded_ft.yaml", "medium_relit.yaml", "medium_unoccluded_relit.yaml"):
         load_train_config(REPO / "train" / "configs" / name)
 
 
@@ -130,6 +130,26 @@ def test_render_target_model_aims_the_rendering_terms_at_the_learned_transport()
         assert photo[k] > 0.05 and float(model[k]) < 1e-6
     for k in ("transport", "albedo", "light", "shading_tl"):
         assert float(model[k]) == float(photo[k]) == 0.0
+
+
+def test_novel_light_relighting_term():
+    from relightnet.model.losses import LossWeights
+
+    g = torch.Generator().manual_seed(1)
+    B, K, H, W = 3, 9, 8, 8
+    A, T = torch.rand(B, 3, H, W, generator=g), torch.rand(B, K, H, W, generator=g)
+    L = torch.rand(B, K, 3, generator=g)
+    batch = {"image": A * shading_map(T, L), "mask": torch.ones(B, 1, H, W), "albedo": A, "transport": T, "light": L}
+    on = LossWeights(relit_novel=1.0)
+    assert "relit_novel" not in relight_losses(Prediction(A, T, L), batch)  # off by default
+    assert float(relight_losses(Prediction(A, T, L), batch, on)["relit_novel"]) < 1e-7  # the truth relights exactly
+    # Albedo that absorbed the shading of its own light reproduces the photo but not another light.
+    baked = A * shading_map(T, L) / shading_map(T, L).mean((2, 3), keepdim=True)
+    flat = torch.ones_like(T) * T.mean((2, 3), keepdim=True)
+    terms = relight_losses(Prediction(baked, flat, L), batch, on)
+    expected = (baked * shading_map(flat, L.roll(1, 0)) - A * shading_map(T, L.roll(1, 0))).abs().mean()
+    torch.testing.assert_close(terms["relit_novel"], expected)
+    assert float(terms["relit_novel"]) > 0.01
 
 
 def test_training_with_render_target_model_runs_on_unoccluded_transport(tiny_dataset, tmp_path):
