@@ -32,7 +32,7 @@ def test_predict_pastes_back_at_original_resolution(net):
     torch.testing.assert_close(estimate_light(net, img, m, size=32), pred.light[0])
 
 
-def test_without_mask_uses_the_mask_head_or_fails_clearly(net):
+def test_without_mask_uses_the_mask_head_or_fails_clearly(net, caplog):
     img = torch.rand(3, 40, 64)
     head = net.albedo_dec.head
     with torch.no_grad():
@@ -40,6 +40,8 @@ def test_without_mask_uses_the_mask_head_or_fails_clearly(net):
         head.bias[3] = 50.0  # the mask head says "person" everywhere
         pred, box = predict_image(net, img, None, size=32)
         assert pred.mask.shape == (1, 1, 40, 64) and pred.mask.min() > 0.99 and box.size >= 64
+        # ... which looks like the background: the whole frame and its top edge.
+        assert "may have taken the background for the person" in caplog.text
         head.bias[3] = -50.0  # ... or nowhere: a clear error
         with pytest.raises(InputError, match="found no person"):
             predict_image(net, img, None, size=32)
