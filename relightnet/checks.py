@@ -29,6 +29,7 @@ __all__ = [
     "check_dtype",
     "check_sh_count",
     "sh_order_from_count",
+    "check_device",
 ]
 
 
@@ -144,3 +145,20 @@ def check_sh_count(x: torch.Tensor, name: str = "sh", axis: int = -2) -> int:
     if x.dim() == 0 or x.dim() < abs(axis):
         raise ShapeError(f"{name}: expected an SH axis at position {axis}, got shape {tuple(x.shape)}")
     return sh_order_from_count(x.shape[axis], name)
+
+
+def check_device(device, name: str = "--device") -> torch.device:
+    """A torch device that exists here: ``cpu``, or ``cuda[:N]`` on a machine with CUDA.
+
+    Raises:
+        InputError: an unknown device name, or CUDA asked for where there is none.
+    """
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError):
+        raise InputError(f"{name} {device}: expected cpu or cuda[:N]") from None
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise InputError(f"{name} {device}: CUDA is not available on this machine (use cpu)")
+    if dev.type not in ("cpu", "cuda"):
+        raise InputError(f"{name} {device}: expected cpu or cuda[:N]")
+    return dev

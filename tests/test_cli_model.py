@@ -2,6 +2,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 from relightnet.cli import main
@@ -55,4 +56,17 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
     assert main(["estimate-light", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"),
                  "--checkpoint", str(tmp_path / "junk.pt"), "--out", str(tmp_path / "l.npz")]) == 1
     assert "differs from the image" in capsys.readouterr().err
+    assert not (tmp_path / "l.npz").exists()
+    write_image(tmp_path / "m.png", np.full((8, 8, 3), 255, np.uint8))
+    assert main(["estimate-light", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"), "--device", "tpu",
+                 "--out", str(tmp_path / "l.npz")]) == 1
+    assert "device tpu: expected cpu or cuda" in capsys.readouterr().err
+    if not torch.cuda.is_available():  # the message a GPU-less machine gives, not "unreadable checkpoint"
+        assert main(["estimate-light", str(tmp_path / "p.png"), "--device", "cuda",
+                     "--out", str(tmp_path / "l.npz")]) == 1
+        assert "CUDA is not available" in capsys.readouterr().err
+    for size in ("0", "-16", "100000"):
+        with pytest.raises(SystemExit):
+            main(["estimate-light", str(tmp_path / "p.png"), "--size", size, "--out", str(tmp_path / "l.npz")])
+        assert "multiple of 16 from 16 to 2048" in capsys.readouterr().err
     assert not (tmp_path / "l.npz").exists()

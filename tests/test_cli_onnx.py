@@ -1,6 +1,7 @@
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from relightnet.cli import main
 from relightnet.model.onnx_serving import OnnxRelighter
@@ -9,7 +10,7 @@ from relightnet.sh import load_light
 REPO = Path(__file__).resolve().parents[1]
 
 
-def test_export_and_run_a_video(tiny_dataset, tmp_path, masked_clip):
+def test_export_and_run_a_video(tiny_dataset, tmp_path, masked_clip, capsys):
     run = tmp_path / "run"
     assert main(["-q", "train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tiny_dataset),
                  "--out", str(run)]) == 0
@@ -34,4 +35,14 @@ def test_export_and_run_a_video(tiny_dataset, tmp_path, masked_clip):
     (masks / "003.png").unlink()
     assert main(["onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
                  "--out-dir", str(tmp_path / "out2")]) == 1
-    assert not (tmp_path / "out2" / "lights_raw.npz").exists()
+    assert not (tmp_path / "out2").exists()  # no empty folder left either
+    # --out-dir naming a file; a bad --size; an export to a non-.onnx name.
+    assert main(["onnx-run", str(onnx), "--video", str(video), "--masks", str(masks),
+                 "--out-dir", str(onnx)]) == 1
+    assert "--out-dir is a file" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["onnx-run", str(onnx), "--video", str(video), "--masks", str(masks), "--out-dir",
+              str(tmp_path / "o3"), "--size", "0"])
+    assert "multiple of 16 from 16 to 2048" in capsys.readouterr().err
+    assert main(["export", "--checkpoint", str(run / "last.pt"), "--out", str(tmp_path / "m.txt")]) == 1
+    assert "expected an .onnx output file" in capsys.readouterr().err and not (tmp_path / "m.txt").exists()

@@ -51,6 +51,28 @@ def pos_int(text: str) -> int:
     return v
 
 
+def work_size(text: str) -> int:
+    """The CNN's working size: a positive multiple of 16, at most 2048."""
+    try:
+        v = int(text)
+    except ValueError:
+        v = -1
+    if v < 16 or v % 16 or v > 2048:
+        raise argparse.ArgumentTypeError(f"expected a multiple of 16 from 16 to 2048, got {text!r}")
+    return v
+
+
+def image_size(text: str) -> int:
+    """A picture's size in pixels: 1 to 4096."""
+    try:
+        v = int(text)
+    except ValueError:
+        v = -1
+    if not 1 <= v <= 4096:
+        raise argparse.ArgumentTypeError(f"expected a size from 1 to 4096 pixels, got {text!r}")
+    return v
+
+
 def key_value_arg(keys, cast, key_name: str = "NAME", value_name: str = "a number"):
     """An argparse type parsing ``KEY=VALUE`` with KEY in ``keys`` (a sequence or a callable giving one)."""
 

@@ -6,7 +6,7 @@ import argparse
 import logging
 
 from ..temporal.smoothers import SMOOTHING
-from .common import add_command, add_model_args, nonneg_int, pos_int
+from .common import add_command, add_model_args, nonneg_int, pos_int, work_size
 
 logger = logging.getLogger("relightnet.compare")
 
@@ -52,7 +52,7 @@ def register(sub) -> None:
                         "(default: hermite)")
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")
-    p.add_argument("--size", type=pos_int, help="CNN working size, a multiple of 16 (default: its training size)")
+    p.add_argument("--size", type=work_size, help="CNN working size, a multiple of 16 (default: its training size)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="the 2D path relights the CNN's albedo (default: the photo divided by the predicted "
                         "shading, as relight-video does)")

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, nonneg_int, pos_int
+from .common import LIGHT_HELP, add_command, exposure_arg, image_size, nonneg_int
 
 logger = logging.getLogger("relightnet.light")
 
@@ -98,7 +98,7 @@ def register(sub) -> None:
         "--exposure", type=exposure_arg, default="auto",
         help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: auto)",
     )
-    show.add_argument("--size", type=pos_int, default=256, help="sphere size in pixels (default: 256)")
+    show.add_argument("--size", type=image_size, default=256, help="sphere size in pixels (default: 256)")
     show.set_defaults(func=run_show)
 
     conv = add_command(

@@ -7,7 +7,7 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command, read_photo
+from .common import add_checkpoint_args, add_command, read_photo, work_size
 
 logger = logging.getLogger("relightnet.model")
 
@@ -96,7 +96,7 @@ def register(sub) -> None:
     p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "
                    "if it has one, else the model's mask head")
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
-    p.add_argument("--size", type=int, default=None,
+    p.add_argument("--size", type=work_size, default=None,
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")
     add_checkpoint_args(p)
     p.set_defaults(func=run_estimate_light)

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command
+from .common import add_checkpoint_args, add_command, work_size
 
 logger = logging.getLogger("relightnet.onnx")
 
@@ -60,5 +60,5 @@ def register(sub) -> None:
     p.add_argument("--video", required=True, help="input video (mp4, mkv, ...)")
     p.add_argument("--masks", required=True, help="folder of per-frame mask images (sorted) or a mask video")
     p.add_argument("--out-dir", required=True, help="output folder: lights_raw.npz, lights_smoothed.npz, albedo.mp4")
-    p.add_argument("--size", type=int, default=None, help="working size (default: the model's training size)")
+    p.add_argument("--size", type=work_size, default=None, help="working size (default: the model's training size)")
     p.set_defaults(func=run_onnx)

@@ -137,7 +137,8 @@ class VideoWriter:
             if codec == "libx264" and (h % 2 or w % 2):
                 # 4:2:0 chroma needs even sizes; 4:4:4 keeps odd-sized frames whole (fewer players read it).
                 pix_fmt = "yuv444p"
-                logger.warning("%s: odd frame size %dx%d: mp4 written as yuv444p (4:4:4)", self.path, h, w)
+                logger.warning("%s: odd frame size %dx%d (width x height): mp4 written as yuv444p (4:4:4)",
+                               self.path, w, h)
             fmt = "mp4" if codec == "libx264" else "matroska"
             self._container = av.open(self._file, mode="w", format=fmt)
             self._stream = self._container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
@@ -207,6 +208,8 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
     from .image import read_mask
 
     p = Path(masks)
+    if p.is_file() and p.suffix.lower() in (".png", ".jpg", ".jpeg"):
+        raise InputError(f"{p}: a single image; expected a folder of per-frame mask images or a mask video")
     if p.is_dir():
         files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
         if not files:
@@ -217,13 +220,20 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
     )
 
 
-def frames_with_masks(video, masks) -> tuple[VideoInfo, int, Iterator[tuple[int, torch.Tensor, torch.Tensor]]]:
+def frames_with_masks(video, masks, allow_empty: bool = False
+                      ) -> tuple[VideoInfo, int, Iterator[tuple[int, torch.Tensor, torch.Tensor]]]:
     """Stream a video's frames with their masks, checking that they belong together.
+
+    Args:
+        video: the video file.
+        masks: a folder of mask images or a mask video (:func:`read_masks`).
+        allow_empty: pass empty masks (frames without the person) on instead of failing.
 
     Returns:
         (video info, mask count, iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W))).
         The iterator raises :class:`InputError` when the counts differ (also for containers
-        that do not store a frame count), a mask's size differs from its frame, or a mask is empty.
+        that do not store a frame count), a mask's size differs from its frame, or a mask is
+        empty (unless ``allow_empty``).
     """
     info = video_info(video)
     n_masks, mask_iter = read_masks(masks)
@@ -237,8 +247,8 @@ def frames_with_masks(video, masks) -> tuple[VideoInfo, int, Iterator[tuple[int,
             img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
             if tuple(mask.shape) != tuple(img.shape[1:]):
                 raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
-            if not mask.any():
-                raise InputError(f"{masks}: mask {t} is empty")
+            if not allow_empty and not mask.any():
+                raise InputError(f"{masks}: the mask of frame {t} (counting from 0) is empty")
             yield t, img, mask
 
     return info, n_masks, pairs()

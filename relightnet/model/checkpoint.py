@@ -13,7 +13,7 @@ from pathlib import Path
 
 import torch
 
-from ..checks import InputError
+from ..checks import InputError, check_device
 from ..io import atomic_write
 from .network import NetConfig, RelightNet
 
@@ -80,6 +80,7 @@ def shipped_checkpoint() -> Path:
 
 def load_model(path=None, device="cpu") -> RelightNet:
     """A :class:`RelightNet` in eval mode from a checkpoint (default: the shipped model)."""
+    device = check_device(device, "device")
     path = shipped_checkpoint() if path is None else Path(path)
     state = load_checkpoint(path, map_location=device)
     try:

@@ -113,6 +113,8 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     """
     import onnx
 
+    if Path(out).suffix.lower() != ".onnx":
+        raise InputError(f"{out}: expected an .onnx output file")
     if example_size % 16:
         raise InputError(f"example_size: expected a multiple of 16, got {example_size}")
     smoother = make_smoother(smoothing, lmax=net.config.lmax, **smoother_opts)
@@ -125,19 +127,22 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     h16, w16 = torch.export.Dim("h16", min=1, max=512), torch.export.Dim("w16", min=1, max=512)
     spatial = {0: batch, 2: 16 * h16, 3: 16 * w16}
     shapes = {"image": spatial, "mask": spatial, "light_state": {0: batch}, "is_first": {0: batch}}
-    import logging
     import warnings
 
-    quiet = logging.getLogger("torch.onnx")  # "torchvision is not installed" notes from the op registry
-    level = quiet.level
-    quiet.setLevel(logging.ERROR)
+    # The exporter's own notes ("torchvision is not installed", onnx_ir/onnxscript pass logs, about
+    # a hundred INFO lines) are not the user's business.
+    quiet = [logging.getLogger(n) for n in ("torch.onnx", "onnx_ir", "onnxscript")]
+    levels = [q.level for q in quiet]
+    for q in quiet:
+        q.setLevel(logging.ERROR)
     try:
         with warnings.catch_warnings(), torch.no_grad():
             warnings.simplefilter("ignore")
             prog = torch.onnx.export(model, args, dynamo=True, dynamic_shapes=shapes, input_names=list(INPUTS),
                                      output_names=list(OUTPUTS), verbose=False)
     finally:
-        quiet.setLevel(level)
+        for q, lv in zip(quiet, levels, strict=True):
+            q.setLevel(lv)
     proto = prog.model_proto
     for key, value in _metadata(net, smoothing, s, train_config).items():
         entry = proto.metadata_props.add()

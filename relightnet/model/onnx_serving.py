@@ -231,16 +231,24 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
         raise InputError(f"size: expected a multiple of 16, got {size}")
     info, _, pairs = frames_with_masks(video, masks)
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: --out-dir is a file; expected a folder (made if needed)")
+    made = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    raw, smooth = [], []
-    with VideoWriter(out / "albedo.mp4", fps=info.fps) as writer:
-        for _, img, mask in pairs:
-            res, box = r.step_photo(img, mask, size)
-            raw.append(res["light_raw"][0])
-            smooth.append(res["light_smoothed"][0])
-            albedo = _paste(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask
-            writer.write(albedo.permute(1, 2, 0))
-    result = {"raw": np.stack(raw), "smoothed": np.stack(smooth)}
-    save_light(out / "lights_raw.npz", torch.from_numpy(result["raw"]))
-    save_light(out / "lights_smoothed.npz", torch.from_numpy(result["smoothed"]))
+    try:
+        raw, smooth = [], []
+        with VideoWriter(out / "albedo.mp4", fps=info.fps) as writer:
+            for _, img, mask in pairs:
+                res, box = r.step_photo(img, mask, size)
+                raw.append(res["light_raw"][0])
+                smooth.append(res["light_smoothed"][0])
+                albedo = _paste(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask
+                writer.write(albedo.permute(1, 2, 0))
+        result = {"raw": np.stack(raw), "smoothed": np.stack(smooth)}
+        save_light(out / "lights_raw.npz", torch.from_numpy(result["raw"]))
+        save_light(out / "lights_smoothed.npz", torch.from_numpy(result["smoothed"]))
+    except BaseException:
+        if made and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()  # a failed run leaves no empty folder behind
+        raise
     return result

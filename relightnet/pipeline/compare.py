@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..checks import InputError, sh_order_from_count
+from ..checks import InputError, check_device, sh_order_from_count
 from ..io.image import linear_to_srgb, srgb_to_linear, to_uint8
 from ..model.network import photo_albedo
 from ..sh.io import resize_sh
@@ -345,12 +345,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
             raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
     if source not in preset_names():
         raise InputError(f"source: expected a preset name ({', '.join(preset_names())}), got {source!r}")
-    try:
-        dev = torch.device(device)
-    except (RuntimeError, TypeError) as e:
-        raise InputError(f"device: {e}") from None
-    if dev.type == "cuda" and not torch.cuda.is_available():
-        raise InputError(f"device: {device!r} asked for but CUDA is not available")
+    dev = check_device(device, "device")
     cfg, files = _open_data(data_dir, split)
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():

@@ -39,7 +39,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     Args:
         model: the CNN: a :class:`RelightNet` or a predictor (:mod:`relightnet.pipeline.backends`).
         video: input video file (its sound, if any, is carried over to ``out``).
-        masks: folder of per-frame mask images (sorted) or a mask video, one per frame.
+        masks: folder of per-frame mask images (sorted) or a mask video, one per frame; a frame
+            whose mask is empty (the person out of view) is written unchanged.
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
@@ -52,15 +53,23 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     """
     from tqdm import tqdm
 
+    if not math.isfinite(turntable_deg_per_s) or abs(turntable_deg_per_s) > 1e6:
+        raise InputError(f"turntable: expected degrees per second (a finite number), got {turntable_deg_per_s}")
     if not 0 < smoothing <= 1:
         raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
     predict = as_predictor(model)
-    info, n_masks, pairs = frames_with_masks(video, masks)
+    info, n_masks, pairs = frames_with_masks(video, masks, allow_empty=True)
     light = resize_sh(light, predict.lmax)
     src = None
     n = 0
+    empty: list[int] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks, desc="relight-video", unit="frame", disable=not progress):
+            if not mask.any():  # the person is out of the frame: nothing to relight
+                writer.write(img.permute(1, 2, 0))
+                empty.append(t)
+                n += 1
+                continue
             pred = predict(img, mask)
             est = pred.light[0]
             src = est if src is None else smoothing * est + (1 - smoothing) * src
@@ -73,5 +82,9 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             m = pred.mask[0]
             writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
             n += 1
+        if n and len(empty) == n:  # raised inside the writer's block: no output is left
+            raise InputError(f"{masks}: every mask is empty: no person to relight")
+    if empty:
+        logger.warning("%d frame(s) with an empty mask were written unchanged (first: frame %d)", len(empty), empty[0])
     logger.info("wrote %s (%d frames)", Path(out), n)
     return n

@@ -143,6 +143,8 @@ def load_camera(spec, size) -> Camera:
         raise InputError(f"--camera {spec}: expected JSON with eye [x,y,z], target [x,y,z], fov_deg ({e})") from None
     if eye.shape != (3,) or target.shape != (3,) or up.shape != (3,) or not 0 < fov < 180 or not math.isfinite(fov):
         raise InputError(f"--camera {spec}: eye/target/up need 3 numbers and fov_deg a value in (0, 180)")
+    if not all(bool(torch.isfinite(v).all()) for v in (eye, target, up)):
+        raise InputError(f"--camera {spec}: eye, target and up must be finite numbers (no NaN or Infinity)")
     if float((eye - target).norm()) < 1e-6:
         raise InputError(f"--camera {spec}: eye and target coincide")
     return perspective_camera(look_at(eye, target, up), size, fov_deg=fov)

@@ -75,6 +75,9 @@ def sh_basis(dirs: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
         check_unit(dirs, name="dirs")
     if not dirs.is_floating_point():
         raise TypeError(f"dirs: expected a floating dtype, got {dirs.dtype}")
+    if lmax > 24 and dirs.dtype != torch.float64:
+        # (2m−1)!! passes float32's range at m = 29: evaluate high orders in float64.
+        return sh_basis(dirs.double(), lmax, check=False).to(dirs.dtype)
     x, y, z = dirs.unbind(-1)
     out: list[torch.Tensor | float] = [0.0] * sh_count(lmax)
     # C_m, S_m: real and imaginary parts of (x + i y)^m (C_0 = 1, S_0 = 0).

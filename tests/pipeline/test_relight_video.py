@@ -43,3 +43,34 @@ def test_relight_video_keeps_the_sound(tmp_path, masked_clip, clip_with_sound):
     with av.open(str(out)) as c:
         assert c.streams.audio and c.streams.audio[0].codec_context.name == "aac"
         assert sum(f.samples for f in c.decode(audio=0)) > 0
+
+
+def test_frames_without_the_person_pass_through(tmp_path, masked_clip, capsys):
+    from relightnet.io import write_image
+
+    video, masks = masked_clip(tmp_path)
+    write_image(masks / "001.png", np.zeros((64, 48, 3), np.uint8))  # the person is out of view in frame 1
+    out = tmp_path / "relit.mkv"
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--out", str(out)]) == 0
+    frames, src = list(read_video(out)), list(read_video(video))
+    assert len(frames) == 3
+    np.testing.assert_array_equal(frames[1], src[1])  # written unchanged (lossless mkv)
+    assert not np.array_equal(frames[0], src[0])
+    assert "1 frame(s) with an empty mask" in capsys.readouterr().err
+    # Every mask empty: an error, and no output.
+    for t in (0, 2):
+        write_image(masks / f"{t:03d}.png", np.zeros((64, 48, 3), np.uint8))
+    out2 = tmp_path / "none.mkv"
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--out", str(out2)]) == 1
+    assert not out2.exists()
+
+
+def test_one_mask_image_is_not_a_mask_sequence(tmp_path, masked_clip, capsys):
+    video, masks = masked_clip(tmp_path)
+    assert main(["relight-video", str(video), "--masks", str(masks / "000.png"), "--light", "sunset",
+                 "--out", str(tmp_path / "x.mkv")]) == 1
+    assert "a single image; expected a folder" in capsys.readouterr().err
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--turntable", "nan",
+                 "--out", str(tmp_path / "x.mkv")]) == 1
+    assert "turntable: expected degrees per second" in capsys.readouterr().err
+    assert not (tmp_path / "x.mkv").exists()

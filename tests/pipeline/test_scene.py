@@ -66,7 +66,8 @@ def test_load_camera(tmp_path):
     px = cam.project(torch.tensor([[0.0, 1.0, 0.0]]))
     torch.testing.assert_close(px[0, 0], torch.tensor([80.0, 45.0]), atol=1e-3, rtol=0)
     for bad, text in (({"eye": [0, 1]}, "3 numbers"), ({"eye": [0, 1, 0], "target": [0, 1, 0]}, "coincide"),
-                      ({"eye": [0, 1, 4], "fov_deg": 200}, "fov"), ({"target": [0, 0, 0]}, "eye")):
+                      ({"eye": [0, 1, 4], "fov_deg": 200}, "fov"), ({"target": [0, 0, 0]}, "eye"),
+                      ({"eye": [0, 1, float("nan")]}, "finite")):
         f.write_text(json.dumps(bad))
         with pytest.raises(InputError, match=text):
             load_camera(f, (90, 160))

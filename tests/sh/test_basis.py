@@ -75,3 +75,12 @@ def test_bad_inputs():
         sh_basis(torch.full((2, 3), float("nan")), 2)
     with pytest.raises(ValueError, match="lmax"):
         sh_basis(_rand_dirs(3), -1)
+
+
+def test_high_orders_stay_finite_in_float32():
+    # (2m-1)!! leaves float32's range at m = 29; high orders are evaluated in float64.
+    d = torch.nn.functional.normalize(torch.randn(500, 3, generator=torch.Generator().manual_seed(0)), dim=-1)
+    for lmax in (28, 30, 40):
+        b = sh_basis(d, lmax)
+        assert b.dtype == torch.float32 and torch.isfinite(b).all()
+        torch.testing.assert_close(b.double(), sh_basis(d.double(), lmax), rtol=0, atol=1e-5)
