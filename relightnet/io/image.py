@@ -123,7 +123,7 @@ def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     raise InputError(f"{path}: not {what} (no frame decoded)")
 
 
-def write_image(path: str | os.PathLike, img, srgb: bool = True) -> Path:
+def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None) -> Path:
     """Write an 8-bit PNG atomically.
 
     Args:
@@ -132,6 +132,7 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True) -> Path:
             radiance/reflectance (sRGB-encoded when ``srgb``, clamped to
             [0, 1]); uint8 values are written unchanged.
         srgb: gamma-encode float input with :func:`linear_to_srgb`.
+        alpha: optional (H, W) coverage in [0, 1] (never gamma-encoded): an RGBA PNG.
 
     Returns:
         The path written.
@@ -141,7 +142,14 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True) -> Path:
         raise InputError(f"{path}: expected a .png output file")
     img = to_uint8(_as_hwc(img, "image"), srgb)
     arr = np.ascontiguousarray(img.cpu().numpy())
-    if arr.shape[-1] == 1:
+    if alpha is not None:
+        a = torch.as_tensor(alpha).detach().cpu()
+        if tuple(a.shape) != arr.shape[:2]:
+            raise ShapeError(f"alpha: expected {arr.shape[:2]} like the image, got {tuple(a.shape)}")
+        a8 = to_uint8(a.float()[..., None], srgb=False).numpy()
+        rgb = np.repeat(arr, 3, axis=-1) if arr.shape[-1] == 1 else arr
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(np.concatenate([rgb, a8], -1)), format="rgba")
+    elif arr.shape[-1] == 1:
         frame = av.VideoFrame.from_ndarray(arr[..., 0], format="gray")
     else:
         frame = av.VideoFrame.from_ndarray(arr, format="rgb24")

@@ -9,6 +9,7 @@ relights the CNN's own albedo (blurred to the working size on a large photo).
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import torch
@@ -18,6 +19,8 @@ from ..io.image import linear_to_srgb, srgb_to_linear
 from ..model.inference import predict_image
 from ..model.network import Prediction, RelightNet, photo_albedo, shading_map
 from ..sh.io import resize_sh
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["RelitImage", "relight_image", "match_exposure"]
 
@@ -72,7 +75,9 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
     """
     check_shape(light, ["K", 3], name="light")
     check_finite(light, "light")
-    sh_order_from_count(light.shape[0], "light")
+    order = sh_order_from_count(light.shape[0], "light")
+    if order > model.config.lmax:
+        logger.warning("light: order %d truncated to the model's order %d", order, model.config.lmax)
     light = resize_sh(light, model.config.lmax)  # the model's order (truncate or zero-pad)
     if image.dtype == torch.uint8:
         image = image.float() / 255
@@ -80,7 +85,12 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
     new = match_exposure(light, pred) if keep_exposure else light
     image = image.to(pred.albedo)
     albedo = photo_albedo(srgb_to_linear(image)[None], pred) if detail else pred.albedo
-    relit = (albedo * shading_map(pred.transport, new.to(pred.albedo)))[0]
+    shading = shading_map(pred.transport, new.to(pred.albedo))
+    relit = (albedo * shading)[0]
+    lit = float(((shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum().clamp_min(1))
+    if lit < 0.5:
+        logger.warning("light: it lights only %.0f%% of the person (negative or zero irradiance elsewhere): "
+                       "is it a valid SH light?", 100 * lit)
     m = pred.mask[0]
     out = linear_to_srgb(relit.clamp(0, 1)) * m + image * (1 - m)  # background kept as shot
     return RelitImage(out.permute(1, 2, 0).cpu(), pred, new, mask is None, albedo[0].cpu())

@@ -111,3 +111,18 @@ def test_video_display_rotation_is_applied(tmp_path):
     assert len(frames) == 3 and frames[0].shape == (64, 32, 3)
     g = frames[0].mean(-1)
     assert g[:32].mean() > 230 and g[32:].mean() < 25  # the white half is on top, as a viewer shows it
+
+
+def test_write_image_with_alpha(tmp_path):
+    from relightnet.checks import ShapeError
+    from relightnet.io import write_image
+
+    img = torch.rand(6, 5, 3)
+    alpha = torch.zeros(6, 5)
+    alpha[1:4, 2:] = 1
+    path = write_image(tmp_path / "a.png", img, alpha=alpha)
+    torch.testing.assert_close(read_alpha(path), alpha)
+    torch.testing.assert_close(read_image(path, linear=True), img, atol=0.02, rtol=0)
+    with pytest.raises(ShapeError, match="alpha"):
+        write_image(tmp_path / "b.png", img, alpha=torch.ones(5, 6))
+    assert not (tmp_path / "b.png").exists()

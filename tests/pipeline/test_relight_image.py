@@ -73,3 +73,30 @@ def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
     cnn = relight_image(model, img, est, mask, keep_exposure=False, detail=False)
     assert float((cnn.image[inside] - orig[inside]).abs().mean()) > 0.01
     assert same.albedo.shape == (3, 120, 150)
+
+
+def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys):
+    import av
+
+    from relightnet.io import read_alpha
+
+    img, mask = photo
+    rgba = np.concatenate([img.permute(1, 2, 0).numpy(), (mask.numpy()[..., None] * 255).astype(np.uint8)], -1)
+    cut = tmp_path / "cut.png"
+    from relightnet.io.image import _encode
+
+    cut.write_bytes(_encode("png", av.VideoFrame.from_ndarray(np.ascontiguousarray(rgba), format="rgba")))
+    out = tmp_path / "r.png"
+    assert main(["relight-image", str(cut), "--light", "sunset", "--out", str(out)]) == 0
+    assert "alpha channel of" in capsys.readouterr().err  # the cut-out's alpha was the mask
+    torch.testing.assert_close(read_alpha(out), read_alpha(cut))  # ... and the output keeps it
+    # A light that is negative everywhere, and one of a higher order than the model's.
+    neg = tmp_path / "neg.npy"
+    np.save(neg, -np.ones((9, 3), np.float32))
+    assert main(["relight-image", str(cut), "--light", str(neg), "--out", str(out)]) == 0
+    assert "is it a valid SH light" in capsys.readouterr().err
+    from relightnet.sh import save_light
+
+    hi = save_light(tmp_path / "hi.npz", torch.cat([preset_light("studio"), torch.zeros(7, 3)]))
+    assert main(["relight-image", str(cut), "--light", str(hi), "--out", str(out)]) == 0
+    assert "order 3 truncated to the model's order 2" in capsys.readouterr().err
