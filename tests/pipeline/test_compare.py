@@ -199,7 +199,9 @@ def test_bad_inputs_write_nothing(seq_dir, tiny_dataset, tmp_path, capsys):
     fails(["--data", str(seq_dir), "--checkpoint", str(bad)], "unreadable checkpoint")
     fails(["--data", str(seq_dir), "--checkpoint", str(tmp_path / "missing.pt")], "checkpoint not found")
     fails(["--data", str(seq_dir), "--source-light", "moon"], "preset")
-    fails(["--data", str(seq_dir), "--size", "40"], "multiple of 16")
+    with pytest.raises(SystemExit):  # refused by the option parser, before anything runs
+        main(["compare", "--out", str(out), "--data", str(seq_dir), "--size", "40"])
+    assert "multiple of 16" in capsys.readouterr().err and _no_leftovers(tmp_path, "rep")
     out.write_text("a file")
     assert main(["compare", "--data", str(seq_dir), "--out", str(out)]) == 1
     assert "not a folder" in capsys.readouterr().err and out.read_text() == "a file"
