@@ -117,8 +117,9 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             cands["occlusion_floor"] = (b["albedo"], b["transport_unoccluded"], b["light"])
         for who, (A, T, L) in cands.items():
             relit = A * shading_map(T, novel)
-            # As relight-image does by default: the photo divided by the predicted shading is relit.
-            relit_photo = photo_albedo(b["image"], Prediction(A, T, L, M)) * shading_map(T, novel)
+            # As relight-image does by default: the photo (clipped as a camera would) divided by the
+            # predicted shading is relit.
+            relit_photo = photo_albedo(b["image"].clamp(0, 1), Prediction(A, T, L, M)) * shading_map(T, novel)
             S_pred = shading_map(T, L)
             for j in range(len(chunk)):
                 sl = slice(j, j + 1)
