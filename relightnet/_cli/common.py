@@ -51,26 +51,25 @@ def pos_int(text: str) -> int:
     return v
 
 
-def work_size(text: str) -> int:
-    """The CNN's working size: a positive multiple of 16, at most 2048."""
+def _int_in(text: str, lo: int, hi: int, step: int, expected: str) -> int:
+    """An integer in [lo, hi] that is a multiple of ``step``, else an argparse error saying ``expected``."""
     try:
         v = int(text)
     except ValueError:
-        v = -1
-    if v < 16 or v % 16 or v > 2048:
-        raise argparse.ArgumentTypeError(f"expected a multiple of 16 from 16 to 2048, got {text!r}")
+        v = lo - 1
+    if not lo <= v <= hi or v % step:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return v
+
+
+def work_size(text: str) -> int:
+    """The CNN's working size: a positive multiple of 16, at most 2048."""
+    return _int_in(text, 16, 2048, 16, "a multiple of 16 from 16 to 2048")
 
 
 def image_size(text: str) -> int:
     """A picture's size in pixels: 1 to 4096."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = -1
-    if not 1 <= v <= 4096:
-        raise argparse.ArgumentTypeError(f"expected a size from 1 to 4096 pixels, got {text!r}")
-    return v
+    return _int_in(text, 1, 4096, 1, "a size from 1 to 4096 pixels")
 
 
 def key_value_arg(keys, cast, key_name: str = "NAME", value_name: str = "a number"):
