@@ -101,30 +101,33 @@ def load_single_light(arg: str, lmax: int | None = None):
 
 
 def read_photo(image: str, mask: str | None):
-    """A photo and its person mask for the photo commands: ((3, H, W) sRGB in [0, 1], (H, W) or None).
+    """A photo, its person mask and its alpha for the photo commands (the photo decoded once).
 
     The mask is ``--mask`` (its alpha where it has transparency, else white = person); without
     one, a cut-out photo's own alpha; else None (the model's mask head finds the person).
+
+    Returns:
+        ((3, H, W) sRGB in [0, 1], (H, W) mask or None, (H, W) alpha or None).
     """
     import logging
 
-    from ..io import read_alpha, read_image, read_mask
+    from ..io import read_image_alpha, read_mask
 
-    img = read_image(image).permute(2, 0, 1)
+    img, alpha = read_image_alpha(image)
+    img = img.permute(2, 0, 1)
     if mask:
         m = read_mask(mask)
         what = f"--mask {mask}"
+    elif alpha is None:
+        return img, None, None
     else:
-        a = read_alpha(image)
-        if a is None:
-            return img, None
-        m, what = (a > 0.5).float(), f"{image}: alpha channel"
+        m, what = (alpha > 0.5).float(), f"{image}: alpha channel"
         logging.getLogger("relightnet").info("no --mask: using the alpha channel of %s as the person's mask", image)
     if tuple(m.shape) != tuple(img.shape[1:]):
         raise ValueError(f"{what}: size {tuple(m.shape)} differs from the image's {tuple(img.shape[1:])}")
     if not m.any():
         raise ValueError(f"{what}: empty mask (no person pixel): expected the person's mask")
-    return img, m
+    return img, m, alpha
 
 
 def add_checkpoint_args(p: argparse.ArgumentParser, device: bool = True) -> None:

@@ -51,7 +51,7 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     from ..model.inference import estimate_light
     from ..sh import save_light
 
-    image, mask = read_photo(args.image, args.mask)
+    image, mask, _ = read_photo(args.image, args.mask)
     model = load_model(args.checkpoint, device=args.device)
     if mask is None:
         logger.info("no --mask: using the model's mask head to find the person")

@@ -15,18 +15,18 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from ..io import atomic_write, read_alpha, write_image
+    from ..io import atomic_write, write_image
     from ..model.checkpoint import load_model
     from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
-    image, mask = read_photo(args.image, args.mask)
+    image, mask, alpha = read_photo(args.image, args.mask)
     light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
-    write_image(args.out, res.image, srgb=False, alpha=read_alpha(args.image))  # a cut-out stays a cut-out
+    write_image(args.out, res.image, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
     if args.save_maps:
         d = Path(args.save_maps)
         d.mkdir(parents=True, exist_ok=True)

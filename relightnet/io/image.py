@@ -21,7 +21,8 @@ import torch
 from ..checks import InputError, ShapeError, check_finite
 from .atomic import atomic_write
 
-__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_alpha", "read_mask"]
+__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_image_alpha",
+           "read_alpha", "read_mask"]
 
 
 def linear_to_srgb(x: torch.Tensor) -> torch.Tensor:
@@ -229,7 +230,7 @@ def _read_rgba(path: str | os.PathLike) -> torch.Tensor:
 def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
     """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats, upright.
 
-    Gray images are repeated to three channels; alpha is dropped (see :func:`read_alpha`).
+    Gray images are repeated to three channels; alpha is dropped (see :func:`read_image_alpha`).
     The EXIF orientation (rotations and mirrors) is applied.
 
     Args:
@@ -243,8 +244,19 @@ def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
         InputError: missing, unreadable, or a floating-point (HDR) image
             (read those with :func:`relightnet.io.read_envmap`).
     """
-    x = _read_rgba(path)[..., :3].contiguous()
-    return srgb_to_linear(x) if linear else x
+    return read_image_alpha(path, linear)[0]
+
+
+def read_image_alpha(path: str | os.PathLike, linear: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
+    """:func:`read_image` and the image's transparency from one decode.
+
+    Returns:
+        ((H, W, 3) float32 RGB, (H, W) float32 alpha in [0, 1] or None when the image has no
+        alpha or is fully opaque).
+    """
+    rgba = _read_rgba(path)
+    x, a = rgba[..., :3].contiguous(), rgba[..., 3]
+    return (srgb_to_linear(x) if linear else x), (a.contiguous() if bool((a < 1).any()) else None)
 
 
 def read_alpha(path: str | os.PathLike) -> torch.Tensor | None:
@@ -253,8 +265,7 @@ def read_alpha(path: str | os.PathLike) -> torch.Tensor | None:
     Returns:
         (H, W) float32 in [0, 1], or None when the image has no alpha or is fully opaque.
     """
-    a = _read_rgba(path)[..., 3]
-    return a if bool((a < 1).any()) else None
+    return read_image_alpha(path)[1]
 
 
 def read_mask(path: str | os.PathLike) -> torch.Tensor:
@@ -263,7 +274,5 @@ def read_mask(path: str | os.PathLike) -> torch.Tensor:
     Returns:
         (H, W) float32 in {0, 1} (alpha or gray level above 0.5).
     """
-    rgba = _read_rgba(path)
-    a = rgba[..., 3]
-    level = a if bool((a < 1).any()) else rgba[..., :3].mean(-1)
-    return (level > 0.5).float()
+    rgb, alpha = read_image_alpha(path)
+    return ((alpha if alpha is not None else rgb.mean(-1)) > 0.5).float()

@@ -80,7 +80,8 @@ def test_photo_commands_take_a_cutouts_alpha_as_the_mask(tmp_path):
     rgba = np.zeros((20, 30, 4), np.uint8)
     rgba[5:15, 10:20] = 255
     path = _png_rgba(tmp_path / "cutout.png", rgba)
-    img, mask = read_photo(str(path), None)
+    img, mask, alpha = read_photo(str(path), None)
+    assert alpha is not None and torch.equal(mask, (alpha > 0.5).float())
     assert img.shape == (3, 20, 30) and mask is not None and int(mask.sum()) == 100
     plain = tmp_path / "plain.png"
     plain.write_bytes(_encode("png", av.VideoFrame.from_ndarray(rgba[..., :3].copy(), format="rgb24")))
