@@ -51,21 +51,20 @@ def _aac_packets(src, a_in, out_stream, end: float):
     import av
 
     resampler = av.AudioResampler(format="fltp", layout=out_stream.layout, rate=out_stream.rate)
+
+    def frames():  # resampled frames, then the resampler's and the encoder's flushes (None)
+        for frame in src.decode(a_in):
+            if frame.time is not None and frame.time > end:
+                break
+            yield from resampler.resample(frame)
+        yield from resampler.resample(None)
+        yield None
+
     n = 0
-    for frame in src.decode(a_in):
-        if frame.time is not None and frame.time > end:
-            break
-        for f in resampler.resample(frame):
-            for p in out_stream.encode(f):
-                n += 1
-                yield float(p.dts * p.time_base) if p.dts is not None else 0.0, n, p
-    for f in resampler.resample(None):
+    for f in frames():
         for p in out_stream.encode(f):
             n += 1
-            yield float(p.dts * p.time_base) if p.dts is not None else end, n, p
-    for p in out_stream.encode(None):
-        n += 1
-        yield float(p.dts * p.time_base) if p.dts is not None else end, n, p
+            yield (float(p.dts * p.time_base) if p.dts is not None else (0.0 if f is not None else end)), n, p
 
 
 def add_audio(video, audio_from, out, duration: float | None = None) -> Path:
