@@ -101,7 +101,8 @@ def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
     return pred.albedo * shading_map(pred.transport, new_light)
 
 
-def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05) -> torch.Tensor:
+def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
+                 shading: torch.Tensor | None = None) -> torch.Tensor:
     """Albedo at the photo's own resolution: the photo divided by the predicted shading T · L̂.
 
     The CNN works at a small size (128² for the shipped model), so its albedo pasted back on a
@@ -115,13 +116,16 @@ def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05) -> 
         image: (B, 3, H, W) the photo, *linear* RGB, at the prediction's size.
         pred: :class:`Prediction` at the same size (its mask, when present, sets the mean).
         floor: fraction of the mean shading below which the CNN's albedo takes over.
+        shading: ``pred.shading()`` when the caller has it already, (B, 3, H, W).
 
     Returns:
         (B, 3, H, W) albedo (non-negative; above 1 where the photo has highlights).
     """
     dims = check_shape(image, ["B", 3, "H", "W"], name="image")
     check_shape(pred.albedo, [dims["B"], 3, dims["H"], dims["W"]], name="prediction albedo")
-    shading = pred.shading()
+    if shading is None:
+        shading = pred.shading()
+    check_shape(shading, [dims["B"], 3, dims["H"], dims["W"]], name="shading")
     m = pred.mask if pred.mask is not None else torch.ones_like(shading[:, :1])
     mean = (shading * m).sum((2, 3), keepdim=True) / m.sum((2, 3), keepdim=True).clamp_min(1e-8)
     tau = (floor * mean).clamp_min(1e-6)

@@ -22,7 +22,7 @@ from ..sh.io import resize_sh
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["RelitImage", "relight_image", "match_exposure"]
+__all__ = ["RelitImage", "relight_image", "match_exposure", "to_model_order"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,21 +38,30 @@ class RelitImage:
     albedo: torch.Tensor
 
 
-def match_exposure(new_light: torch.Tensor, pred: Prediction) -> torch.Tensor:
+def match_exposure(new_light: torch.Tensor, pred: Prediction, shading: torch.Tensor | None = None) -> torch.Tensor:
     """Scale ``new_light`` (K, 3) so the person's mean shading luminance stays what it was.
 
     Lights come at any scale (a projected HDRI's sun reaches 1e4); matching the exposure keeps
     the relit person as bright as in the photo while the direction and colour of light change.
+    ``shading``: ``pred.shading()`` (B, 3, H, W) when the caller has it already.
     """
     m = pred.mask
     lum = torch.tensor([0.2126, 0.7152, 0.0722])
 
-    def level(light):
-        s = shading_map(pred.transport, light.to(pred.transport))
+    def level(s):
         return float((torch.einsum("bchw,c->bhw", s, lum.to(s))[:, None] * m).sum() / m.sum().clamp_min(1))
 
-    old, new = level(pred.light[0]), level(new_light)
+    old = level(pred.shading() if shading is None else shading)
+    new = level(shading_map(pred.transport, new_light.to(pred.transport)))
     return new_light * (old / new) if new > 1e-8 and old > 0 else new_light
+
+
+def to_model_order(light: torch.Tensor, lmax: int) -> torch.Tensor:
+    """(K, 3) light at the model's SH order ``lmax`` (zero-padded, or truncated with a warning)."""
+    order = sh_order_from_count(light.shape[0], "light")
+    if order > lmax:
+        logger.warning("light: order %d truncated to the model's order %d", order, lmax)
+    return resize_sh(light, lmax)
 
 
 @torch.no_grad()
@@ -75,16 +84,14 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
     """
     check_shape(light, ["K", 3], name="light")
     check_finite(light, "light")
-    order = sh_order_from_count(light.shape[0], "light")
-    if order > model.config.lmax:
-        logger.warning("light: order %d truncated to the model's order %d", order, model.config.lmax)
-    light = resize_sh(light, model.config.lmax)  # the model's order (truncate or zero-pad)
+    light = to_model_order(light, model.config.lmax)
     if image.dtype == torch.uint8:
         image = image.float() / 255
     pred, _ = predict_image(model, image, mask, size=size)
-    new = match_exposure(light, pred) if keep_exposure else light
+    before = pred.shading()
+    new = match_exposure(light, pred, before) if keep_exposure else light
     image = image.to(pred.albedo)
-    albedo = photo_albedo(srgb_to_linear(image)[None], pred) if detail else pred.albedo
+    albedo = photo_albedo(srgb_to_linear(image)[None], pred, shading=before) if detail else pred.albedo
     shading = shading_map(pred.transport, new.to(pred.albedo))
     relit = (albedo * shading)[0]
     lit = float(((shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum().clamp_min(1))

@@ -22,9 +22,8 @@ from ..io import VideoWriter, frames_with_masks
 from ..io.image import linear_to_srgb, srgb_to_linear
 from ..model.network import photo_albedo, shading_map
 from ..sh import rotate_sh_up
-from ..sh.io import resize_sh
 from .backends import as_predictor
-from .relight_image import match_exposure
+from .relight_image import match_exposure, to_model_order
 
 logger = logging.getLogger(__name__)
 
@@ -59,7 +58,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
     predict = as_predictor(model)
     info, n_masks, pairs = frames_with_masks(video, masks, allow_empty=True)
-    light = resize_sh(light, predict.lmax)
+    light = to_model_order(light, predict.lmax)
     src = None
     n = 0
     empty: list[int] = []
@@ -75,9 +74,12 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
             # Exposure reference: the smoothed source light, not this frame's raw estimate.
-            before = dataclasses.replace(pred, light=src[None])
-            new = match_exposure(new, before)
-            albedo = photo_albedo(srgb_to_linear(img.to(pred.albedo))[None], before) if detail else pred.albedo
+            ref = dataclasses.replace(pred, light=src[None])
+            before = ref.shading()
+            new = match_exposure(new, ref, before)
+            albedo = pred.albedo
+            if detail:
+                albedo = photo_albedo(srgb_to_linear(img.to(albedo))[None], ref, shading=before)
             relit = (albedo * shading_map(pred.transport, new))[0]
             m = pred.mask[0]
             writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
