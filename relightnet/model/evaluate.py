@@ -116,11 +116,11 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
         if floor:
             cands["occlusion_floor"] = (b["albedo"], b["transport_unoccluded"], b["light"])
         for who, (A, T, L) in cands.items():
-            relit = A * shading_map(T, novel)
+            S_new, S_pred = shading_map(T, novel), shading_map(T, L)
+            relit = A * S_new
             # As relight-image does by default: the photo (clipped as a camera would) divided by the
             # predicted shading is relit.
-            relit_photo = photo_albedo(b["image"].clamp(0, 1), Prediction(A, T, L, M)) * shading_map(T, novel)
-            S_pred = shading_map(T, L)
+            relit_photo = photo_albedo(b["image"].clamp(0, 1), Prediction(A, T, L, M), shading=S_pred) * S_new
             for j in range(len(chunk)):
                 sl = slice(j, j + 1)
                 add(who, "transport_rmse", _rmse(T[sl], T_gt[sl], M[sl]))
