@@ -26,6 +26,7 @@ import numpy as np
 
 from ..checks import InputError
 from ..io import atomic_write
+from ..io.arrays import read_npz, read_npz_names
 from .config import SPLITS, SynthConfig
 
 __all__ = [
@@ -159,22 +160,20 @@ def read_shard(path, fields=None) -> dict[str, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: shard not found")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            names = list(z.files) if fields is None else list(fields)
-            missing = [n for n in names if n not in z.files]
-            if missing:
-                raise InputError(f"{path}: shard has no field(s) {missing}; it has {sorted(z.files)}")
-            out = {n: z[n] for n in names}
-    except InputError:
-        raise
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise InputError(f"{path}: unreadable shard ({type(e).__name__}: {e})") from None
+    out = read_npz(path, "shard", fields)
+    if fields is not None:
+        missing = [n for n in fields if n not in out]
+        if missing:
+            have = sorted(read_npz_names(path))
+            raise InputError(f"{path}: shard has no field(s) {missing}; it has {have}")
     if "meta" in out:
+        meta = out["meta"]
+        if meta.ndim != 1 or meta.dtype.kind not in "US":
+            raise InputError(f"{path}: meta: expected (n,) JSON strings, got {meta.dtype}{list(meta.shape)}")
         try:
-            out["meta"] = [json.loads(str(m)) for m in out["meta"]]
-        except ValueError as e:
-            raise InputError(f"{path}: meta is not JSON ({e})") from None
+            out["meta"] = [json.loads(str(m)) for m in meta]
+        except (ValueError, RecursionError) as e:
+            raise InputError(f"{path}: meta is not JSON ({type(e).__name__}: {e})") from None
     return out
 
 

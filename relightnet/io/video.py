@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import logging
+import math
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -21,7 +22,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from .atomic import atomic_write
-from .image import to_uint8, upright
+from .image import open_limited, to_uint8, upright
 
 logger = logging.getLogger(__name__)
 
@@ -46,13 +47,9 @@ def _open(path):
     if not path.is_file():
         raise InputError(f"{path}: video file not found")
     try:
-        c = av.open(str(path))
-        if not c.streams.video:
-            c.close()
-            raise InputError(f"{path}: no video stream")
-        return c
-    except av.error.FFmpegError as e:
-        raise InputError(f"{path}: unreadable video ({e})") from None
+        return open_limited(path, "a video")  # frame size checked before any frame is decoded
+    except (av.error.FFmpegError, OSError, ValueError) as e:
+        raise InputError(f"{path}: unreadable video ({type(e).__name__}: {e})") from None
 
 
 def video_info(path) -> VideoInfo:
@@ -65,11 +62,16 @@ def video_info(path) -> VideoInfo:
         size = (s.codec_context.height, s.codec_context.width)
         try:  # a phone video stored sideways says so in its display matrix, seen on the frames
             first = next(iter(c.decode(video=0)), None)
-        except av.error.FFmpegError as e:
-            raise InputError(f"{path}: corrupt video ({e})") from None
-        if first is not None and round(float(first.rotation) / 90) % 2:
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+        if first is None:
+            raise InputError(f"{path}: no frame could be decoded (empty or corrupt video)")
+        size = (first.height, first.width)
+        if round(float(first.rotation) / 90) % 2:
             size = size[::-1]
-        return VideoInfo(int(s.frames or 0), fps, size)
+        if not (math.isfinite(fps) and 0 < fps <= 1000):
+            raise InputError(f"{path}: frame rate {fps:g} is not a usable video frame rate")
+        return VideoInfo(max(int(s.frames or 0), 0), fps, size)
 
 
 def read_video(path) -> Iterator[np.ndarray]:
@@ -85,8 +87,8 @@ def read_video(path) -> Iterator[np.ndarray]:
         try:
             for frame in c.decode(video=0):
                 yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
-        except av.error.FFmpegError as e:
-            raise InputError(f"{path}: corrupt video ({e})") from None
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
 
 
 class VideoWriter:
