@@ -11,7 +11,6 @@ import contextlib
 import itertools
 import logging
 import math
-import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -21,7 +20,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
-from .atomic import atomic_write
+from .atomic import atomic_write, remove_stale, temp_path
 from .image import open_limited, to_uint8, upright
 
 logger = logging.getLogger(__name__)
@@ -115,10 +114,14 @@ class VideoWriter:
         # With a sound track to carry over, the video goes to a hidden file first and
         # close() muxes the two into ``path``.
         self._audio_from = audio_from if audio_from is not None and has_audio(audio_from) else None
-        self._video_path = (self.path.with_name(f".{self.path.stem}.{os.getpid()}.video{self.path.suffix}")
-                            if self._audio_from is not None else self.path)
-        self._ctx = atomic_write(self._video_path)
-        self._file = self._ctx.__enter__()
+        if self._audio_from is None:
+            self._video_path = self.path
+            self._ctx = atomic_write(self.path)
+            self._file = self._ctx.__enter__()
+        else:  # a private temporary file (its name records this process, see io.atomic)
+            remove_stale(self.path)
+            self._video_path, self._ctx = temp_path(self.path, "video"), None
+            self._file = open(self._video_path, "xb")
         self._container = None
         self._stream = None
         self.n_frames = 0
@@ -165,7 +168,10 @@ class VideoWriter:
         for packet in self._stream.encode():
             self._container.mux(packet)
         self._container.close()
-        self._ctx.__exit__(None, None, None)
+        if self._ctx is not None:
+            self._ctx.__exit__(None, None, None)
+        else:
+            self._file.close()
         if self._audio_from is not None:
             from .audio import add_audio
 
@@ -184,6 +190,10 @@ class VideoWriter:
         with contextlib.suppress(Exception):
             if self._container is not None:
                 self._container.close()
+        if self._ctx is None:
+            self._file.close()
+            self._video_path.unlink(missing_ok=True)
+            return
         with contextlib.suppress(RuntimeError):
             self._ctx.__exit__(RuntimeError, RuntimeError("aborted"), None)
 
