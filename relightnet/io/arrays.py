@@ -39,6 +39,8 @@ def _header(f: IO[bytes], what: str) -> tuple[tuple[int, ...], bool, np.dtype]:
         raise
     except Exception as e:  # bad magic, header text, dtype description
         raise InputError(f"{what}: not a readable .npy array ({type(e).__name__}: {_first_line(e)})") from None
+    if not isinstance(shape, tuple) or not all(isinstance(n, int) and n >= 0 for n in shape):
+        raise InputError(f"{what}: bad array shape {shape!r} in the .npy header")
     if dtype.hasobject or dtype.kind not in _KINDS or dtype.fields is not None or dtype.itemsize == 0:
         raise InputError(f"{what}: array dtype {dtype} is not read (numbers and strings only)")
     return tuple(int(n) for n in shape), bool(fortran), dtype

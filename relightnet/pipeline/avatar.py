@@ -151,12 +151,15 @@ def _plate_frames(plate, target, size):
 def _reuse(path: Path, fingerprint: str) -> torch.Tensor | None:
     if not path.is_file():
         return None
-    try:
-        with np.load(path) as z:
-            if str(z["fingerprint"]) == fingerprint and "raw" in z:
-                return torch.from_numpy(z["raw"])
-    except (OSError, ValueError, KeyError):
+    from ..io.arrays import read_npz
+
+    try:  # a damaged or foreign file is not reused (it is rewritten)
+        z = read_npz(path, "light estimates", ("fingerprint", "raw"))
+    except InputError:
         return None
+    if "raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint \
+            and z["raw"].dtype.kind == "f":
+        return torch.from_numpy(z["raw"])
     return None
 
 

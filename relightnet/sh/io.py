@@ -61,7 +61,11 @@ def resize_sh(sh: torch.Tensor, lmax: int) -> torch.Tensor:
 
 def _validate(sh, where: str) -> torch.Tensor:
     """Shape (K,3)|(T,K,3), valid K, finite; returns float32. Errors start with ``where``."""
-    sh = torch.as_tensor(np.asarray(sh) if not isinstance(sh, torch.Tensor) else sh)
+    if not isinstance(sh, torch.Tensor):
+        sh = np.asarray(sh)
+        if sh.dtype.kind not in "biuf":
+            raise InputError(f"{where}: expected real coefficients, got dtype {sh.dtype}")
+        sh = torch.as_tensor(sh.astype(sh.dtype.newbyteorder("=")))
     if sh.dim() not in (2, 3) or sh.shape[-1] != 3:
         raise ShapeError(f"{where}: expected a light (K, 3) or a sequence (T, K, 3), got {tuple(sh.shape)}")
     sh_order_from_count(sh.shape[-2], where)
