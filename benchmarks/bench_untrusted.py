@@ -7,6 +7,7 @@ and measures, in child processes:
 
 - ``read_image`` refusing it: the time of the call itself and the process's peak RSS;
 - the whole ``relightnet relight-image`` command refusing it (Python start, imports, refusal);
+- the start-up alone (Python + torch + relightnet imports), which the command's time includes;
 - for scale, ``read_image`` decoding a 4000² PNG that is under the limit.
 
 Prints a table (medians over ``--runs``) for BENCHMARKS.md.
@@ -73,6 +74,14 @@ def child_command(path: Path, out: Path) -> tuple[float, float, str]:
     return wall, max(peak, before) / 1024, proc.stderr.strip().splitlines()[-1]
 
 
+def child_import() -> float:
+    """Wall time of a process that only starts Python and imports relightnet's CLI and readers."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import relightnet.cli, relightnet.io"], env=env, check=True)
+    return time.perf_counter() - t
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--side", type=int, default=12000)
@@ -87,6 +96,7 @@ def main() -> None:
         reads = [child_read(big) for _ in range(args.runs)]
         cmds = [child_command(big, tmp / "out.png") for _ in range(args.runs)]
         smalls = [child_read(small) for _ in range(args.runs)]
+        imports = [child_import() for _ in range(args.runs)]
     med = statistics.median
     print(f"{args.side}x{args.side} black PNG, {size / 1e3:.0f} KB on disk; medians of {args.runs} runs")
     print("| what | refused | call time | process wall | peak RSS |")
@@ -95,6 +105,8 @@ def main() -> None:
           f"{med(r['s'] for r in reads) * 1e3:.1f} ms | | {med(r['rss_mb'] for r in reads):.0f} MiB |")
     print(f"| relightnet relight-image ({args.side}² PNG) | {all('above the limit' in c[2] for c in cmds)} | | "
           f"{med(c[0] for c in cmds):.2f} s | {max(c[1] for c in cmds):.0f} MiB |")
+    print(f"| python -c 'import relightnet.cli, relightnet.io' (start-up alone) | | | "
+          f"{med(imports):.2f} s | |")
     print(f"| read_image(4000² PNG, decoded) | {any(r['refused'] for r in smalls)} | "
           f"{med(r['s'] for r in smalls) * 1e3:.0f} ms | | {med(r['rss_mb'] for r in smalls):.0f} MiB |")
     print(f"\nerror line: {cmds[0][2]}")
