@@ -111,6 +111,11 @@ def decode_options() -> dict[str, str]:
     return {"max_pixels": str(max_pixels())}
 
 
+def limit_hint() -> str:
+    """What to add to a decoder error whose frame size was unknown: the pixel limit may be the cause."""
+    return f"; frames above {max_pixels() / 1e6:.1f} MP are refused (--max-pixels, RELIGHTNET_MAX_PIXELS)"
+
+
 def open_limited(path: str | os.PathLike, what: str):
     """``av.open`` a media file with the pixel limit applied to probing and decoding.
 
@@ -159,7 +164,7 @@ def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     except InputError:
         raise
     except (av.FFmpegError, OSError, ValueError) as e:
-        hint = "" if size else f"; images above {max_pixels() / 1e6:.1f} MP are refused (--max-pixels)"
+        hint = "" if size else limit_hint()
         raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e}{hint})") from None
     raise InputError(f"{path}: not {what} (no frame decoded)")
 

@@ -178,8 +178,8 @@ def load_pickle(path: str | Path, what: str = "pickle") -> object:
 
     Returns:
         Plain values: dicts, lists, tuples, sets, numbers, strings, bytes and numpy arrays /
-        scalars (numeric or string dtypes); sparse matrices come back dense, chumpy objects as
-        their arrays.
+        scalars (numeric or string dtypes, native byte order); sparse matrices come back dense,
+        chumpy objects as their arrays.
 
     Raises:
         InputError: missing or unreadable file, a name outside the allowed list (the message
@@ -325,7 +325,7 @@ class _Resolver:
             raise self.fail(f"a numpy array {shape} of {dt} needs {math.prod(shape) * dt.itemsize} bytes, "
                             f"has {len(raw)}")
         arr = np.frombuffer(bytes(raw), dtype=dt).reshape(shape, order="F" if fortran else "C")
-        return arr.copy()
+        return arr.astype(dt.newbyteorder("="))  # a native-order copy
 
     def _sparse(self, obj: _Sparse, depth: int) -> np.ndarray:
         st = obj.state

@@ -21,7 +21,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
-from .image import open_limited, to_uint8, upright
+from .image import limit_hint, open_limited, to_uint8, upright
 
 logger = logging.getLogger(__name__)
 
@@ -62,7 +62,7 @@ def video_info(path) -> VideoInfo:
         try:  # a phone video stored sideways says so in its display matrix, seen on the frames
             first = next(iter(c.decode(video=0)), None)
         except (av.error.FFmpegError, ValueError) as e:
-            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
         if first is None:
             raise InputError(f"{path}: no frame could be decoded (empty or corrupt video)")
         size = (first.height, first.width)
@@ -87,7 +87,7 @@ def read_video(path) -> Iterator[np.ndarray]:
             for frame in c.decode(video=0):
                 yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
         except (av.error.FFmpegError, ValueError) as e:
-            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
 
 
 class VideoWriter:
