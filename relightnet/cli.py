@@ -20,6 +20,7 @@ logger = logging.getLogger("relightnet")
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
     "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "compare", "blender", "demo",
+    "batch",
 ]
 
 
