@@ -1,0 +1,23 @@
+"""A local Ray cluster for the distributed tests: 2 CPUs, loopback only, started once and stopped at the end."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+# Before ray is imported anywhere: a local instance then binds 127.0.0.1 only (no network address).
+os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+
+
+@pytest.fixture(scope="session")
+def ray_cluster():
+    """The ``ray`` module, connected to a fresh local 2-CPU cluster (its address: ``ray_cluster.address``)."""
+    import ray
+
+    ray.init(num_cpus=2, include_dashboard=False)
+    try:
+        assert ray.get_runtime_context().gcs_address.startswith("127.0.0.1:")
+        yield ray
+    finally:
+        ray.shutdown()
