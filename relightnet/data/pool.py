@@ -15,18 +15,21 @@ tasks, so it reaches workers on any executor.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import logging
 import multiprocessing as mp
 import os
 import queue
 import threading
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from .config import SynthConfig
 from .shards import shard_name
 
-__all__ = ["FAULT_ENV", "shard_task", "worker_assets", "run_pool"]
+__all__ = ["FAULT_ENV", "shard_task", "worker_assets", "LocalPool", "run_pool"]
 
 logger = logging.getLogger("relightnet.data.synth")
 
@@ -106,47 +109,99 @@ def _worker_task(task) -> dict:
     return {"split": task[1], "index": task[2], "error": error, "attempts": attempts}
 
 
-def run_pool(tasks: list, workers: int, on_result, on_tick, max_retries: int = 0, fault: str | None = None) -> None:
-    """Run shard tasks on a local process pool.
+class LocalPool:
+    """A local process pool of shard workers, usable for several runs (a context manager).
 
     Workers start with forkserver (the generator preloaded; never a fork of a threaded
-    process), else spawn; each builds its body assets once and runs torch single-threaded.
-    A task that raises is tried again in its worker up to ``max_retries`` times (a worker
-    process that dies is not retried here: that is what the Ray executor adds).
+    process), else spawn; each builds its body assets once (and keeps its memos of env maps
+    and clothing regions across runs) and runs torch single-threaded. A task that raises is
+    tried again in its worker up to ``max_retries`` times; when a worker process dies (killed,
+    out of memory), the shards that were in flight are charged one attempt each and run
+    again on fresh workers, up to ``max_retries`` times, like a Ray task.
 
     Args:
-        tasks: ``(cfg_dict, split, index, out_dir, compression)`` tuples.
-        on_result: gets every finished shard's result (any order), or a failure
-            ``{"split", "index", "error", "attempts"}``.
-        on_tick: called with 1 after every sample.
+        workers: processes.
+        max_retries: retries of a task that raised, and of a task whose process died.
         fault: the fault-hook spec handed to the workers (module docstring), or None.
     """
-    if "forkserver" in mp.get_all_start_methods():
-        ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(["relightnet.data.generate"])
-    else:  # pragma: no cover - not POSIX
-        ctx = mp.get_context("spawn")
-    ticks = ctx.Queue()
-    stop = threading.Event()
 
-    def drain() -> None:
+    def __init__(self, workers: int, max_retries: int = 0, fault: str | None = None):
+        if "forkserver" in mp.get_all_start_methods():
+            self._ctx = mp.get_context("forkserver")
+            self._ctx.set_forkserver_preload(["relightnet.data.generate"])
+        else:  # pragma: no cover - not POSIX
+            self._ctx = mp.get_context("spawn")
+        self._ticks = self._ctx.Queue()
+        self._workers, self._max_retries, self._fault = int(workers), int(max_retries), fault
+        self._pool = self._start()
+
+    def _start(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(self._workers, mp_context=self._ctx, initializer=_worker_init,
+                                   initargs=(self._ticks, self._fault, self._max_retries))
+
+    def _drain(self, on_tick, stop: threading.Event) -> None:
         while True:
             try:
-                ticks.get(timeout=0.05)
+                self._ticks.get(timeout=0.05)
             except queue.Empty:
                 if stop.is_set():
                     return
                 continue
             on_tick(1)
 
-    pool = ctx.Pool(min(workers, len(tasks)), initializer=_worker_init, initargs=(ticks, fault, int(max_retries)))
-    thread = threading.Thread(target=drain, daemon=True)
-    thread.start()
-    try:
-        for result in pool.imap_unordered(_worker_task, tasks, chunksize=1):
-            on_result(result)
-    finally:
-        pool.terminate()
-        pool.join()
-        stop.set()
-        thread.join()
+    def run(self, tasks: list, on_result, on_tick) -> None:
+        """Run shard tasks ``(cfg_dict, split, index, out_dir, compression)``, at most one per worker at a time.
+
+        ``on_result`` gets every finished shard's result (any order), or a failure
+        ``{"split", "index", "error", "attempts"}``; ``on_tick`` is called with 1 after every sample.
+        """
+        stop = threading.Event()
+        thread = threading.Thread(target=self._drain, args=(on_tick, stop), daemon=True)
+        thread.start()
+        todo, running, deaths = collections.deque(tasks), {}, collections.Counter()
+        try:
+            while todo or running:
+                while todo and len(running) < self._workers:
+                    task = todo.popleft()
+                    running[self._pool.submit(_worker_task, task)] = task
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                if any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+                    self._pool.shutdown(wait=True, cancel_futures=True)  # every task in flight died with it
+                    self._pool = self._start()
+                    for task in running.values():
+                        deaths[task[1:3]] += 1
+                        name = shard_name(task[1], task[2])
+                        if deaths[task[1:3]] > self._max_retries:
+                            on_result({"split": task[1], "index": task[2], "attempts": deaths[task[1:3]],
+                                       "error": "WorkerCrashedError: the worker process died (killed or out of "
+                                                "memory) while making the shard"})
+                        else:
+                            logger.warning("%s: a worker process died while making it; trying again", name)
+                            todo.appendleft(task)
+                    running.clear()
+                    continue
+                for f in done:
+                    running.pop(f)
+                    on_result(f.result())
+        finally:
+            stop.set()
+            thread.join()
+
+    def close(self, kill: bool = False) -> None:
+        """Stop the workers: after their current shard, or at once with ``kill`` (an interrupted run)."""
+        if kill:  # ProcessPoolExecutor has no public way to stop running work before Python 3.14
+            for p in list(getattr(self._pool, "_processes", {}).values()):
+                p.kill()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> LocalPool:
+        return self
+
+    def __exit__(self, exc_type, *exc) -> None:
+        self.close(kill=exc_type is not None)
+
+
+def run_pool(tasks: list, workers: int, on_result, on_tick, max_retries: int = 0, fault: str | None = None) -> None:
+    """Run shard tasks on a new :class:`LocalPool` of ``min(workers, len(tasks))`` processes, then close it."""
+    with LocalPool(min(workers, len(tasks)), max_retries, fault) as pool:
+        pool.run(tasks, on_result, on_tick)
