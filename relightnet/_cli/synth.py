@@ -143,7 +143,8 @@ def register(sub) -> None:
     p.add_argument("--lmax", type=int, help="SH order of lights and transports (default: 2, K = 9)")
     p.add_argument("--sequence", type=int, metavar="T", help="make clips of T frames instead of still samples")
     p.add_argument("--config", help="a .yaml/.json SynthConfig file (flags override its values)")
-    p.add_argument("--workers", type=int, help="generator processes (default: the CPUs available; 0: in-process)")
+    p.add_argument("--workers", type=int, help="generator processes (default: the CPUs available; 0: in-process; "
+                   "not used with --ray)")
     p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
                    help="run one Ray task per shard: on the running cluster (RAY_ADDRESS or 'ray start' here), "
                    "else a new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")

@@ -9,7 +9,8 @@ and ``manifest.json``::
                           "shards": [{"file": "train-00000.npz", "index": 0, "start": 0, "count": 16,
                                       "sha256": "...", "bytes": 123456}, ...]}, ...}}
 
-The manifest is rewritten (atomically) after every finished shard and has no
+The manifest is rewritten (atomically) as shards finish (at most once a second, and at
+the end; a shard written but not listed yet is verified and listed on resume) and has no
 timestamps, so an interrupted run that is run again ends with the same manifest and
 the same shard bytes as an uninterrupted one — whatever the number of workers, local or
 on a Ray cluster (:mod:`relightnet.distributed.ray_synth`): every sample is seeded by
@@ -27,6 +28,7 @@ import contextlib
 import json
 import logging
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +52,11 @@ from .shards import (
 __all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed", "default_workers"]
 
 logger = logging.getLogger("relightnet.data.synth")
+
+#: The driver rewrites the manifest at most this often while shards come in (and at the end):
+#: with hundreds of workers, one rewrite per shard would make the driver the bottleneck.
+#: A shard written but not yet listed when the driver is killed is verified and listed on resume.
+MANIFEST_EVERY_S = 1.0
 
 
 class ShardsFailed(RelightError):
@@ -348,13 +355,17 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
             failures.append((shard_name(r["split"], r["index"]), r["error"]))
             return
         _add_entry(manifest, r)
-        _write_manifest(out_dir, manifest)
+        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
+            _write_manifest(out_dir, manifest)
+            written[0] = time.monotonic()
 
+    written = [time.monotonic()]
     tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
     try:
         _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
     finally:
         bar.close()
+        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
         _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
     if failures:
         raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
