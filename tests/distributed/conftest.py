@@ -15,7 +15,14 @@ def ray_cluster():
     """The ``ray`` module, connected to a fresh local 2-CPU cluster (its address: ``ray_cluster.address``)."""
     import ray
 
-    ray.init(num_cpus=2, include_dashboard=False)
+    for attempt in range(3):  # Ray gives its raylet a fixed 30 s to register: a heavily loaded machine may miss it
+        try:
+            ray.init(num_cpus=2, include_dashboard=False)
+            break
+        except Exception as e:  # noqa: BLE001 - ray raises a bare Exception for this
+            ray.shutdown()
+            if "timed out during startup" not in str(e) or attempt == 2:
+                raise
     try:
         assert ray.get_runtime_context().gcs_address.startswith("127.0.0.1:")
         yield ray
