@@ -8,6 +8,9 @@ import pytest
 
 # Before ray is imported anywhere: a local instance then binds 127.0.0.1 only (no network address).
 os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+# Ray's workers at the test run's own priority (Ray lowers them by 15 by default; on a shared machine
+# that starves them).
+os.environ.setdefault("RAY_worker_niceness", "0")
 
 
 @pytest.fixture(scope="session")
