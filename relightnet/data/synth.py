@@ -298,8 +298,8 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
         body: with ``workers=0``, a prebuilt AnnyBody or ``SynthAssets`` to reuse (built if None).
         ray: a :class:`relightnet.distributed.RayOptions` to run one Ray task per shard on a
             cluster instead (needs the optional ``ray`` package); None: locally.
-        max_retries: times a failed shard is tried again (Ray: also when its worker process or
-            node dies; locally: when it raises).
+        max_retries: times a shard that raised, or whose worker process died (pool or Ray; or
+            its Ray node), is tried again.
 
     Returns:
         The manifest (also in ``out_dir/manifest.json``).
