@@ -151,8 +151,8 @@ def register(sub) -> None:
     p.add_argument("--cpus-per-task", type=pos_float, default=1.0,
                    help="--ray: CPUs reserved per shard task (default: 1)")
     p.add_argument("--max-retries", type=nonneg_int, default=2,
-                   help="times a failed shard is tried again (with --ray also when its process or node dies; "
-                   "default: 2)")
+                   help="times a shard that raised or whose worker process (or Ray node) died is tried again "
+                   "(default: 2)")
     p.add_argument("--compression", choices=("deflate", "store"), default="deflate",
                    help="shard compression (default: deflate)")
     p.add_argument("--n", type=int, default=8, help="--preview: samples (rows) in the sheet (default: 8)")
