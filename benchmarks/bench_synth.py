@@ -30,7 +30,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.body import AnnyBody  # noqa: E402
-from relightnet.data import SynthConfig, synth  # noqa: E402
+from relightnet.data import SynthConfig, pool, synth  # noqa: E402
 from relightnet.data import render_sample as rs  # noqa: E402
 from relightnet.data.generate import generate_sample, prepare_assets  # noqa: E402
 from relightnet.data.shards import stack_samples, write_shard  # noqa: E402
@@ -96,7 +96,7 @@ def bench_pool(cfg: SynthConfig, workers: int, n: int) -> tuple[float, float]:
     with tempfile.TemporaryDirectory() as d:
         tasks = [(cfg.to_dict(), "train", i, d, "deflate") for i in range(n // cfg.shard_size)]
         t_start = time.perf_counter()
-        synth.run_pool(tasks, workers, on_result=lambda r: None, on_tick=lambda: stamps.append(time.perf_counter()))
+        pool.run_pool(tasks, workers, on_result=lambda r: None, on_tick=lambda n: stamps.append(time.perf_counter()))
         t_end = time.perf_counter()
     first = sorted(stamps)[workers - 1]  # every worker has made its first sample
     return (len(stamps) - workers) / (t_end - first), first - t_start

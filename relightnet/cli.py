@@ -20,7 +20,7 @@ logger = logging.getLogger("relightnet")
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
     "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "relight", "avatar", "compare", "blender",
-    "demo",
+    "demo", "batch",
 ]
 
 

@@ -51,6 +51,17 @@ def pos_int(text: str) -> int:
     return v
 
 
+def pos_float(text: str) -> float:
+    """A finite number > 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not v > 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return v
+
+
 def _int_in(text: str, lo: int, hi: int, step: int, expected: str) -> int:
     """An integer in [lo, hi] that is a multiple of ``step``, else an argparse error saying ``expected``."""
     try:

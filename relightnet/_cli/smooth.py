@@ -6,22 +6,12 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, nonneg_int, pos_int
+from .common import add_command, nonneg_int, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
 
 OFFLINE = ("hermite", "poly", "savgol")
 CAUSAL = ("ema", "one-euro", "fir")
-
-
-def _pos_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not v > 0 or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return v
 
 
 def _smooth(args, sh):
@@ -125,7 +115,7 @@ def register(sub) -> None:
     p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz or .json")
     p.add_argument("--method", default="hermite",
                    help=f"one of {', '.join(OFFLINE + CAUSAL)} (default: hermite)")
-    p.add_argument("--knots", type=_pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
+    p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
     p.add_argument("--tangents", choices=("catmull-rom", "free"), default="catmull-rom",
                    help="hermite: knot tangents from finite differences or fitted (default: catmull-rom)")
     p.add_argument("--degree", type=int, default=None,
@@ -140,10 +130,10 @@ def register(sub) -> None:
     p.add_argument("--switches", choices=("auto", "none"), default="auto",
                    help="offline: split the sequence at persistent jumps (default: auto)")
     p.add_argument("--iterations", type=pos_int, default=3, help="offline outlier passes (default: 3)")
-    p.add_argument("--alpha", type=_pos_float, default=0.3, help="ema: weight of the new frame (default: 0.3)")
-    p.add_argument("--min-cutoff", type=_pos_float, default=0.5, help="one-euro: cutoff at rest, Hz (default: 0.5)")
+    p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the new frame (default: 0.3)")
+    p.add_argument("--min-cutoff", type=pos_float, default=0.5, help="one-euro: cutoff at rest, Hz (default: 0.5)")
     p.add_argument("--beta", type=float, default=1.0, help="one-euro: cutoff gain per unit speed (default: 1)")
-    p.add_argument("--rate", type=_pos_float, default=30.0, help="one-euro: frames per second (default: 30)")
+    p.add_argument("--rate", type=pos_float, default=30.0, help="one-euro: frames per second (default: 30)")
     p.add_argument("--persist", type=pos_int, default=2,
                    help="causal: frames a jump must last to count as a switch (default: 2)")
     p.add_argument("--truth", default=None, help="true light sequence, for the error and the plot")

@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import add_command, key_value_arg
+from .common import add_command, key_value_arg, nonneg_int, pos_float
 
 logger = logging.getLogger("relightnet.synth")
 
@@ -21,7 +21,12 @@ train count; val and test keep the config's proportions to train (defaults 64:8:
 N/8 and N/4, rounded up) unless --split-count sets them. Running the same command again
 resumes: finished shards are checked (sha256) and kept; other settings are an error.
 --sequence T makes clips of T frames instead (shard_size clips per shard, a frame axis
-after the sample axis)."""
+after the sample axis).
+
+--ray [ADDRESS] runs one Ray task per shard on a cluster (a running one, else a local
+instance; ADDRESS: HOST:PORT of a head node, or 'local'); --out must then be a folder every
+node sees. The shards are byte-identical to a local run. A shard that fails is retried
+(--max-retries); one that keeps failing is named with its error and the exit status is 1."""
 
 
 def _splits():
@@ -90,10 +95,15 @@ def run(args: argparse.Namespace) -> int:
     workers = default_workers() if args.workers is None else args.workers
     if workers < 0:
         raise InputError(f"--workers: expected an integer >= 0, got {workers}")
+    ray = None
+    if args.ray is not None:
+        from ..distributed import RayOptions
+
+        ray = RayOptions(address=args.ray or None, cpus_per_task=args.cpus_per_task)
     splits = None if not args.splits else [s.strip() for s in args.splits.split(",") if s.strip()]
     try:
         m = run_synth(Path(args.out), cfg, workers=workers, splits=splits, progress=not args.quiet,
-                      compression=args.compression)
+                      compression=args.compression, ray=ray, max_retries=args.max_retries)
     except KeyboardInterrupt:
         sys.stderr.write(f"relightnet synth: interrupted; run the same command again to resume {args.out}\n")
         return 130
@@ -110,6 +120,8 @@ def register(sub) -> None:
         "  relightnet synth --out data/tiny --count 8 --res 64 --n-dirs 32 --split-count test=0\n"
         "  relightnet synth --out data/big --config synth.yaml --splits train\n"
         "  relightnet synth --out data/clips --sequence 16 --count 32 --res 128\n"
+        "  relightnet synth --out /shared/data/big --count 100000 --ray            # running cluster, else local\n"
+        "  relightnet synth --out /shared/data/big --count 100000 --ray head:6379 --cpus-per-task 1\n"
         "  relightnet synth --verify data/synth\n"
         "  relightnet synth --preview data/synth --out sheet.png --n 8\n",
     )
@@ -131,7 +143,16 @@ def register(sub) -> None:
     p.add_argument("--lmax", type=int, help="SH order of lights and transports (default: 2, K = 9)")
     p.add_argument("--sequence", type=int, metavar="T", help="make clips of T frames instead of still samples")
     p.add_argument("--config", help="a .yaml/.json SynthConfig file (flags override its values)")
-    p.add_argument("--workers", type=int, help="generator processes (default: the CPUs available; 0: in-process)")
+    p.add_argument("--workers", type=int, help="generator processes (default: the CPUs available; 0: in-process; "
+                   "not used with --ray)")
+    p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
+                   help="run one Ray task per shard: on the running cluster (RAY_ADDRESS or 'ray start' here), "
+                   "else a new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")
+    p.add_argument("--cpus-per-task", type=pos_float, default=1.0,
+                   help="--ray: CPUs reserved per shard task (default: 1)")
+    p.add_argument("--max-retries", type=nonneg_int, default=2,
+                   help="times a shard that raised or whose worker process (or Ray node) died is tried again "
+                   "(default: 2)")
     p.add_argument("--compression", choices=("deflate", "store"), default="deflate",
                    help="shard compression (default: deflate)")
     p.add_argument("--n", type=int, default=8, help="--preview: samples (rows) in the sheet (default: 8)")

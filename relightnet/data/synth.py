@@ -1,4 +1,4 @@
-"""Make a synthetic dataset folder: shards written by a process pool, a manifest, resumable.
+"""Make a synthetic dataset folder: shards written by a process pool or a Ray cluster, a manifest, resumable.
 
 A dataset folder holds ``{split}-{i:05d}.npz`` shards (:mod:`relightnet.data.shards`)
 and ``manifest.json``::
@@ -9,10 +9,14 @@ and ``manifest.json``::
                           "shards": [{"file": "train-00000.npz", "index": 0, "start": 0, "count": 16,
                                       "sha256": "...", "bytes": 123456}, ...]}, ...}}
 
-The manifest is rewritten (atomically) after every finished shard and has no
+The manifest is rewritten (atomically) as shards finish (at most once a second, and at
+the end; a shard written but not listed yet is verified and listed on resume) and has no
 timestamps, so an interrupted run that is run again ends with the same manifest and
-the same shard bytes as an uninterrupted one — whatever the number of workers: every
-sample is seeded by (seed, split, index) and generated with one torch thread.
+the same shard bytes as an uninterrupted one — whatever the number of workers, local or
+on a Ray cluster (:mod:`relightnet.distributed.ray_synth`): every sample is seeded by
+(seed, split, index) and generated with one torch thread. Workers write shards (each
+atomically, into a folder every worker sees); only the driver writes the manifest. A
+shard that still fails after its retries is named, with its error, in :class:`ShardsFailed`.
 
 With ``cfg.sequence_frames = T > 0`` every item is a clip from ``generate_sequence``:
 a shard holds ``shard_size`` clips, each field gaining a frame axis (n, T, H, W, C).
@@ -23,15 +27,13 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
-import multiprocessing as mp
 import os
-import queue
-import threading
+import time
 from pathlib import Path
 
 import numpy as np
 
-from ..checks import InputError
+from ..checks import InputError, RelightError
 from ..io import atomic_write
 from .config import SPLITS, SynthConfig
 from .shards import (
@@ -47,9 +49,27 @@ from .shards import (
     write_shard,
 )
 
-__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_pool", "run_synth", "default_workers"]
+__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed", "default_workers"]
 
 logger = logging.getLogger("relightnet.data.synth")
+
+#: The driver rewrites the manifest at most this often while shards come in (and at the end):
+#: with hundreds of workers, one rewrite per shard would make the driver the bottleneck.
+#: A shard written but not yet listed when the driver is killed is verified and listed on resume.
+MANIFEST_EVERY_S = 1.0
+
+
+class ShardsFailed(RelightError):
+    """Shards that could not be made after their retries; the others were written and a rerun resumes.
+
+    ``failures``: ``[(shard file name, one-line error), ...]``.
+    """
+
+    def __init__(self, out_dir, failures: list[tuple[str, str]], attempts: int):
+        self.failures = failures
+        named = "; ".join(f"{name}: {err}" for name, err in failures)
+        super().__init__(f"{out_dir}: {len(failures)} shard(s) failed after {attempts} attempt(s) ({named}); "
+                         "the other shards are written; run the same command again to retry")
 
 
 def _write_manifest(out_dir: Path, manifest: dict) -> None:
@@ -217,66 +237,6 @@ def make_and_write_shard(cfg: SynthConfig, split: str, index: int, out_dir, comp
     return {"split": split, "index": index, "start": start, "count": count, **info, "fields": _fields_of(arrays)}
 
 
-# --- worker processes --------------------------------------------------------------------------------
-_WORKER: dict = {}
-
-
-def _worker_init(ticks) -> None:
-    import torch
-
-    torch.set_num_threads(1)
-    with contextlib.suppress(RuntimeError):
-        torch.set_num_interop_threads(1)
-    from .generate import prepare_assets
-
-    _WORKER["body"], _WORKER["ticks"] = prepare_assets(), ticks
-
-
-def _worker_task(task) -> dict:
-    cfg_dict, split, index, out_dir, compression = task
-    ticks = _WORKER["ticks"]
-    return make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,
-                                _WORKER["body"], lambda: ticks.put(1))
-
-
-def run_pool(tasks: list, workers: int, on_result, on_tick) -> None:
-    """Run ``(cfg_dict, split, index, out_dir, compression)`` shard tasks on a process pool.
-
-    Workers start with forkserver (the generator preloaded; never a fork of a threaded
-    process), else spawn; each builds its body assets once and runs torch single-threaded.
-    ``on_result(result)`` gets every finished shard (any order), ``on_tick()`` every sample.
-    """
-    if "forkserver" in mp.get_all_start_methods():
-        ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(["relightnet.data.generate"])
-    else:  # pragma: no cover - not POSIX
-        ctx = mp.get_context("spawn")
-    ticks = ctx.Queue()
-    stop = threading.Event()
-
-    def drain() -> None:
-        while True:
-            try:
-                ticks.get(timeout=0.05)
-            except queue.Empty:
-                if stop.is_set():
-                    return
-                continue
-            on_tick()
-
-    pool = ctx.Pool(min(workers, len(tasks)), initializer=_worker_init, initargs=(ticks,))
-    thread = threading.Thread(target=drain, daemon=True)
-    thread.start()
-    try:
-        for result in pool.imap_unordered(_worker_task, tasks, chunksize=1):
-            on_result(result)
-    finally:
-        pool.terminate()
-        pool.join()
-        stop.set()
-        thread.join()
-
-
 def _cleanup_temp(out_dir: Path) -> None:
     """Remove temporary files a killed run left behind (atomic writes never leave half files in place)."""
     for p in out_dir.glob(".*.tmp"):
@@ -285,33 +245,77 @@ def _cleanup_temp(out_dir: Path) -> None:
                 p.unlink()
 
 
+def _run_here(tasks: list, body, max_retries: int, on_result, on_tick) -> None:
+    """Run shard tasks in this process, each tried up to ``1 + max_retries`` times."""
+    from ..distributed.cluster import one_line
+    from .generate import prepare_assets
+
+    body = prepare_assets() if body is None else body
+    for cfg_dict, split, index, out_dir, compression in tasks:
+        for attempt in range(1, max_retries + 2):
+            try:
+                on_result(make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,
+                                               body, lambda: on_tick(1)))
+                break
+            except Exception as e:  # noqa: BLE001 - reported with its shard, never lost
+                logger.warning("%s: attempt %d failed: %s", shard_name(split, index), attempt, one_line(e))
+                if attempt > max_retries:
+                    on_result({"split": split, "index": index, "error": one_line(e)})
+
+
+def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result, on_tick) -> None:
+    """Run shard tasks in this process (workers=0), on the local pool, or on Ray (``ray`` given)."""
+    from .pool import FAULT_ENV, run_pool
+
+    fault = os.environ.get(FAULT_ENV) or None
+    if ray is not None:
+        from ..distributed.cluster import connect
+        from ..distributed.ray_synth import run_ray_shards
+
+        with connect(ray.address):
+            run_ray_shards(tasks, on_result, on_tick, cpus_per_task=ray.cpus_per_task, max_retries=max_retries,
+                           fault=fault)
+    elif workers == 0:
+        _run_here(tasks, body, max_retries, on_result, on_tick)
+    else:
+        run_pool(tasks, workers, on_result, on_tick, max_retries=max_retries, fault=fault)
+
+
 def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress: bool = True,
-              compression: str = "deflate", body=None) -> dict:
+              compression: str = "deflate", body=None, ray=None, max_retries: int = 2) -> dict:
     """Make every missing shard of a dataset folder, and its manifest.
 
     Args:
-        out_dir: dataset folder (created if needed; its parent must exist).
+        out_dir: dataset folder (created if needed; its parent must exist; with ``ray``, a path
+            every node of the cluster sees).
         cfg: generator config (counts, res, seed, shard size, ...).
         workers: generator processes, one shard per task (forkserver/spawn; each builds its body
             assets once and writes its shards); 0 runs in this process. The bytes written do not
-            depend on it.
+            depend on it. Ignored with ``ray``.
         splits: which splits to make now (default: all with a non-zero count).
         progress: show a tqdm bar (samples/s).
         compression: shard compression, ``"deflate"`` or ``"store"``.
         body: with ``workers=0``, a prebuilt AnnyBody or ``SynthAssets`` to reuse (built if None).
+        ray: a :class:`relightnet.distributed.RayOptions` to run one Ray task per shard on a
+            cluster instead (needs the optional ``ray`` package); None: locally.
+        max_retries: times a shard that raised, or whose worker process died (pool or Ray; or
+            its Ray node), is tried again.
 
     Returns:
         The manifest (also in ``out_dir/manifest.json``).
 
     Raises:
         InputError: bad arguments, or ``out_dir`` holds a dataset made with another config.
+        ShardsFailed: some shards still failed after their retries (the others are written and
+            in the manifest; nothing half-written is left).
     """
     from .generate import GENERATOR_VERSION
 
     if not isinstance(cfg, SynthConfig):
         raise InputError(f"cfg: expected a SynthConfig, got {type(cfg).__name__}")
-    if int(workers) != workers or workers < 0:
-        raise InputError(f"workers: expected an integer >= 0, got {workers!r}")
+    for name, v in (("workers", workers), ("max_retries", max_retries)):
+        if int(v) != v or v < 0:
+            raise InputError(f"{name}: expected an integer >= 0, got {v!r}")
     splits = [s for s in SPLITS if cfg.counts.get(s, 0)] if splits is None else list(splits)
     bad = [s for s in splits if s not in SPLITS]
     if bad:
@@ -344,23 +348,27 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
 
     bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
                smoothing=0.1, dynamic_ncols=True)
+    failures = []
 
     def finished(r: dict) -> None:
+        if "error" in r:
+            failures.append((shard_name(r["split"], r["index"]), r["error"]))
+            return
         _add_entry(manifest, r)
-        _write_manifest(out_dir, manifest)
+        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
+            _write_manifest(out_dir, manifest)
+            written[0] = time.monotonic()
 
+    written = [time.monotonic()]
+    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
     try:
-        if workers == 0:
-            from .generate import prepare_assets
-
-            body = prepare_assets() if body is None else body
-            for s, i, _, _ in todo:
-                finished(make_and_write_shard(cfg, s, i, out_dir, compression, body, lambda: bar.update(1)))
-        else:
-            run_pool([(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo], int(workers),
-                     finished, lambda: bar.update(1))
+        _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
     finally:
         bar.close()
+        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
+        _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
+    if failures:
+        raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
     logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
     return manifest
 

@@ -1,0 +1,10 @@
+"""Jobs beyond one process: Ray clusters for ``synth --ray`` and ``batch``.
+
+``ray`` is optional (``pip install 'relightnet[ray]'``) and imported only by the functions
+of this package that need it (``connect``, :mod:`.ray_synth`, :mod:`.ray_jobs`); the batch
+runner works locally without it.
+"""
+
+from .cluster import RayOptions, connect, import_ray, one_line
+
+__all__ = ["RayOptions", "connect", "import_ray", "one_line"]

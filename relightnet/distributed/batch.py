@@ -1,0 +1,182 @@
+"""``relightnet batch``: run a jobs file locally or on a Ray cluster, resumable, with a summary.
+
+Every job runs as its own ``relightnet`` subprocess (a crash, a leak or a hung library
+takes down that job only) with its resources: locally, as many at once as the CPUs (and
+GPUs) allow, in file order; on Ray, one task per job with ``num_cpus``/``num_gpus``. The
+semantics are the same: a bad entry fails alone with its one-line reason, a crashed job is
+retried, a job whose output already exists complete is skipped (outputs are written
+atomically, so an existing ``--out`` file is complete; an ``--out`` folder counts as
+complete when the previous summary says that job was done), and the summary
+``JOBS.summary.json`` (beside the jobs file) is rewritten atomically after every job, so a
+killed driver resumes by running the same command again. Each job's output (stdout and
+stderr, the last 20,000 characters) goes to ``JOBS.logs/NNN.log``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from pathlib import Path
+
+from ..io import atomic_write
+from .jobs import Job, execute_job, load_jobs
+
+__all__ = ["run_batch", "summary_path", "SUMMARY_FORMAT"]
+
+logger = logging.getLogger("relightnet.distributed")
+
+SUMMARY_FORMAT = "relightnet-batch/1"
+
+
+def summary_path(jobs_file) -> Path:
+    """``JOBS.summary.json`` beside ``JOBS.yaml``."""
+    p = Path(jobs_file)
+    return p.with_name(f"{p.stem}.summary.json")
+
+
+def _logs_dir(jobs_file) -> Path:
+    p = Path(jobs_file)
+    return p.with_name(f"{p.stem}.logs")
+
+
+def _previous(path: Path) -> dict:
+    """{(command, args): record} of the jobs a previous summary says were done or skipped."""
+    try:
+        old = json.loads(path.read_text())
+        return {(r["command"], tuple(r["args"])): r for r in old.get("jobs", [])
+                if r.get("status") in ("done", "skipped")}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return {}
+
+
+def _complete(job: Job, cwd: Path, previous: dict) -> bool:
+    out = cwd / job.out
+    if out.is_file():
+        return True
+    return out.is_dir() and (job.command, job.args) in previous
+
+
+def _local_gpus() -> int:
+    import torch
+
+    return torch.cuda.device_count() if torch.cuda.is_available() else 0
+
+
+def run_local(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
+    """Run jobs on this machine, as many at once as their CPUs and GPUs fit, in file order.
+
+    A job asking for more CPUs than the machine has runs alone with all of them; one asking
+    for more GPUs than there are fails. ``on_done(job, result)`` is called in this thread.
+    """
+    from ..data.synth import default_workers
+
+    cpus = default_workers()
+    gpus = _local_gpus() if any(j.gpus for j in jobs) else 0
+    free_cpus, free_gpus = float(cpus), list(range(gpus))
+    pending, running = list(jobs), {}
+    with ThreadPoolExecutor(max_workers=max(1, len(jobs))) as pool:
+        while pending or running:
+            for job in list(pending):
+                need_c, need_g = min(job.cpus, cpus), math.ceil(job.gpus)
+                if need_g > gpus:
+                    pending.remove(job)
+                    on_done(job, {"status": "failed", "error": f"needs {job.gpus:g} GPU(s); this machine has {gpus}",
+                                  "seconds": 0.0, "attempts": 0, "output": ""})
+                    continue
+                if need_c > free_cpus + 1e-9 or need_g > len(free_gpus):
+                    continue
+                ids, free_gpus = free_gpus[:need_g], free_gpus[need_g:]
+                free_cpus -= need_c
+                env = {"OMP_NUM_THREADS": str(max(1, int(need_c)))}
+                if gpus:
+                    env["CUDA_VISIBLE_DEVICES"] = ",".join(map(str, ids))
+                running[pool.submit(execute_job, job, cwd, max_retries, env)] = (job, need_c, ids)
+                pending.remove(job)
+            if not running:
+                continue
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for fut in done:
+                job, c, ids = running.pop(fut)
+                free_cpus += c
+                free_gpus = sorted(free_gpus + ids)
+                on_done(job, fut.result())
+
+
+def _counts(records: list[dict]) -> dict:
+    return {s: sum(r["status"] == s for r in records) for s in ("done", "skipped", "failed", "pending")}
+
+
+def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) -> dict:
+    """Run every job of a jobs file that is not complete yet (module docstring).
+
+    Args:
+        jobs_file: the YAML/JSON jobs file (:mod:`relightnet.distributed.jobs`).
+        ray: a :class:`relightnet.distributed.RayOptions` (its ``address``) to run on a Ray
+            cluster; None: on this machine.
+        max_retries: times a crashed job is run again (bad input is not retried).
+        progress: show a tqdm bar over the jobs.
+
+    Returns:
+        The summary (also written to ``JOBS.summary.json``): ``{"format", "jobs_file", "runner",
+        "counts": {done, skipped, failed, pending}, "jobs": [{index, command, args, out,
+        resources, status, error, seconds, attempts, log}]}``.
+
+    Raises:
+        InputError: the jobs file is unreadable or has no ``jobs`` list.
+    """
+    from tqdm import tqdm
+
+    jobs = load_jobs(jobs_file)
+    cwd = Path.cwd()
+    spath, logs = summary_path(jobs_file), _logs_dir(jobs_file)
+    previous = _previous(spath)
+    records = [{**j.record(), "status": "pending", "error": None, "seconds": 0.0, "attempts": 0, "log": None}
+               for j in jobs]
+    summary = {"format": SUMMARY_FORMAT, "jobs_file": str(jobs_file), "runner": "ray" if ray else "local",
+               "counts": {}, "jobs": records}
+
+    def write() -> None:
+        summary["counts"] = _counts(records)
+        with atomic_write(spath, "w") as f:
+            f.write(json.dumps(summary, indent=1) + "\n")
+
+    bar = tqdm(total=len(jobs), unit="job", desc="batch", disable=not progress, dynamic_ncols=True)
+
+    def done(job: Job, result: dict) -> None:
+        rec = records[job.index]
+        rec.update({k: result[k] for k in ("status", "error", "attempts")}, seconds=round(result["seconds"], 3))
+        if result.get("output"):
+            logs.mkdir(exist_ok=True)
+            rec["log"] = str(logs / f"{job.index:03d}.log")
+            with atomic_write(rec["log"], "w") as f:
+                f.write(f"$ relightnet {job.command} {' '.join(job.args)}\n{result['output'].rstrip()}\n")
+        logger.info("job %d (%s): %s%s", job.index, " ".join([job.command, *([job.out] if job.out else [])]),
+                    rec["status"], f": {rec['error']}" if rec["error"] else "")
+        bar.update(1)
+        write()
+
+    todo = []
+    for job in jobs:
+        if job.error is not None:
+            done(job, {"status": "failed", "error": job.error, "seconds": 0.0, "attempts": 0})
+        elif _complete(job, cwd, previous):
+            done(job, {"status": "skipped", "error": None, "seconds": 0.0, "attempts": 0})
+        else:
+            todo.append(job)
+    write()
+    try:
+        if todo and ray is not None:
+            from .cluster import connect
+            from .ray_jobs import run_ray_jobs
+
+            with connect(ray.address):
+                run_ray_jobs(todo, os.fspath(cwd), max_retries, done)
+        elif todo:
+            run_local(todo, os.fspath(cwd), max_retries, done)
+    finally:
+        bar.close()
+        write()
+    return summary
