@@ -19,7 +19,8 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "compare", "blender", "demo",
+    "light", "render", "synth", "model", "smooth", "onnx", "segment", "relight", "avatar", "compare", "blender",
+    "demo",
 ]
 
 
