@@ -12,8 +12,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-#: scikit-image's colour photographs of real scenes (none shows a person).
-BACKGROUNDS = ("coffee", "rocket", "chelsea", "motorcycle", "camera")
+#: scikit-image's photographs of real scenes without a person (brick: grey; not "camera": it shows one).
+BACKGROUNDS = ("coffee", "rocket", "chelsea", "motorcycle", "brick")
 
 
 def background(name: str, size: tuple[int, int]) -> torch.Tensor:
