@@ -19,8 +19,8 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "relight", "avatar", "compare", "blender",
-    "demo", "batch",
+    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "relight", "avatar", "compare",
+    "blender", "demo", "batch",
 ]
 
 

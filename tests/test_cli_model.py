@@ -62,7 +62,7 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
                  "--out", str(tmp_path / "l.npz")]) == 1
     assert "device tpu: expected cpu or cuda" in capsys.readouterr().err
     if not torch.cuda.is_available():  # the message a GPU-less machine gives, not "unreadable checkpoint"
-        assert main(["estimate-light", str(tmp_path / "p.png"), "--device", "cuda",
+        assert main(["estimate-light", str(tmp_path / "p.png"), "--device", "cuda", "--mask-source", "head",
                      "--out", str(tmp_path / "l.npz")]) == 1
         assert "CUDA is not available" in capsys.readouterr().err
     for size in ("0", "-16", "100000"):

@@ -6,7 +6,7 @@ import argparse
 import logging
 
 from ..temporal.smoothers import SMOOTHING
-from .common import LIGHT_HELP, add_command, add_model_args, nonneg_int, pos_int
+from .common import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.avatar")
 
@@ -25,7 +25,8 @@ def run(args: argparse.Namespace) -> int:
     res = avatar(args.target, args.out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
-                 model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet)
+                 model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
+                 mask_source=args.mask_source)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -36,6 +37,7 @@ def register(sub) -> None:
         "Put an avatar into a target video, lit by the target's light: the CNN estimates the light of every "
         "frame from the person in it, the estimates are smoothed over time, and the avatar is rendered with "
         "PRT transport under that light and composited over the frames (3D path).",
+        "  relightnet avatar --target clip.mp4 --motion walk --out avatar.mp4   # masks: person segmentation\n"
         "  relightnet avatar --target clip.mp4 --target-masks masks/ --motion walk --out avatar.mp4\n"
         "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
         "--albedo skin.png --out a.mp4\n"
@@ -43,7 +45,8 @@ def register(sub) -> None:
     )
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
     p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
-                   "(default: the model's mask head)")
+                   "(default: the person segmentation, tracked from frame to frame; --mask-source)")
+    add_mask_source_arg(p)
     p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
                    "target's frames")
     p.add_argument("--motion", default="walk",

@@ -111,33 +111,40 @@ def load_single_light(arg: str, lmax: int | None = None):
     return light
 
 
-def read_photo(image: str, mask: str | None):
+MASK_SOURCE_HELP = ("where the person's mask comes from when none is given (and a photo has no alpha): "
+                    "'segment' (default): the shipped person segmentation; 'head': the CNN's mask head")
+
+
+def add_mask_source_arg(p: argparse.ArgumentParser) -> None:
+    """--mask-source segment|head: what finds the person when the user gives no mask."""
+    from ..segment.sources import MASK_SOURCES
+
+    p.add_argument("--mask-source", default="segment", choices=MASK_SOURCES, help=MASK_SOURCE_HELP)
+
+
+def read_photo(image: str, mask: str | None, mask_source: str = "segment"):
     """A photo, its person mask and its alpha for the photo commands (the photo decoded once).
 
-    The mask is ``--mask`` (its alpha where it has transparency, else white = person); without
-    one, a cut-out photo's own alpha; else None (the model's mask head finds the person).
+    The mask follows :mod:`relightnet.segment.sources`: ``--mask`` (its alpha where it has
+    transparency, else white = person); without one, a cut-out photo's own alpha; else the
+    person segmentation (``mask_source="segment"``) or None (``"head"``: the model's mask head).
 
     Returns:
         ((3, H, W) sRGB in [0, 1], (H, W) mask or None, (H, W) alpha or None).
     """
-    import logging
-
     from ..io import read_image_alpha, read_mask
+    from ..segment.sources import person_mask
 
     img, alpha = read_image_alpha(image)
     img = img.permute(2, 0, 1)
-    if mask:
-        m = read_mask(mask)
-        what = f"--mask {mask}"
-    elif alpha is None:
-        return img, None, None
-    else:
-        m, what = (alpha > 0.5).float(), f"{image}: alpha channel"
-        logging.getLogger("relightnet").info("no --mask: using the alpha channel of %s as the person's mask", image)
-    if tuple(m.shape) != tuple(img.shape[1:]):
-        raise ValueError(f"{what}: size {tuple(m.shape)} differs from the image's {tuple(img.shape[1:])}")
-    if not m.any():
-        raise ValueError(f"{what}: empty mask (no person pixel): expected the person's mask")
+    given = read_mask(mask) if mask else None
+    m = person_mask(img, given, alpha, mask_source, name=image)
+    if given is not None or alpha is not None:  # the user's mask or the photo's alpha: check it fits
+        what = f"--mask {mask}" if mask else f"{image}: alpha channel"
+        if tuple(m.shape) != tuple(img.shape[1:]):
+            raise ValueError(f"{what}: size {tuple(m.shape)} differs from the image's {tuple(img.shape[1:])}")
+        if not m.any():
+            raise ValueError(f"{what}: empty mask (no person pixel): expected the person's mask")
     return img, m, alpha
 
 

@@ -7,7 +7,7 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command, read_photo, work_size
+from .common import add_checkpoint_args, add_command, add_mask_source_arg, read_photo, work_size
 
 logger = logging.getLogger("relightnet.model")
 
@@ -51,10 +51,8 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     from ..model.inference import estimate_light
     from ..sh import save_light
 
-    image, mask, _ = read_photo(args.image, args.mask)
+    image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
     model = load_model(args.checkpoint, device=args.device)
-    if mask is None:
-        logger.info("no --mask: using the model's mask head to find the person")
     light = estimate_light(model, image, mask, size=args.size)
     save_light(args.out, light.cpu())
     logger.info("wrote %s", args.out)
@@ -90,11 +88,13 @@ def register(sub) -> None:
     p.set_defaults(func=run_evaluate)
 
     p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person.",
+                    "  relightnet estimate-light person.jpg --out light.npz        # mask: person segmentation\n"
                     "  relightnet estimate-light person.jpg --mask person_mask.png --out light.npz\n"
                     "  relightnet estimate-light person.png --out light_ke18.npy    # Kanamori-Endo format (BGR)\n")
     p.add_argument("image", help="image file (PNG/JPEG)")
     p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "
-                   "if it has one, else the model's mask head")
+                   "if it has one, else the person segmentation (--mask-source)")
+    add_mask_source_arg(p)
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
     p.add_argument("--size", type=work_size, default=None,
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")

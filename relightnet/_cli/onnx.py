@@ -54,11 +54,13 @@ def register(sub) -> None:
     p.set_defaults(func=run_export)
 
     p = add_command(sub, "onnx-run", "Run an exported model over a video with ONNX Runtime (lights per frame).",
+                    "  relightnet onnx-run relightnet.onnx --video clip.mp4 --out-dir out/clip  # masks: segmentation\n"
                     "  relightnet onnx-run relightnet.onnx --video clip.mp4 --masks masks/ --out-dir out/clip\n"
                     "  relightnet onnx-run m.onnx --video clip.mp4 --masks clip_masks.mp4 --out-dir out/clip\n")
     p.add_argument("model", help="model from 'relightnet export'")
     p.add_argument("--video", required=True, help="input video (mp4, mkv, ...)")
-    p.add_argument("--masks", required=True, help="folder of per-frame mask images (sorted) or a mask video")
+    p.add_argument("--masks", help="folder of per-frame mask images (sorted) or a mask video (default: the person "
+                   "segmentation, tracked from frame to frame)")
     p.add_argument("--out-dir", required=True, help="output folder: lights_raw.npz, lights_smoothed.npz, albedo.mp4")
     p.add_argument("--size", type=work_size, default=None, help="working size (default: the model's training size)")
     p.set_defaults(func=run_onnx)

@@ -6,13 +6,22 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_checkpoint_args, add_command, add_model_args, load_single_light, read_photo
+from .common import (
+    LIGHT_HELP,
+    add_checkpoint_args,
+    add_command,
+    add_mask_source_arg,
+    add_model_args,
+    load_single_light,
+    read_photo,
+)
 
 logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    image, mask, alpha = read_photo(args.image, args.mask)  # first: a bad photo fails before the heavy imports
+    # first: a bad photo fails before the heavy imports (and the person is found in it)
+    image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
     import numpy as np
     import torch
 
@@ -50,18 +59,21 @@ def run_video(args: argparse.Namespace) -> int:
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
     relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
-                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo)
+                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
+                  mask_source=args.mask_source)
     return 0
 
 
 def register(sub) -> None:
     p = add_command(sub, "relight-image", "Relight a photo of a person with any light (2D path: the CNN).",
+                    "  relightnet relight-image person.jpg --light sunset --out relit.png    # mask: segmentation\n"
                     "  relightnet relight-image person.png --mask mask.png --light sunset --out relit.png\n"
                     "  relightnet relight-image person.jpg --light light.npy --out relit.png --save-maps maps/\n"
                     "  relightnet relight-image person.png --mask m.png --light studio.exr --absolute --out r.png\n")
     p.add_argument("image", help="photo (PNG/JPEG)")
     p.add_argument("--mask", help="person mask (white = person, or its alpha); default: the photo's alpha if it "
-                   "has one, else the model's mask head")
+                   "has one, else the person segmentation (--mask-source)")
+    add_mask_source_arg(p)
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="relit image (PNG)")
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
@@ -74,10 +86,13 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
     p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",
+                    "  relightnet relight-video clip.mp4 --light sunset --out relit.mp4      # masks: segmentation\n"
                     "  relightnet relight-video clip.mp4 --masks masks/ --light sunset --out relit.mp4\n"
                     "  relightnet relight-video clip.mp4 --masks masks.mp4 --light studio --turntable 30 --out t.mp4\n")
     p.add_argument("video", help="input video (mp4, mkv, ...)")
-    p.add_argument("--masks", required=True, help="folder of per-frame mask images (sorted) or a mask video")
+    p.add_argument("--masks", help="folder of per-frame mask images (sorted) or a mask video (default: the person "
+                   "segmentation, tracked from frame to frame; --mask-source)")
+    add_mask_source_arg(p)
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="output video (.mp4 or .mkv)")
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")

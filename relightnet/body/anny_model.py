@@ -26,7 +26,6 @@ equal to, the rest mesh its blend shapes produce.
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Mapping
 
 import torch
@@ -85,7 +84,8 @@ def load_anny(dtype: torch.dtype = torch.float32, device: torch.device | str | N
     """Build ``anny.Anny()`` (default rig and MakeHuman topology, pure-torch dense LBS).
 
     The cache is ``$ANNY_CACHE_DIR`` as set *now* (anny itself reads it once, at import),
-    else ``~/.cache/anny``; a cold cache takes minutes and ~1 GB to fill
+    else the checkout's ``.cache/anny`` that ``make`` filled, else ``~/.cache/anny``
+    (:func:`relightnet.body.cache.anny_cache_dir`); a cold cache takes minutes and ~1 GB to fill
     (``python -m relightnet.body.cache``), a warm one loads in well under a second.
     Dense LBS (``skinning_method="lbs"``) is plain torch: no NVIDIA Warp import, any device,
     differentiable.
@@ -93,11 +93,14 @@ def load_anny(dtype: torch.dtype = torch.float32, device: torch.device | str | N
     import anny
     import anny.paths
 
-    cache = os.environ.get("ANNY_CACHE_DIR")
+    from .cache import anny_cache_dir
+
+    cache = anny_cache_dir()
     if cache:
         anny.paths.set_anny_cache_path(cache)
     else:
-        logger.info("ANNY_CACHE_DIR is not set: anny uses %s", anny.paths.get_anny_cache_path())
+        logger.info("ANNY_CACHE_DIR is not set and make filled no cache: anny uses %s",
+                    anny.paths.get_anny_cache_path())
 
     model = anny.Anny(skinning_method="lbs")
     return model.to(device=device, dtype=dtype).eval()

@@ -16,12 +16,12 @@ from .image import (
     to_uint8,
     write_image,
 )
-from .video import VideoInfo, VideoWriter, frames_with_masks, read_masks, read_video, video_info
+from .video import VideoInfo, VideoWriter, count_frames, frames_with_masks, read_masks, read_video, video_info
 
 __all__ = [
     "atomic_write",
     "ENVMAP_SUFFIXES", "read_envmap", "write_envmap",
     "linear_to_srgb", "srgb_to_linear", "to_uint8", "read_image", "read_image_alpha", "read_alpha", "read_mask",
     "write_image",
-    "VideoInfo", "VideoWriter", "frames_with_masks", "read_masks", "read_video", "video_info",
+    "VideoInfo", "VideoWriter", "count_frames", "frames_with_masks", "read_masks", "read_video", "video_info",
 ]

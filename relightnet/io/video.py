@@ -25,7 +25,7 @@ from .image import limit_hint, open_limited, to_uint8, upright
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["VideoInfo", "video_info", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
+__all__ = ["VideoInfo", "video_info", "count_frames", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
 
 _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), ".mkv": ("ffv1", "bgr0", {})}
 
@@ -71,6 +71,20 @@ def video_info(path) -> VideoInfo:
         if not (math.isfinite(fps) and 0 < fps <= 1000):
             raise InputError(f"{path}: frame rate {fps:g} is not a usable video frame rate")
         return VideoInfo(max(int(s.frames or 0), 0), fps, size)
+
+
+def count_frames(path) -> int:
+    """Frames of a video: the container's count, else (mkv, webm store none) by decoding every frame."""
+    import av
+
+    n = video_info(path).n_frames
+    if n:
+        return n
+    with contextlib.closing(_open(path)) as c:
+        try:
+            return sum(1 for _ in c.decode(video=0))
+        except av.error.FFmpegError as e:
+            raise InputError(f"{path}: corrupt video ({e})") from None
 
 
 def read_video(path) -> Iterator[np.ndarray]:
@@ -214,8 +228,8 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
     :func:`~relightnet.io.read_mask`).
 
     Returns:
-        (count, iterator of (H, W) float32 masks in {0, 1}); count is 0 when a mask video's
-        container does not store its frame count.
+        (count, iterator of (H, W) float32 masks in {0, 1}); a mask video whose container stores
+        no frame count (mkv, webm) is counted by decoding it.
     """
     from .image import read_mask
 
@@ -227,7 +241,7 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
         if not files:
             raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
         return len(files), (read_mask(f) for f in files)
-    return video_info(p).n_frames, (
+    return count_frames(p), (
         (torch.from_numpy(f).float().mean(-1) > 127).float() for f in read_video(p)
     )
 

@@ -216,6 +216,8 @@ def quantize_int8(src, dst, mode: str = "static", calibration=None) -> Path:
 def run_video(model_path, video, masks, out_dir, size: int | None = None, threads: int = 0) -> dict:
     """Stream a video through an exported model: per-frame raw and smoothed lights, albedo video.
 
+    ``masks``: a folder of mask images or a mask video; None: the person segmentation
+    (:func:`relightnet.segment.video_masks`; the exported graph has no mask head).
     Frames are cropped around each frame's mask (KE18 framing), resized to ``size`` (default:
     the model's training size from its metadata), and run in order so the smoothing state
     carries over. Writes ``lights_raw.npz`` and ``lights_smoothed.npz`` ((T, K, 3) light
@@ -224,7 +226,8 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     Returns:
         ``{"raw": (T, K, 3), "smoothed": (T, K, 3)}`` numpy arrays.
     """
-    from ..io import VideoWriter, frames_with_masks
+    from ..io import VideoWriter
+    from ..segment.sources import video_masks
     from ..sh import save_light
     from .inference import _paste
 
@@ -232,7 +235,7 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     size = int(r.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
     if size % 16:
         raise InputError(f"size: expected a multiple of 16, got {size}")
-    info, _, pairs = frames_with_masks(video, masks)
+    info, _, pairs = video_masks(video, masks, "segment")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: --out-dir is a file; expected a folder (made if needed)")

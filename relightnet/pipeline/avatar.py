@@ -3,7 +3,7 @@
 Two streaming passes over the target video, so memory does not grow with its length:
 
 1. **Light.** The CNN estimates the SH light of every frame from the person in it (masks
-   given, or found by the model's mask head). The per-frame estimates are smoothed over
+   given, or found by the person segmentation or the model's mask head). The per-frame estimates are smoothed over
    time (default: robust Hermite splines with 3-MAD outlier correction and light-switch
    detection, :func:`relightnet.temporal.smooth_lights`). ``light=`` skips this pass.
 2. **Render.** The avatar (Anny or SMPL, posed by a motion) is rendered each frame with
@@ -31,7 +31,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import VideoWriter, atomic_write, read_video, video_info
+from ..io import VideoWriter, atomic_write, count_frames, read_video, video_info
 from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
@@ -61,36 +61,30 @@ class AvatarResult:
     switches: torch.Tensor | None = None
 
 
-def _frames(video, masks):
-    """(t, frame (3, H, W) float, mask (H, W) | None) of a video, with masks checked when given."""
-    from ..io import frames_with_masks
-
-    if masks is not None:
-        return frames_with_masks(video, masks)[2]
-    return ((t, torch.from_numpy(f).permute(2, 0, 1).float() / 255, None) for t, f in enumerate(read_video(video)))
-
-
 @torch.no_grad()
-def estimate_video_lights(model, video, masks=None, progress: bool = True) -> torch.Tensor:
+def estimate_video_lights(model, video, masks=None, progress: bool = True, mask_source: str = "segment"
+                          ) -> torch.Tensor:
     """Per-frame light estimates of a video (the first pass of :func:`avatar`).
 
     Args:
         model: a :class:`~relightnet.model.RelightNet` or a predictor (:mod:`.backends`).
         video: the target video file.
-        masks: folder of mask images or a mask video (one per frame), or None to use the
-            model's mask head.
+        masks: folder of mask images or a mask video (one per frame), or None: ``mask_source``
+            (``segment``: the person segmentation; ``head``: the model's mask head).
 
     Returns:
         (T, K, 3) raw lights, camera-relative light frame, linear RGB.
     """
     from tqdm import tqdm
 
+    from ..segment.sources import video_masks
+
     predict = as_predictor(model)
-    if masks is None and not predict.has_mask_head:
-        raise InputError("--target-masks: this model has no mask head; give the target person's masks")
-    info = video_info(video)
+    if masks is None and mask_source == "head" and not predict.has_mask_head:
+        raise InputError("--mask-source head: this model has no mask head; give --target-masks or use 'segment'")
+    info, _, frames = video_masks(video, masks, mask_source)
     lights = []
-    for _, img, mask in tqdm(_frames(video, masks), total=info.n_frames or None, desc="estimate light",
+    for _, img, mask in tqdm(frames, total=info.n_frames or None, desc="estimate light",
                              unit="frame", disable=not progress):
         lights.append(predict.light(img, mask).float().cpu())
     if not lights:
@@ -115,7 +109,7 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "hermite"):
     return res.smoothed, res.outliers, res.switches
 
 
-def _fingerprint(video, masks, predictor_name: str) -> str:
+def _fingerprint(video, masks, predictor_name: str, mask_source: str = "segment") -> str:
     def stat(p):
         p = Path(p)
         if p.is_dir():
@@ -123,7 +117,7 @@ def _fingerprint(video, masks, predictor_name: str) -> str:
         st = p.stat()
         return [p.name, st.st_size, st.st_mtime_ns]
 
-    return json.dumps({"video": stat(video), "masks": None if masks is None else stat(masks),
+    return json.dumps({"video": stat(video), "masks": mask_source if masks is None else stat(masks),
                        "model": predictor_name}, sort_keys=True)
 
 
@@ -181,7 +175,7 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
 
 def _count_frames(video) -> int:
     """Frames of a video: from the container, else by decoding it (streaming)."""
-    return video_info(video).n_frames or sum(1 for _ in read_video(video))
+    return count_frames(video)
 
 
 @torch.no_grad()
@@ -203,6 +197,7 @@ def avatar(
     antialias: bool = False,
     model_name: str = "model",
     progress: bool = True,
+    mask_source: str = "segment",
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -216,7 +211,7 @@ def avatar(
         body: ``"anny"``, ``"smpl:PATH"`` or a body model.
         albedo: ``"default"``, a texture image path (sRGB, in the body's UV layout), a (V, 3)
             per-vertex albedo or a :class:`~relightnet.render.TexturedAlbedo`.
-        target_masks: masks of the person in the target (folder or mask video); None: mask head.
+        target_masks: masks of the person in the target (folder or mask video); None: ``mask_source``.
         plate: what to composite over: None (the target's frames), a clean-plate video of the
             same size (the scene without the person) or one image.
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
@@ -227,6 +222,8 @@ def avatar(
         antialias: smooth the avatar's silhouette against the background (analytic edge
             antialiasing at the silhouette pixels; about 24 ms per 512² frame).
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
+        mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
+            (the model's mask head); :mod:`relightnet.segment.sources`.
 
     Returns:
         :class:`AvatarResult`.
@@ -254,13 +251,13 @@ def avatar(
         if model is None:
             raise InputError("model: give a model (or predictor) to estimate the light, or a light")
         predict = as_predictor(model)
-        fp = _fingerprint(target, target_masks, model_name)
+        fp = _fingerprint(target, target_masks, model_name, mask_source)
         raw = _reuse(lights_file, fp)
         reused = raw is not None
         if reused:
             logger.info("reusing the light estimates in %s", lights_file)
         else:
-            raw = estimate_video_lights(predict, target, target_masks, progress)
+            raw = estimate_video_lights(predict, target, target_masks, progress, mask_source)
         n = raw.shape[0]
         smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
     else:

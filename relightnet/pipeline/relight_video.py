@@ -18,9 +18,10 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
-from ..io import VideoWriter, frames_with_masks
+from ..io import VideoWriter
 from ..io.image import linear_to_srgb, srgb_to_linear
 from ..model.network import photo_albedo, shading_map
+from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
 from .backends import as_predictor
 from .relight_image import match_exposure, to_model_order
@@ -32,20 +33,23 @@ __all__ = ["relight_video"]
 
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
-                  smoothing: float = 0.3, progress: bool = True, detail: bool = True) -> int:
+                  smoothing: float = 0.3, progress: bool = True, detail: bool = True,
+                  mask_source: str = "segment") -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
         model: the CNN: a :class:`RelightNet` or a predictor (:mod:`relightnet.pipeline.backends`).
         video: input video file (its sound, if any, is carried over to ``out``).
-        masks: folder of per-frame mask images (sorted) or a mask video, one per frame; a frame
-            whose mask is empty (the person out of view) is written unchanged.
+        masks: folder of per-frame mask images (sorted) or a mask video, one per frame, or None
+            (``mask_source``: the person segmentation, or the CNN's mask head); a frame whose mask
+            is empty (the person out of view) is written unchanged.
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
         smoothing: EMA weight of the newest frame in the source-light estimate (1 = none).
         detail: relight each frame's own albedo (frame / predicted shading under the smoothed
             source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
+        mask_source: without ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`).
 
     Returns:
         The number of frames written.
@@ -57,14 +61,17 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     if not 0 < smoothing <= 1:
         raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
     predict = as_predictor(model)
-    info, n_masks, pairs = frames_with_masks(video, masks, allow_empty=True)
+    if masks is None and mask_source == "head" and not predict.has_mask_head:
+        raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
+    info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
     light = to_model_order(light, predict.lmax)
     src = None
     n = 0
     empty: list[int] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
-        for t, img, mask in tqdm(pairs, total=n_masks, desc="relight-video", unit="frame", disable=not progress):
-            if not mask.any():  # the person is out of the frame: nothing to relight
+        for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
+                                 disable=not progress):
+            if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
                 writer.write(img.permute(1, 2, 0))
                 empty.append(t)
                 n += 1
@@ -85,7 +92,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
-            raise InputError(f"{masks}: every mask is empty: no person to relight")
+            raise InputError(f"{masks or video}: every mask is empty: no person to relight")
     if empty:
         logger.warning("%d frame(s) with an empty mask were written unchanged (first: frame %d)", len(empty), empty[0])
     logger.info("wrote %s (%d frames)", Path(out), n)

@@ -85,7 +85,7 @@ def test_photo_commands_take_a_cutouts_alpha_as_the_mask(tmp_path):
     assert img.shape == (3, 20, 30) and mask is not None and int(mask.sum()) == 100
     plain = tmp_path / "plain.png"
     plain.write_bytes(_encode("png", av.VideoFrame.from_ndarray(rgba[..., :3].copy(), format="rgb24")))
-    assert read_photo(str(plain), None)[1] is None  # no alpha: the mask head's job
+    assert read_photo(str(plain), None, mask_source="head")[1] is None  # no alpha: the mask head's job
     empty = rgba.copy()
     empty[..., 3] = 0
     with pytest.raises(ValueError, match="alpha channel: empty mask"):

@@ -94,3 +94,51 @@ def test_frames_with_masks_from_a_mask_video_and_its_checks(tmp_path):
             w.write(f)
     with pytest.raises(InputError, match="different number of frames"):
         list(frames_with_masks(tmp_path / "v.mkv", tmp_path / "m2.mkv")[2])
+
+
+def _write_webm(path, frames, fps=5):
+    """A VP8 webm (the container stores no frame count), written with PyAV directly."""
+    import av
+
+    with av.open(str(path), "w", format="webm") as c:
+        s = c.add_stream("libvpx", rate=fps)
+        s.width, s.height, s.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
+        s.options = {"crf": "4", "b:v": "1M"}
+        for f in frames:
+            for p in s.encode(av.VideoFrame.from_ndarray(f, format="rgb24")):
+                c.mux(p)
+        for p in s.encode():
+            c.mux(p)
+
+
+@pytest.mark.parametrize("video_ext, mask_ext", [(".mp4", ".mkv"), (".mkv", ".mp4"), (".mp4", ".webm"),
+                                                 (".webm", ".mp4"), (".mkv", ".webm"), (".webm", ".mkv")])
+def test_mask_videos_pair_across_containers(tmp_path, video_ext, mask_ext):
+    """mkv and webm store no frame count: counted by decoding, so they pair with an mp4 both ways."""
+    from relightnet.io import count_frames, frames_with_masks
+
+    frames = [f.copy() for f in _frames(4, 32, 32)]
+    masks = [np.zeros((32, 32, 3), np.uint8) for _ in range(4)]
+    for m in masks:
+        m[8:24, 8:24] = 255
+    for name, items in ((f"v{video_ext}", frames), (f"m{mask_ext}", masks)):
+        if name.endswith(".webm"):
+            _write_webm(tmp_path / name, items)
+        else:
+            with VideoWriter(tmp_path / name, fps=5) as w:
+                for f in items:
+                    w.write(f)
+    assert count_frames(tmp_path / f"m{mask_ext}") == 4
+    info, n, pairs = frames_with_masks(tmp_path / f"v{video_ext}", tmp_path / f"m{mask_ext}")
+    got = list(pairs)
+    assert n == 4 and len(got) == 4 and all(abs(int(m.sum()) - 256) <= 16 for _, _, m in got)
+    if mask_ext != ".mp4":  # one mask short: refused, naming the counts
+        short = tmp_path / f"short{mask_ext}"
+        if mask_ext == ".webm":
+            _write_webm(short, masks[:3])
+        else:
+            with VideoWriter(short, fps=5) as w:
+                for f in masks[:3]:
+                    w.write(f)
+        with pytest.raises(InputError, match="3 masks"):
+            list(frames_with_masks(tmp_path / f"v{video_ext}", short)[2])

@@ -92,7 +92,8 @@ def test_avatar_mask_head_and_onnx_backend_agree(target, model, anny_body, tmp_p
     from relightnet.pipeline.backends import TorchPredictor, make_predictor
 
     video, masks, _ = target
-    res = avatar(video, tmp_path / "mh.mkv", model=model, body=anny_body, n_dirs=8, progress=False)
+    res = avatar(video, tmp_path / "mh.mkv", model=model, body=anny_body, n_dirs=8, progress=False,
+                 mask_source="head")
     assert res.n_frames == N and torch.isfinite(res.lights_raw).all()
     monkeypatch.setenv("RELIGHTNET_CACHE", str(tmp_path / "cache"))
     onnx = make_predictor("onnx")
