@@ -50,6 +50,9 @@ class SynthConfig:
         jitter: random shift/scale of the crop (fraction of the crop side).
         ages: range of Anny's age parameter (default: teens to adults).
         sequence_frames: frames per clip when making sequences (0: still samples).
+        light_mix: optional weights of the light sources (``relightnet.data.lights.LIGHT_SOURCES``:
+            hdri, sky_sun, lobes, fills, preetham, window, mixture); when given it replaces
+            ``synthetic_light_prob``. Empty: the original draw (env maps and three procedural kinds).
     """
 
     seed: int = 0
@@ -68,6 +71,7 @@ class SynthConfig:
     jitter: float = 0.03
     ages: tuple = (0.6, 1.0)
     sequence_frames: int = 0
+    light_mix: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         def bad(name, expected):
@@ -109,6 +113,13 @@ class SynthConfig:
             bad("ages", "(low, high) within Anny's age range [-1/3, 1]")
         if not isinstance(self.sequence_frames, int) or self.sequence_frames < 0:
             bad("sequence_frames", "an integer >= 0")
+        from .lights import LIGHT_SOURCES
+
+        mix = self.light_mix
+        if not isinstance(mix, dict) or set(mix) - set(LIGHT_SOURCES) or any(
+            not isinstance(v, int | float) or not v >= 0 for v in mix.values()
+        ) or (mix and not sum(mix.values()) > 0):
+            bad("light_mix", f"a mapping from {LIGHT_SOURCES} to weights >= 0 (not all 0)")
 
     @property
     def n_coeffs(self) -> int:
