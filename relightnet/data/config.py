@@ -53,6 +53,9 @@ class SynthConfig:
         light_mix: optional weights of the light sources (``relightnet.data.lights.LIGHT_SOURCES``:
             hdri, sky_sun, lobes, fills, preetham, window, mixture); when given it replaces
             ``synthetic_light_prob``. Empty: the original draw (env maps and three procedural kinds).
+        clip_lights: how a clip's light changes: ``random`` (turning, changing level, sometimes a
+            switch), ``constant`` (one fixed light) or ``switch`` (fixed lights, one switch half-way);
+            the last two make the clips that measure drift and lag.
     """
 
     seed: int = 0
@@ -72,6 +75,7 @@ class SynthConfig:
     ages: tuple = (0.6, 1.0)
     sequence_frames: int = 0
     light_mix: dict = field(default_factory=dict)
+    clip_lights: str = "random"
 
     def __post_init__(self) -> None:
         def bad(name, expected):
@@ -113,6 +117,8 @@ class SynthConfig:
             bad("ages", "(low, high) within Anny's age range [-1/3, 1]")
         if not isinstance(self.sequence_frames, int) or self.sequence_frames < 0:
             bad("sequence_frames", "an integer >= 0")
+        if self.clip_lights not in ("random", "constant", "switch"):
+            bad("clip_lights", "'random', 'constant' or 'switch'")
         from .lights import LIGHT_SOURCES
 
         mix = self.light_mix

@@ -156,7 +156,8 @@ def _window(rng: np.random.Generator, lmax: int) -> tuple[torch.Tensor, dict]:
     windows = []
     for _ in range(int(rng.integers(1, 3))):
         elev, azim = float(rng.uniform(math.radians(-5), math.radians(40))), float(rng.uniform(-math.pi, math.pi))
-        hw, hh = float(rng.uniform(math.radians(8), math.radians(40))), float(rng.uniform(math.radians(8), math.radians(30)))
+        hw = float(rng.uniform(math.radians(8), math.radians(40)))
+        hh = float(rng.uniform(math.radians(8), math.radians(30)))
         daylight = bool(rng.uniform() < 0.7)
         col = (np.array([0.85, 0.95, 1.1]) if daylight else np.array([1.0, 0.78, 0.55])) * rng.uniform(0.9, 1.1, 3)
         power = float(rng.uniform(0.3, 1.0))

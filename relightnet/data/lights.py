@@ -38,7 +38,6 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from .light_families import FAMILIES, family_light
 from ..sh import (
     ambient_light,
     directional_light,
@@ -48,6 +47,7 @@ from ..sh import (
     rotate_sh,
     rotate_sh_up,
 )
+from .light_families import FAMILIES, family_light
 
 __all__ = [
     "LIGHT_SOURCES",

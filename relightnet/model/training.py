@@ -42,7 +42,9 @@ class TrainConfig:
     (A ⊙ (T·L) with the target transport, so that the rendering terms agree with the transport the
     network learns — for ``transport_unoccluded`` the photo's occlusion shading would otherwise leak
     into the albedo); ``init`` starts from the weights of a checkpoint (fine-tuning) instead of a
-    random initialisation."""
+    random initialisation; ``precision`` ``fp32`` or ``bf16`` (autocast of the network's
+    convolutions; losses and the light solve stay float32) and ``channels_last`` (NHWC
+    memory format) are speed settings (BENCHMARKS.md measures them)."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -60,6 +62,8 @@ class TrainConfig:
                                                    "intensity": [0.5, 2.0], "white_balance": 0.1})
     threads: int = 0
     init: str | None = None
+    precision: str = "fp32"
+    channels_last: bool = False
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -71,6 +75,8 @@ class TrainConfig:
             raise InputError(
                 f"train config target: expected 'transport' or 'transport_unoccluded', got {self.target!r}"
             )
+        if self.precision not in ("fp32", "bf16"):
+            raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {self.precision!r}")
         if self.render_target not in ("image", "model"):
             raise InputError(f"train config render_target: expected 'image' or 'model', got {self.render_target!r}")
         NetConfig(**self.net)
@@ -200,9 +206,11 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
+    if cfg.channels_last:
+        model = model.to(memory_format=torch.channels_last)
     if cfg.init and not resume:
         init = load_checkpoint(cfg.init, map_location=device)
-        if init["net_config"] != dataclasses.asdict(net_cfg):
+        if NetConfig(**init["net_config"]) != net_cfg:
             raise InputError(f"{cfg.init}: its network configuration differs from the training config's")
         model.load_state_dict(init["model"])
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
@@ -230,7 +238,11 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
         if cfg.render_target == "model":
             batch["render"] = batch["albedo"] * shading_map(batch["transport"], batch["light"])
-        pred = ddp(batch_to_input(batch))
+        x = batch_to_input(batch)
+        if cfg.channels_last:
+            x = x.contiguous(memory_format=torch.channels_last)
+        with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+            pred = ddp(x)
         terms = relight_losses(pred, batch, weights)
         opt.zero_grad(set_to_none=True)
         terms["total"].backward()
