@@ -12,7 +12,10 @@ masked by the person mask M and averaged over masked pixels:
   item of the batch (rolled by one), what the model is used for: a new light;
 - total variation of T̂ and Â inside the eroded mask;
 - mask: binary cross-entropy of the mask head against M (when present);
-- light head (``hybrid`` networks): |L̂_head − L|, so that the solve's prior is a light too.
+- light head (``hybrid`` networks): |L̂_head − L|, so that the solve's prior is a light too;
+- light shape (off by default): the scale-invariant irradiance error of L̂ against L over the
+  sphere, ``sqrt(1 − ⟨a, b⟩² / (‖a‖² ‖b‖²))`` in the irradiance inner product (weights Â_l²;
+  :func:`scale_invariant_light_error`): direction and colour, not exposure.
 """
 
 from __future__ import annotations
@@ -22,9 +25,10 @@ from dataclasses import asdict, dataclass
 import torch
 from torch.nn import functional as F
 
+from ..sh.irradiance import cosine_lobe_per_coeff
 from .network import Prediction, shading_map
 
-__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses"]
+__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses", "scale_invariant_light_error"]
 
 
 @dataclass(frozen=True)
@@ -42,6 +46,7 @@ class LossWeights:
     tv: float = 0.05
     mask: float = 0.5
     light_head: float = 0.0
+    light_si: float = 0.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -65,6 +70,19 @@ def total_variation(x: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
     dx = (x[..., :, 1:] - x[..., :, :-1]).abs() * (mask[..., :, 1:] * mask[..., :, :-1])
     dy = (x[..., 1:, :] - x[..., :-1, :]).abs() * (mask[..., 1:, :] * mask[..., :-1, :])
     return (dx.sum() + dy.sum()) / (mask.sum() * x.shape[1]).clamp_min(1.0)
+
+
+def scale_invariant_light_error(est: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
+    """(B,) ``min_s ‖s E_est − E_true‖ / ‖E_true‖`` over the sphere and RGB of (B, K, 3) lights.
+
+    Exact (the SH basis is orthonormal): the irradiance inner product is Σ_k Â_l² a_k b_k.
+    Equals :func:`relightnet.sh.metrics.light_error` (which samples directions).
+    """
+    k = est.shape[-2]
+    w = cosine_lobe_per_coeff(round(k**0.5) - 1, dtype=est.dtype, device=est.device)[:, None] ** 2
+    ab, aa, bb = ((est * true * w).sum((-2, -1)), (est * est * w).sum((-2, -1)), (true * true * w).sum((-2, -1)))
+    cos2 = ab.square() / (aa * bb).clamp_min(1e-12)
+    return (1 - cos2).clamp_min(1e-8).sqrt()
 
 
 def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWeights()) -> dict:
@@ -103,6 +121,8 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
     terms["tv"] = total_variation(Th, inner) + total_variation(Ah, inner)
     if pred.mask is not None:
         terms["mask"] = F.binary_cross_entropy(pred.mask.float().clamp(1e-6, 1 - 1e-6), M)
+    if weights.light_si:
+        terms["light_si"] = scale_invariant_light_error(Lh, L).mean()
     if pred.light_head is not None and weights.light_head:
         terms["light_head"] = (pred.light_head.float() - L).abs().mean()
     w = weights.to_dict()
