@@ -129,7 +129,7 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
             priors.append(prior)
         raw = torch.stack(lights)
         ev, prior = _stack_evidence(evs, priors)
-        smoothed = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg)[0]
+        smoothed = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, meta.get("fps", 30.0))[0]
         switches = meta.get("switch_frames") or []
         out.append({"raw": raw, "smoothed": smoothed, "true": it["light"].float(),
                     "switch": int(switches[0]) if switches else None})

@@ -122,18 +122,20 @@ def estimate_video_evidence(model, video, masks=None, progress: bool = True):
     return torch.stack(lights), ev, (torch.stack(priors) if priors else None)
 
 
-def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2):
+def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
+                        fps: float = 30.0):
     """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
 
-    ``pooled`` shares the light across each shot: the per-frame evidence of the light solve
-    (``evidence``, ``prior`` from :func:`estimate_video_evidence`, ``reg`` the network's λ) is
-    pooled between detected light switches and solved once
+    ``pooled`` shares the light across frames: the per-frame evidence of the light solve
+    (``evidence``, ``prior`` from :func:`estimate_video_evidence`, ``reg`` the network's λ) of the
+    frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular weights, at the
+    video's ``fps``) and between the same detected light switches is solved jointly
     (:func:`relightnet.temporal.pool_shot_lights`); ``hermite``/``poly``/``savgol`` use
     :func:`relightnet.temporal.smooth_lights` with 3-MAD outlier correction and automatic switch
     detection; ``auto`` is ``pooled`` when there is evidence, else ``hermite``; ``none`` returns
     the raw lights.
     """
-    from ..temporal import pool_shot_lights, smooth_lights
+    from ..temporal import pool_shot_lights, pool_window, smooth_lights
 
     if method not in SMOOTHING:
         raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
@@ -144,7 +146,7 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
         if evidence is None:
             raise InputError("smoothing pooled: the model regresses its light (no solve to pool); "
                              "use hermite, poly, savgol or none")
-        pooled, _, switches = pool_shot_lights(evidence, prior, reg)
+        pooled, _, switches = pool_shot_lights(evidence, prior, reg, window=pool_window(fps))
         return pooled, none, switches
     if method == "none" or raw.shape[0] < 3:
         return raw.clone(), none, none
@@ -301,7 +303,7 @@ def avatar(
             logger.info("reusing the light estimates in %s", lights_file)
         raw, ev, prior = cached if reused else estimate_video_evidence(predict, target, target_masks, progress)
         n = raw.shape[0]
-        smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg)
+        smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, info.fps)
     else:
         fp = ""
         n = _count_frames(target)

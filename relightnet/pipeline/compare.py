@@ -66,6 +66,8 @@ __all__ = ["PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "so
 #: The two paths and the three lights each is shaded with (the row order of the tables).
 PATHS = ("2d", "3d")
 LIGHTS = ("true", "raw", "smoothed")
+#: Frame rate of the generated clips (``meta["fps"]``).
+CLIP_FPS = 30.0
 #: Arrays of a clip that the comparison reads.
 CLIP_FIELDS = ("image", "image_composite", "mask", "albedo", "transport", "light", "background")
 
@@ -187,7 +189,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
             tick()
     raw = torch.stack(raw)
     smoothed, outliers, switches = smooth_video_lights(raw, smoothing, *_stack_evidence(evs, priors),
-                                                       predict.solve_reg)
+                                                       predict.solve_reg, CLIP_FPS)
     smoothed = resize_sh(smoothed, lmax)
     lights = {"true": true, "raw": raw, "smoothed": smoothed}
     a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
@@ -383,7 +385,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         records, light_arrays = [], {}
         secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
         with (tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True) as bar,
-              VideoWriter(stage / "side_by_side.mp4", fps=30.0) as video):
+              VideoWriter(stage / "side_by_side.mp4", fps=CLIP_FPS) as video):
             for meta, clip in _clips(files, clips):
                 index = int(meta["seed"]["index"])
                 geo = _one_thread_geometry(cfg, split, index, T, assets)

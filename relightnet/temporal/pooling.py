@@ -25,7 +25,18 @@ from ..model.light_solve import Evidence, pool_evidence, solve_light
 from .causal import _Causal, _check_alpha, _check_positive, _weights, gate_step
 from .offline import detect_switches
 
-__all__ = ["pooling_weights", "pool_shot_lights", "pooled_step", "PooledSolve"]
+__all__ = ["POOL_SECONDS", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step", "PooledSolve"]
+
+#: How far (seconds) the video jobs pool a frame's evidence to either side, inside its segment: a
+#: constant light stays constant, a light that turns (a camera pan) is still followed.
+POOL_SECONDS = 1.0
+
+
+def pool_window(fps: float, seconds: float = POOL_SECONDS) -> int:
+    """Triangular pooling half-width in frames for a video at ``fps`` (at least 1)."""
+    if not (fps > 0 and seconds > 0):
+        raise InputError(f"pooling window: expected positive fps and seconds, got {fps!r}, {seconds!r}")
+    return max(1, round(fps * seconds))
 
 
 def pooling_weights(switches: torch.Tensor, window: int | None = None) -> torch.Tensor:

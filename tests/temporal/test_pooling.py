@@ -98,3 +98,18 @@ def test_causal_pool_equals_the_offline_pool_on_a_constant_shot():
         y, state = f(per_frame[t:t + 1], state, torch.tensor([t == 0]), evidence=Evidence(ev.M[t:t + 1], ev.r[t:t + 1]))
     offline = pool_shot_lights(ev, None, 1e-3, switches=None)[0][-1]
     assert torch.allclose(y[0], offline, atol=1e-4)
+
+
+def test_a_window_follows_a_turning_light():
+    from relightnet.sh import rotate_sh_up
+    from relightnet.temporal import pool_window
+
+    base = _light(8)
+    lights = [rotate_sh_up(base, 0.05 * t) for t in range(40)]  # ~90° over the shot, no switch
+    ev = _frames(lights, noise=0.05)
+    truth = torch.stack(lights)
+    win = pool_shot_lights(ev, None, 1e-6, window=pool_window(10.0, 0.5), switches=None)[0]
+    shot = pool_shot_lights(ev, None, 1e-6, switches=None)[0]
+    rel = lambda x: float((light_distance(x, truth) / light_norm(truth)).mean())  # noqa: E731
+    assert rel(win) < 0.5 * rel(shot)
+    assert pool_window(30.0) == 30 and pool_window(0.5) == 1
