@@ -25,7 +25,7 @@ import torch
 
 from ..checks import InputError
 from ..data.lights import LIGHT_SOURCES
-from ..sh.metrics import chromaticity_error, direction_error, light_error
+from ..sh.metrics import chromaticity_error, direction_error, scale_invariant_light_error
 
 __all__ = ["split_lights", "still_metrics", "clip_lights", "clip_metrics", "evaluate_light", "format_light_report"]
 
@@ -83,9 +83,10 @@ def still_metrics(est: torch.Tensor, true: torch.Tensor, sources: list[str]) -> 
     """
     ambient = torch.zeros_like(true)
     ambient[:, 0] = true[:, 0]
-    per = {"error": light_error(est, true), "error_hemisphere": light_error(est, true, hemisphere=True),
+    per = {"error": scale_invariant_light_error(est.double(), true),
+           "error_hemisphere": scale_invariant_light_error(est, true, hemisphere=True),
            "direction_deg": direction_error(est, true), "chromaticity": chromaticity_error(est, true),
-           "ambient_error": light_error(ambient, true)}
+           "ambient_error": scale_invariant_light_error(ambient.double(), true)}
     src = np.array(sources)
     out = {}
     for group in [*(s for s in LIGHT_SOURCES if s in set(sources)), "all"]:

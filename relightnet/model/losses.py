@@ -14,8 +14,8 @@ masked by the person mask M and averaged over masked pixels:
 - mask: binary cross-entropy of the mask head against M (when present);
 - light head (``hybrid`` networks): |L̂_head − L|, so that the solve's prior is a light too;
 - light shape (off by default): the scale-invariant irradiance error of L̂ against L over the
-  sphere, ``sqrt(1 − ⟨a, b⟩² / (‖a‖² ‖b‖²))`` in the irradiance inner product (weights Â_l²;
-  :func:`scale_invariant_light_error`): direction and colour, not exposure.
+  sphere (:func:`relightnet.sh.metrics.scale_invariant_light_error`): direction and colour, not
+  exposure.
 """
 
 from __future__ import annotations
@@ -25,10 +25,10 @@ from dataclasses import asdict, dataclass
 import torch
 from torch.nn import functional as F
 
-from ..sh.irradiance import cosine_lobe_per_coeff
+from ..sh.metrics import scale_invariant_light_error
 from .network import Prediction, shading_map
 
-__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses", "scale_invariant_light_error"]
+__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses"]
 
 
 @dataclass(frozen=True)
@@ -70,19 +70,6 @@ def total_variation(x: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
     dx = (x[..., :, 1:] - x[..., :, :-1]).abs() * (mask[..., :, 1:] * mask[..., :, :-1])
     dy = (x[..., 1:, :] - x[..., :-1, :]).abs() * (mask[..., 1:, :] * mask[..., :-1, :])
     return (dx.sum() + dy.sum()) / (mask.sum() * x.shape[1]).clamp_min(1.0)
-
-
-def scale_invariant_light_error(est: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
-    """(B,) ``min_s ‖s E_est − E_true‖ / ‖E_true‖`` over the sphere and RGB of (B, K, 3) lights.
-
-    Exact (the SH basis is orthonormal): the irradiance inner product is Σ_k Â_l² a_k b_k.
-    Equals :func:`relightnet.sh.metrics.light_error` (which samples directions).
-    """
-    k = est.shape[-2]
-    w = cosine_lobe_per_coeff(round(k**0.5) - 1, dtype=est.dtype, device=est.device)[:, None] ** 2
-    ab, aa, bb = ((est * true * w).sum((-2, -1)), (est * est * w).sum((-2, -1)), (true * true * w).sum((-2, -1)))
-    cos2 = ab.square() / (aa * bb).clamp_min(1e-12)
-    return (1 - cos2).clamp_min(1e-8).sqrt()
 
 
 def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWeights()) -> dict:

@@ -3,9 +3,11 @@
 All measures compare irradiance ``E(d) = Σ_k Â_l L_k Y_k(d)`` on a shared set of uniform
 directions (4,096 Fibonacci points, or the camera-facing half of them):
 
-- :func:`light_error`: scale-invariant relative error
-  ``min_s ‖s E_est − E_true‖ / ‖E_true‖`` over all directions and the three channels at
-  once (one scale for RGB: colour errors count, exposure does not);
+- :func:`scale_invariant_light_error`: relative error ``min_s ‖s E_est − E_true‖ / ‖E_true‖`` over
+  all directions and the three channels at once (one scale for RGB: colour errors count,
+  exposure does not) — over the sphere it is exact in coefficient space (the SH basis is
+  orthonormal: the irradiance inner product is Σ_k Â_l² a_k b_k) and differentiable (a
+  training loss); over the camera-facing hemisphere it is sampled;
 - :func:`dominant_direction` / :func:`direction_error`: the direction of the luminance's
   l = 1 vector (where the light mostly comes from) and the angle between two of them;
 - :func:`chromaticity_error`: distance between the (r, g) chromaticities of the mean
@@ -23,8 +25,8 @@ from .basis import sh_basis
 from .directions import fibonacci_sphere
 from .irradiance import cosine_lobe_per_coeff
 
-__all__ = ["METRIC_DIRECTIONS", "irradiance_samples", "light_error", "dominant_direction", "direction_error",
-           "chromaticity_error"]
+__all__ = ["METRIC_DIRECTIONS", "irradiance_samples", "scale_invariant_light_error", "dominant_direction",
+           "direction_error", "chromaticity_error"]
 
 #: Directions the irradiance is compared on.
 METRIC_DIRECTIONS = 4096
@@ -52,22 +54,28 @@ def irradiance_samples(sh: torch.Tensor, hemisphere: bool = False) -> torch.Tens
     return basis @ sh.double()
 
 
-def light_error(est: torch.Tensor, truth: torch.Tensor, hemisphere: bool = False) -> torch.Tensor:
+def scale_invariant_light_error(est: torch.Tensor, truth: torch.Tensor, hemisphere: bool = False) -> torch.Tensor:
     """Scale-invariant relative irradiance error ``min_s ‖s E_est − E_true‖ / ‖E_true‖``.
 
     Args:
         est, truth: (..., K, 3) lights (broadcastable).
-        hemisphere: compare on the camera-facing directions only.
+        hemisphere: compare on the camera-facing directions only (sampled, float64); else over the
+            whole sphere, exactly, in the inputs' dtype (differentiable).
 
     Returns:
-        (...) error in [0, 1] (1: no better than a zero light), float64.
+        (...) error in [0, 1] (1: no better than a zero light).
     """
-    a, b = irradiance_samples(est, hemisphere), irradiance_samples(truth, hemisphere)
-    a, b = torch.broadcast_tensors(a, b)
-    ab, aa, bb = (a * b).sum((-2, -1)), (a * a).sum((-2, -1)), (b * b).sum((-2, -1))
-    s = ab / aa.clamp_min(1e-30)
-    res = (bb - 2 * s * ab + s * s * aa).clamp_min(0)
-    return (res / bb.clamp_min(1e-30)).sqrt()
+    if hemisphere:
+        a, b = irradiance_samples(est, True), irradiance_samples(truth, True)
+        dims, w = (-2, -1), 1.0
+    else:
+        check_shape(est, ["...", "K", 3], name="est")
+        a, b, dims = est, truth.to(est.dtype), (-2, -1)
+        lmax = math.isqrt(est.shape[-2]) - 1
+        w = cosine_lobe_per_coeff(lmax, dtype=est.dtype, device=est.device)[:, None] ** 2
+    ab, aa, bb = (a * b * w).sum(dims), (a * a * w).sum(dims), (b * b * w).sum(dims)
+    cos2 = ab.square() / (aa * bb).clamp_min(1e-30)
+    return (1 - cos2).clamp_min(1e-12).sqrt()
 
 
 def dominant_direction(sh: torch.Tensor) -> torch.Tensor:
