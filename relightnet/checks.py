@@ -37,12 +37,12 @@ class RelightError(Exception):
     """Base class of every error relightnet raises on bad input."""
 
 
-class ShapeError(RelightError, ValueError):
-    """A tensor or array has the wrong shape."""
-
-
 class InputError(RelightError, ValueError):
     """A value is not acceptable: NaN, out of range, unreadable file, ..."""
+
+
+class ShapeError(InputError):
+    """A tensor or array has the wrong shape (a kind of bad input)."""
 
 
 def _fmt(spec: Sequence) -> str:

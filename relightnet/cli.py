@@ -19,7 +19,8 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "smooth", "onnx", "relight", "avatar", "compare", "blender", "demo",
+    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "relight", "avatar", "compare", "blender",
+    "demo",
 ]
 
 
@@ -36,7 +37,30 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(f"relightnet._cli.{name}").register(sub)
+    for command in _leaf_parsers(sub):  # every command reads files: one limit for all
+        command.add_argument("--max-pixels", type=_max_pixels, metavar="N",
+                             help="largest image or video frame decoded, width x height (default: 64000000, "
+                                  "or $RELIGHTNET_MAX_PIXELS); larger files are refused before decoding")
     return parser
+
+
+def _leaf_parsers(sub) -> list[argparse.ArgumentParser]:
+    """The parsers of the commands under ``sub``, nested ones (``light show``) included."""
+    out = []
+    for p in sub.choices.values():
+        nested = [a for a in p._actions if isinstance(a, argparse._SubParsersAction)]
+        out += _leaf_parsers(nested[0]) if nested else [p]
+    return out
+
+
+def _max_pixels(text: str) -> int:
+    try:
+        v = int(float(text))
+    except (ValueError, OverflowError):
+        v = 0
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive number of pixels, got {text!r}")
+    return v
 
 
 def configure_logging(verbose: bool = False, quiet: bool = False) -> None:
@@ -51,6 +75,10 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    if getattr(args, "max_pixels", None):
+        from .io.limits import set_max_pixels
+
+        set_max_pixels(args.max_pixels)
     try:
         return int(args.func(args) or 0)
     except (RelightError, FileNotFoundError, ValueError) as e:

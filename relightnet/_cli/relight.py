@@ -12,6 +12,7 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
+    image, mask, alpha = read_photo(args.image, args.mask)  # first: a bad photo fails before the heavy imports
     import numpy as np
     import torch
 
@@ -20,7 +21,6 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
-    image, mask, alpha = read_photo(args.image, args.mask)
     light = load_single_light(args.light)
     model = load_model(args.checkpoint, device=args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)

@@ -26,6 +26,9 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_shape
+from ..io.arrays import read_npz
+from ..io.atomic import atomic_write
+from ..io.safe_pickle import load_pickle
 from .base import matrix_to_rotvec, rotvec_to_matrix
 
 __all__ = ["Motion", "load_motion", "save_motion", "reorient_motion", "Z_UP_TO_Y_UP"]
@@ -67,6 +70,16 @@ def _fail_shape(fname: str, key: str, expected: str, got) -> ShapeError:
     return ShapeError(f"{fname}: key {key!r}: expected {expected}, got {tuple(got)}")
 
 
+def _camera_tensor(value, fname: str, key) -> torch.Tensor:
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"{fname}: camera {key!r}: not a numeric array") from None
+    if not np.isfinite(a).all():
+        raise InputError(f"{fname}: camera {key!r}: contains NaN or Inf values")
+    return torch.as_tensor(a, dtype=torch.float32)
+
+
 def _validated(raw: dict, fname: str) -> Motion:
     missing = [k for k in ("poses", "betas", "trans") if k not in raw]
     if missing:
@@ -104,11 +117,11 @@ def _validated(raw: dict, fname: str) -> Motion:
         raise InputError(f"{fname}: key 'fps': expected a positive number, got {fps}")
     camera = raw.get("camera")
     if camera is None:
-        camera = {k[len("camera_"):]: raw[k] for k in raw if k.startswith("camera_")} or None
+        camera = {k[len("camera_"):]: raw[k] for k in raw if isinstance(k, str) and k.startswith("camera_")} or None
     elif not isinstance(camera, dict):
         raise InputError(f"{fname}: key 'camera': expected a dict of arrays, got {type(camera).__name__}")
     if camera is not None:
-        camera = {k: torch.as_tensor(np.asarray(v, dtype=np.float64), dtype=torch.float32) for k, v in camera.items()}
+        camera = {str(k): _camera_tensor(v, fname, k) for k, v in camera.items()}
     f32 = torch.float32
     return Motion(torch.as_tensor(poses, dtype=f32), torch.as_tensor(betas, dtype=f32),
                   torch.as_tensor(trans, dtype=f32), fps, camera)
@@ -126,17 +139,9 @@ def load_motion(path: str | Path) -> Motion:
     if not path.is_file():
         raise InputError(f"{path}: no such motion file")
     if path.suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                raw = {k: z[k] for k in z.files}
-        except ValueError as e:
-            raise InputError(f"{fname}: cannot read ({e})") from None
+        raw = read_npz(path, "motion file")
     elif path.suffix == ".pkl":
-        try:
-            with open(path, "rb") as f:
-                raw = pickle.load(f, encoding="latin1")
-        except (pickle.UnpicklingError, EOFError, ModuleNotFoundError) as e:
-            raise InputError(f"{fname}: cannot read ({e})") from None
+        raw = load_pickle(path, "motion file")  # arrays and containers only: nothing in it runs
         if not isinstance(raw, dict):
             raise InputError(f"{fname}: expected a dict of arrays, got {type(raw).__name__}")
     else:
@@ -157,11 +162,12 @@ def save_motion(path: str | Path, motion: Motion) -> Path:
     }
     cam = {k: v.detach().cpu().numpy() for k, v in (motion.camera or {}).items()}
     if path.suffix == ".npz":
-        np.savez(path, **arrays, **{f"camera_{k}": v for k, v in cam.items()})
+        with atomic_write(path) as f:
+            np.savez(f, **arrays, **{f"camera_{k}": v for k, v in cam.items()})
     elif path.suffix == ".pkl":
         if cam:
             arrays["camera"] = cam
-        with open(path, "wb") as f:
+        with atomic_write(path) as f:
             pickle.dump(arrays, f)
     else:
         raise InputError(f"{path.name}: expected a .npz or .pkl motion file")

@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import io
 import math
-import pickle
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -33,6 +32,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError
+from ..io.arrays import read_npz
+from ..io.safe_pickle import load_pickle
 from .base import BodyModel, BodyOutput, broadcast_batch
 
 __all__ = ["SMPLBody", "SMPL_KEYS", "load_smpl_file", "smpl_to_world", "spherical_uv"]
@@ -61,53 +62,63 @@ def load_smpl_file(path: str | Path) -> dict[str, np.ndarray]:
     if not path.is_file():
         raise InputError(f"{path}: no such SMPL model file")
     if path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            raw = {k: z[k] for k in z.files if k in SMPL_KEYS + ("vt", "ft")}
+        raw = read_npz(path, "SMPL model file", SMPL_KEYS + ("vt", "ft"))
     elif path.suffix == ".pkl":
-        try:
-            with open(path, "rb") as f:
-                raw = pickle.load(f, encoding="latin1")
-        except ModuleNotFoundError as e:
-            raise InputError(
-                f"{path.name}: this pickle needs {e.name!r} (chumpy-era SMPL file); convert it to .npz "
-                "with numpy arrays (e.g. with the chumpy-free scripts of the smplx project) first"
-            ) from None
+        # Arrays, sparse matrices and chumpy arrays only (official SMPL files): nothing in it runs.
+        raw = load_pickle(path, "SMPL model file")
         if not isinstance(raw, dict):
             raise InputError(f"{path.name}: expected a dict of arrays, got {type(raw).__name__}")
     else:
         raise InputError(f"{path.name}: expected an .npz or .pkl SMPL model file")
+    return _checked_arrays(raw, path.name)
+
+
+def _checked_arrays(raw: dict, name: str) -> dict[str, np.ndarray]:
+    """The SMPL arrays of ``raw`` as float64 / int64, every shape, index and value checked."""
     missing = [k for k in SMPL_KEYS if k not in raw]
     if missing:
-        raise InputError(f"{path.name}: missing key(s) {missing} (an SMPL file needs {list(SMPL_KEYS)})")
+        raise InputError(f"{name}: missing key(s) {missing} (an SMPL file needs {list(SMPL_KEYS)})")
     out = {}
     for k in SMPL_KEYS + ("vt", "ft"):
         if k not in raw:
             continue
         a = raw[k]
-        if hasattr(a, "toarray"):  # scipy sparse J_regressor in .pkl files
-            a = a.toarray()
-        a = np.asarray(a)
+        if not isinstance(a, np.ndarray) or a.dtype.kind not in "biuf":
+            raise InputError(f"{name}: key {k!r}: expected a numeric array, got {type(a).__name__}"
+                             f"{'' if not isinstance(a, np.ndarray) else ' of ' + str(a.dtype)}")
+        if not np.isfinite(a).all():
+            raise InputError(f"{name}: key {k!r}: contains NaN or Inf values")
         out[k] = a.astype(np.int64) if k in ("f", "ft", "kintree_table") else a.astype(np.float64)
-    V = out["v_template"].shape[0]
-    J = out["kintree_table"].shape[-1]
+    v, kt = out["v_template"], out["kintree_table"]
+    V = v.shape[0] if v.ndim == 2 and v.shape[0] > 0 else None
+    J = kt.shape[-1] if kt.ndim == 2 and kt.shape[-1] > 0 else None
+    names = {"v_template": "(V, 3)", "f": "(F, 3)", "J_regressor": f"(J={J}, V={V})",
+             "weights": f"(V={V}, J={J})", "posedirs": f"(V={V}, 3, {9 * (J or 1) - 9})",
+             "shapedirs": f"(V={V}, 3, S)", "kintree_table": "(2, J)"}
     expect = {
         "v_template": (V, 3), "f": (None, 3), "J_regressor": (J, V), "weights": (V, J),
-        "posedirs": (V, 3, 9 * (J - 1)), "shapedirs": (V, 3, None), "kintree_table": (2, J),
+        "posedirs": (V, 3, 9 * (J or 1) - 9), "shapedirs": (V, 3, None), "kintree_table": (2, J),
     }
     for k, shape in expect.items():
         a = out[k]
-        if a.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, a.shape, strict=True)):
-            names = {"v_template": "(V, 3)", "f": "(F, 3)", "J_regressor": f"(J={J}, V={V})",
-                     "weights": f"(V={V}, J={J})", "posedirs": f"(V={V}, 3, {9 * (J - 1)})",
-                     "shapedirs": f"(V={V}, 3, S)", "kintree_table": f"(2, J={J})"}
-            raise ShapeError(f"{path.name}: key {k!r}: expected {names[k]}, got {tuple(a.shape)}")
+        if V is None or J is None or a.ndim != len(shape) or 0 in a.shape[:1] or any(
+                s is not None and s != n for s, n in zip(shape, a.shape, strict=True)):
+            raise ShapeError(f"{name}: key {k!r}: expected {names[k]}, got {tuple(a.shape)}")
+    if out["shapedirs"].shape[2] < 1:
+        raise ShapeError(f"{name}: key 'shapedirs': expected at least one shape component, got 0")
     if out["f"].min() < 0 or out["f"].max() >= V:
-        raise InputError(f"{path.name}: key 'f': indices outside [0, {V})")
+        raise InputError(f"{name}: key 'f': indices outside [0, {V})")
+    parents = kt[0, 1:]
+    if (parents < 0).any() or (parents >= np.arange(1, J)).any():
+        raise InputError(f"{name}: key 'kintree_table': each joint's parent must be an earlier joint")
     if ("vt" in out) != ("ft" in out):
-        raise InputError(f"{path.name}: 'vt' and 'ft' come together (UVs), got only one")
-    if "vt" in out and (out["vt"].shape[-1] != 2 or out["ft"].shape != out["f"].shape):
-        raise ShapeError(f"{path.name}: UVs: expected vt (Vt, 2), ft {out['f'].shape}, "
-                         f"got {out['vt'].shape}, {out['ft'].shape}")
+        raise InputError(f"{name}: 'vt' and 'ft' come together (UVs), got only one")
+    if "vt" in out:
+        vt, ft = out["vt"], out["ft"]
+        if vt.ndim != 2 or vt.shape[-1] != 2 or ft.shape != out["f"].shape:
+            raise ShapeError(f"{name}: UVs: expected vt (Vt, 2), ft {out['f'].shape}, got {vt.shape}, {ft.shape}")
+        if ft.min() < 0 or ft.max() >= len(vt):
+            raise InputError(f"{name}: key 'ft': indices outside [0, {len(vt)})")
     return out
 
 

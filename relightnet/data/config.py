@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +22,9 @@ __all__ = ["SPLITS", "HDRI_NAMES", "SynthConfig", "load_config", "sample_seed"]
 
 #: Dataset splits, in the order used to derive seeds.
 SPLITS = ("train", "val", "test")
+
+#: Largest sample count per split, shard size and PRT direction count a config may ask for.
+MAX_COUNT = 10_000_000
 
 #: The shipped CC0 environment maps (relightnet/data/envmaps).
 HDRI_NAMES = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
@@ -78,23 +82,31 @@ class SynthConfig:
     clip_lights: str = "random"
 
     def __post_init__(self) -> None:
+        try:
+            self._validate()
+        except InputError:
+            raise
+        except (TypeError, ValueError, OverflowError) as e:  # a value of the wrong type (a list for a number, ...)
+            raise InputError(f"config: a value has the wrong type ({e})") from None
+
+    def _validate(self) -> None:
         def bad(name, expected):
             raise InputError(f"config {name}: expected {expected}, got {getattr(self, name)!r}")
 
         if not isinstance(self.seed, int) or self.seed < 0:
             bad("seed", "an integer >= 0")
-        if not isinstance(self.res, int) or self.res < 16 or self.res % 16:
-            bad("res", "a positive multiple of 16")
+        if not isinstance(self.res, int) or not 16 <= self.res <= 4096 or self.res % 16:
+            bad("res", "a multiple of 16 from 16 to 4096")
         if not isinstance(self.lmax, int) or not 0 <= self.lmax <= 8:
             bad("lmax", "an integer in [0, 8]")
-        if not isinstance(self.n_dirs, int) or self.n_dirs < 8:
-            bad("n_dirs", "an integer >= 8")
-        if not isinstance(self.shard_size, int) or self.shard_size < 1:
-            bad("shard_size", "an integer >= 1")
+        if not isinstance(self.n_dirs, int) or not 8 <= self.n_dirs <= MAX_COUNT:
+            bad("n_dirs", f"an integer from 8 to {MAX_COUNT}")
+        if not isinstance(self.shard_size, int) or not 1 <= self.shard_size <= MAX_COUNT:
+            bad("shard_size", f"an integer from 1 to {MAX_COUNT}")
         if not isinstance(self.counts, dict) or set(self.counts) - set(SPLITS) or any(
-            not isinstance(v, int) or v < 0 for v in self.counts.values()
+            not isinstance(v, int) or not 0 <= v <= MAX_COUNT for v in self.counts.values()
         ):
-            bad("counts", f"a mapping from {SPLITS} to integers >= 0")
+            bad("counts", f"a mapping from {SPLITS} to integers from 0 to {MAX_COUNT}")
         for name in ("hdri_train", "hdri_test"):
             names = tuple(getattr(self, name))
             object.__setattr__(self, name, names)
@@ -115,17 +127,17 @@ class SynthConfig:
         object.__setattr__(self, "ages", ages)
         if len(ages) != 2 or not -1 / 3 <= ages[0] <= ages[1] <= 1.0:
             bad("ages", "(low, high) within Anny's age range [-1/3, 1]")
-        if not isinstance(self.sequence_frames, int) or self.sequence_frames < 0:
-            bad("sequence_frames", "an integer >= 0")
+        if not isinstance(self.sequence_frames, int) or not 0 <= self.sequence_frames <= 10000:
+            bad("sequence_frames", "an integer from 0 to 10000")
         if self.clip_lights not in ("random", "constant", "switch"):
             bad("clip_lights", "'random', 'constant' or 'switch'")
         from .lights import LIGHT_SOURCES
 
         mix = self.light_mix
         if not isinstance(mix, dict) or set(mix) - set(LIGHT_SOURCES) or any(
-            not isinstance(v, int | float) or not v >= 0 for v in mix.values()
+            isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < math.inf for v in mix.values()
         ) or (mix and not sum(mix.values()) > 0):
-            bad("light_mix", f"a mapping from {LIGHT_SOURCES} to weights >= 0 (not all 0)")
+            bad("light_mix", f"a mapping from {LIGHT_SOURCES} to finite weights >= 0 (not all 0)")
 
     @property
     def n_coeffs(self) -> int:
@@ -144,6 +156,8 @@ class SynthConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> SynthConfig:
+        if not isinstance(d, dict):
+            raise InputError(f"config: expected a mapping of config keys, got {type(d).__name__}")
         unknown = set(d) - {f.name for f in dataclasses.fields(cls)}
         if unknown:
             raise InputError(f"config: unknown keys {sorted(unknown)}")
@@ -155,8 +169,8 @@ def load_config(path) -> SynthConfig:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: config file not found")
-    text = path.read_text()
     try:
+        text = path.read_bytes().decode("utf-8")
         if path.suffix.lower() in (".yaml", ".yml"):
             import yaml
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..checks import InputError
 from ..io import atomic_write
+from ..io.arrays import read_npz, read_npz_names
 from .config import SPLITS, SynthConfig
 
 __all__ = [
@@ -159,22 +160,20 @@ def read_shard(path, fields=None) -> dict[str, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: shard not found")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            names = list(z.files) if fields is None else list(fields)
-            missing = [n for n in names if n not in z.files]
-            if missing:
-                raise InputError(f"{path}: shard has no field(s) {missing}; it has {sorted(z.files)}")
-            out = {n: z[n] for n in names}
-    except InputError:
-        raise
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise InputError(f"{path}: unreadable shard ({type(e).__name__}: {e})") from None
+    out = read_npz(path, "shard", fields)
+    if fields is not None:
+        missing = [n for n in fields if n not in out]
+        if missing:
+            have = sorted(read_npz_names(path))
+            raise InputError(f"{path}: shard has no field(s) {missing}; it has {have}")
     if "meta" in out:
+        meta = out["meta"]
+        if meta.ndim != 1 or meta.dtype.kind not in "US":
+            raise InputError(f"{path}: meta: expected (n,) JSON strings, got {meta.dtype}{list(meta.shape)}")
         try:
-            out["meta"] = [json.loads(str(m)) for m in out["meta"]]
-        except ValueError as e:
-            raise InputError(f"{path}: meta is not JSON ({e})") from None
+            out["meta"] = [json.loads(str(m)) for m in meta]
+        except (ValueError, RecursionError) as e:
+            raise InputError(f"{path}: meta is not JSON ({type(e).__name__}: {e})") from None
     return out
 
 
@@ -205,12 +204,40 @@ def load_manifest(out_dir) -> dict:
     if not path.is_file():
         raise InputError(f"{path}: no manifest (not a dataset folder made by 'relightnet synth')")
     try:
-        m = json.loads(path.read_text())
-    except (OSError, ValueError) as e:
-        raise InputError(f"{path}: unreadable manifest ({e})") from None
+        m = json.loads(path.read_bytes().decode("utf-8"))
+    except (OSError, ValueError, RecursionError) as e:
+        raise InputError(f"{path}: unreadable manifest ({type(e).__name__}: {str(e)[:200]})") from None
     if not isinstance(m, dict) or m.get("format") != FORMAT:
         raise InputError(f"{path}: expected a manifest of format {FORMAT!r}")
+    _check_manifest(m, path)
     return m
+
+
+def _nonneg_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 10**12
+
+
+def _check_manifest(m: dict, path: Path) -> None:
+    """The structure the readers rely on: a config mapping, and per split its counts and shard entries
+    (``file`` exactly the shard's own name: a manifest cannot point outside its folder)."""
+    if not isinstance(m.get("config"), dict):
+        raise InputError(f"{path}: 'config' is not a mapping")
+    splits = m.get("splits")
+    if not isinstance(splits, dict) or set(splits) - set(SPLITS):
+        raise InputError(f"{path}: 'splits' must map {list(SPLITS)} to their shards")
+    if not isinstance(m.get("fields", {}), dict):
+        raise InputError(f"{path}: 'fields' is not a mapping")
+    for split, info in splits.items():
+        where = f"{path}: splits.{split}"
+        if not isinstance(info, dict) or not all(_nonneg_int(info.get(k)) for k in ("count", "n_shards")) \
+                or not isinstance(info.get("shards"), list):
+            raise InputError(f"{where}: expected count, n_shards (integers) and a shards list")
+        for e in info["shards"]:
+            if not isinstance(e, dict) or not all(_nonneg_int(e.get(k)) for k in ("index", "start", "count")):
+                raise InputError(f"{where}: a shard entry without integer index, start and count")
+            if e.get("file") != shard_name(split, e["index"]):
+                raise InputError(f"{where}: shard {e['index']} names file {e.get('file')!r}, expected "
+                                 f"{shard_name(split, e['index'])!r}")
 
 
 def dataset_config(manifest: dict) -> SynthConfig:

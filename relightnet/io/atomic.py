@@ -1,23 +1,105 @@
-"""Atomic file writes: a reader never sees a half-written file.
+"""Atomic file writes: a reader never sees a half-written file, a killed writer leaves no litter.
 
 Every writer in relightnet goes through :func:`atomic_write`: data goes to a
 hidden temporary file in the destination folder, is flushed and fsynced, then
 ``os.replace`` moves it over the destination in one step. On any error the
 temporary file is deleted and the destination is left as it was.
+
+A process killed outright (SIGKILL, power loss) cannot delete its temporary file, so
+temporary names say who wrote them (:func:`temp_path`: ``.out.mp4.<host>.<pid>-<start>.<random>.tmp``)
+and the next writer of the same output removes those whose process is gone
+(:func:`remove_stale`): the same host, and no live process with that PID and start time.
+Temporary files of running writers, of other hosts and of unknown form are left alone.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import re
+import secrets
+import shutil
+import socket
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
 from ..checks import InputError
 
-__all__ = ["atomic_write"]
+__all__ = ["atomic_write", "temp_path", "remove_stale"]
+
+_TEMP = re.compile(r"(?:(?P<tag>[A-Za-z]+)\.)?(?P<host>[A-Za-z0-9_-]+)\.(?P<pid>\d+)-(?P<start>\d+)\.[0-9a-f]+\.tmp")
+
+
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9_-]", "-", socket.gethostname())[:48] or "host"
+
+
+def _start_time(pid: int | str) -> str | None:
+    """A process's start time (clock ticks since boot, /proc/PID/stat), or None when it does not exist."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            stat = f.read()
+    except OSError:
+        return None
+    return stat.rsplit(")", 1)[-1].split()[19]
+
+
+def _writer_gone(pid: int, start: str) -> bool:
+    """True when no process ``pid`` started at ``start`` runs on this host."""
+    if os.path.isdir("/proc"):
+        return _start_time(pid) != start
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:
+        return False
+    return False
+
+
+def temp_path(path: str | os.PathLike, tag: str = "") -> Path:
+    """A fresh hidden name beside ``path`` that records this process as its writer.
+
+    Args:
+        path: the final output.
+        tag: optional letters naming the use (``"video"``, ``"stage"``).
+
+    Returns:
+        ``.{name}.[{tag}.]{host}.{pid}-{start}.{random}.tmp`` in ``path``'s folder.
+    """
+    path = Path(path)
+    if tag and not tag.isalpha():
+        raise ValueError(f"tag: expected letters only, got {tag!r}")
+    pid = os.getpid()
+    who = f"{_host()}.{pid}-{_start_time(pid) or 0}"
+    return path.with_name(f".{path.name}.{tag + '.' if tag else ''}{who}.{secrets.token_hex(4)}.tmp")
+
+
+def remove_stale(path: str | os.PathLike) -> list[Path]:
+    """Delete the temporary files (and staging folders) of ``path`` left by writers that are gone.
+
+    Returns:
+        The paths removed.
+    """
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    prefix, host, removed = f".{path.name}.", _host(), []
+    try:
+        entries = [p for p in parent.iterdir() if p.name.startswith(prefix) and p.name.endswith(".tmp")]
+    except OSError:
+        return removed
+    for p in entries:
+        m = _TEMP.fullmatch(p.name[len(prefix):])
+        if m is None or m["host"] != host or not _writer_gone(int(m["pid"]), m["start"]):
+            continue
+        with contextlib.suppress(OSError):
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
+            removed.append(p)
+    return removed
 
 
 def _umask() -> int:
@@ -58,7 +140,9 @@ def atomic_write(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InputError(f"{path}: output folder {parent} does not exist")
-    fd, tmp = tempfile.mkstemp(dir=parent, prefix=f".{path.name}.", suffix=".tmp")
+    remove_stale(path)
+    tmp = temp_path(path)
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     try:
         kw = {"encoding": "utf-8", "newline": "\n"} if mode == "w" else {}
         with os.fdopen(fd, mode, **kw) as f:

@@ -20,6 +20,8 @@ import torch
 
 from ..checks import InputError, ShapeError, check_finite
 from .atomic import atomic_write
+from .limits import check_pixels, max_pixels
+from .probe import header_size
 
 __all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_image_alpha",
            "read_alpha", "read_mask"]
@@ -104,23 +106,66 @@ def _is_float_format(name: str) -> bool:
     return re.search(r"f(16|32)(le|be)?$", name) is not None
 
 
+def decode_options() -> dict[str, str]:
+    """FFmpeg decoder options that refuse frames above :func:`~relightnet.io.limits.max_pixels`."""
+    return {"max_pixels": str(max_pixels())}
+
+
+def limit_hint() -> str:
+    """What to add to a decoder error whose frame size was unknown: the pixel limit may be the cause."""
+    return f"; frames above {max_pixels() / 1e6:.1f} MP are refused (--max-pixels, RELIGHTNET_MAX_PIXELS)"
+
+
+def open_limited(path: str | os.PathLike, what: str):
+    """``av.open`` a media file with the pixel limit applied to probing and decoding.
+
+    The video stream's size from the container header is checked before any frame is
+    decoded; FFmpeg's ``max_pixels`` makes its decoders refuse a larger frame anyway (for
+    files whose header does not say). The caller closes the container.
+
+    Raises:
+        InputError: no video stream, or a frame size above the limit.
+    """
+    opts = decode_options()
+    container = av.open(str(path), stream_options=[opts] * 64)
+    try:
+        if not container.streams.video:
+            raise InputError(f"{path}: not {what} (no image stream)")
+        ctx = container.streams.video[0].codec_context
+        if ctx.width or ctx.height:
+            check_pixels(ctx.width, ctx.height, f"{path}")
+        ctx.options = opts
+    except BaseException:
+        container.close()
+        raise
+    return container
+
+
 def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
-    """Decode the first video frame of ``path``; :class:`InputError` naming the file on failure."""
+    """Decode the first video frame of ``path``; :class:`InputError` naming the file on failure.
+
+    The size in the file's header is checked against the pixel limit before decoding.
+    """
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file")
     if not path.is_file():
         raise InputError(f"{path}: is a folder or special file, not a file")
     try:
-        with av.open(str(path)) as container:
-            if not container.streams.video:
-                raise InputError(f"{path}: not {what} (no image stream)")
+        size = header_size(path)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read {what} ({e})") from None
+    if size is not None:
+        check_pixels(*size, f"{path}")
+    try:
+        with open_limited(path, what) as container:
             for frame in container.decode(video=0):
                 return frame
     except InputError:
         raise
     except (av.FFmpegError, OSError, ValueError) as e:
-        raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e})") from None
+        hint = "" if size else limit_hint()
+        raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e}{hint})") from None
     raise InputError(f"{path}: not {what} (no frame decoded)")
 
 

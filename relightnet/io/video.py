@@ -10,7 +10,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import logging
-import os
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -20,8 +20,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
-from .atomic import atomic_write
-from .image import to_uint8, upright
+from .atomic import atomic_write, remove_stale, temp_path
+from .image import limit_hint, open_limited, to_uint8, upright
 
 logger = logging.getLogger(__name__)
 
@@ -46,13 +46,9 @@ def _open(path):
     if not path.is_file():
         raise InputError(f"{path}: video file not found")
     try:
-        c = av.open(str(path))
-        if not c.streams.video:
-            c.close()
-            raise InputError(f"{path}: no video stream")
-        return c
-    except av.error.FFmpegError as e:
-        raise InputError(f"{path}: unreadable video ({e})") from None
+        return open_limited(path, "a video")  # frame size checked before any frame is decoded
+    except (av.error.FFmpegError, OSError, ValueError) as e:
+        raise InputError(f"{path}: unreadable video ({type(e).__name__}: {e})") from None
 
 
 def video_info(path) -> VideoInfo:
@@ -65,11 +61,16 @@ def video_info(path) -> VideoInfo:
         size = (s.codec_context.height, s.codec_context.width)
         try:  # a phone video stored sideways says so in its display matrix, seen on the frames
             first = next(iter(c.decode(video=0)), None)
-        except av.error.FFmpegError as e:
-            raise InputError(f"{path}: corrupt video ({e})") from None
-        if first is not None and round(float(first.rotation) / 90) % 2:
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
+        if first is None:
+            raise InputError(f"{path}: no frame could be decoded (empty or corrupt video)")
+        size = (first.height, first.width)
+        if round(float(first.rotation) / 90) % 2:
             size = size[::-1]
-        return VideoInfo(int(s.frames or 0), fps, size)
+        if not (math.isfinite(fps) and 0 < fps <= 1000):
+            raise InputError(f"{path}: frame rate {fps:g} is not a usable video frame rate")
+        return VideoInfo(max(int(s.frames or 0), 0), fps, size)
 
 
 def read_video(path) -> Iterator[np.ndarray]:
@@ -85,8 +86,8 @@ def read_video(path) -> Iterator[np.ndarray]:
         try:
             for frame in c.decode(video=0):
                 yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
-        except av.error.FFmpegError as e:
-            raise InputError(f"{path}: corrupt video ({e})") from None
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
 
 
 class VideoWriter:
@@ -113,10 +114,14 @@ class VideoWriter:
         # With a sound track to carry over, the video goes to a hidden file first and
         # close() muxes the two into ``path``.
         self._audio_from = audio_from if audio_from is not None and has_audio(audio_from) else None
-        self._video_path = (self.path.with_name(f".{self.path.stem}.{os.getpid()}.video{self.path.suffix}")
-                            if self._audio_from is not None else self.path)
-        self._ctx = atomic_write(self._video_path)
-        self._file = self._ctx.__enter__()
+        if self._audio_from is None:
+            self._video_path = self.path
+            self._ctx = atomic_write(self.path)
+            self._file = self._ctx.__enter__()
+        else:  # a private temporary file (its name records this process, see io.atomic)
+            remove_stale(self.path)
+            self._video_path, self._ctx = temp_path(self.path, "video"), None
+            self._file = open(self._video_path, "xb")
         self._container = None
         self._stream = None
         self.n_frames = 0
@@ -163,7 +168,10 @@ class VideoWriter:
         for packet in self._stream.encode():
             self._container.mux(packet)
         self._container.close()
-        self._ctx.__exit__(None, None, None)
+        if self._ctx is not None:
+            self._ctx.__exit__(None, None, None)
+        else:
+            self._file.close()
         if self._audio_from is not None:
             from .audio import add_audio
 
@@ -182,6 +190,10 @@ class VideoWriter:
         with contextlib.suppress(Exception):
             if self._container is not None:
                 self._container.close()
+        if self._ctx is None:
+            self._file.close()
+            self._video_path.unlink(missing_ok=True)
+            return
         with contextlib.suppress(RuntimeError):
             self._ctx.__exit__(RuntimeError, RuntimeError("aborted"), None)
 

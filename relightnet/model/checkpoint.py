@@ -1,14 +1,22 @@
-"""Checkpoints: atomic save, validated load, and the shipped model.
+"""Checkpoints: atomic save, safe validated load, and the shipped model.
 
-A checkpoint is a ``torch.save`` dict: ``format`` (a version tag), ``net_config``, ``model``
-(state dict), ``step``, ``input_size`` (side of the training images), and for training runs
-``optimizer``, ``scheduler``, ``train_config`` and ``rng`` (torch's CPU RNG state).
+A checkpoint is a ``torch.save`` dict of tensors and plain Python values only (dicts, lists,
+tuples, strings, numbers, booleans, None; configs as dicts): ``format`` (a version tag),
+``net_config``, ``model`` (state dict), ``step``, ``input_size`` (side of the training
+images), and for training runs ``optimizer``, ``scheduler``, ``train_config`` and ``rng``
+(torch's CPU RNG state). :func:`save_checkpoint` refuses anything else, and
+:func:`load_checkpoint` reads with ``torch.load(weights_only=True)``: a file that names any
+other Python object is refused by name and nothing in it runs. A checkpoint of your own
+that holds numpy values or config objects (older code) converts with
+:func:`convert_checkpoint` (``relightnet convert-checkpoint OLD NEW``).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import io
+import pickle
+import re
 from pathlib import Path
 
 import torch
@@ -18,11 +26,16 @@ from ..io import atomic_write
 from .network import NetConfig, RelightNet
 
 __all__ = ["FORMAT", "SHIPPED", "save_checkpoint", "load_checkpoint", "load_model", "shipped_checkpoint",
-           "release_checkpoint"]
+           "release_checkpoint", "convert_checkpoint"]
 
-FORMAT = "relightnet-ckpt-1"
+FORMAT = "relightnet-ckpt-2"
+#: Formats read: 1 had the same plain content (it loads with ``weights_only=True`` too).
+READ_FORMATS = ("relightnet-ckpt-1", FORMAT)
 #: The pretrained model shipped in the package.
 SHIPPED = Path(__file__).resolve().parents[1] / "weights" / "relightnet_small.pt"
+#: Largest integer accepted in a checkpoint's network configuration (sizes, levels, orders).
+_MAX_CONFIG_INT = 4096
+_PLAIN = (str, int, float, bool, type(None), torch.Tensor)
 
 
 def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 0, optimizer=None, scheduler=None,
@@ -45,8 +58,26 @@ def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 
     return _write(path, state)
 
 
+def _check_plain(value, where: str = "checkpoint", depth: int = 0) -> None:
+    """Raise TypeError unless ``value`` is tensors and plain Python values all the way down."""
+    if depth > 32:
+        raise TypeError(f"{where}: nested deeper than 32 levels")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            if not isinstance(k, (str, int)):
+                raise TypeError(f"{where}: key {k!r} is a {type(k).__name__}; keys are strings or integers")
+            _check_plain(v, f"{where}[{k!r}]", depth + 1)
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _check_plain(v, f"{where}[{i}]", depth + 1)
+    elif not isinstance(value, _PLAIN):
+        raise TypeError(f"{where} is a {type(value).__module__}.{type(value).__name__}; a checkpoint holds "
+                        "tensors and plain Python values only (configs as dicts)")
+
+
 def _write(path, state: dict) -> Path:
-    """torch.save into memory, then one atomic file write."""
+    """Check the content is plain, torch.save into memory, then one atomic file write."""
+    _check_plain(state)
     buf = io.BytesIO()
     torch.save(state, buf)
     with atomic_write(path) as f:
@@ -54,21 +85,95 @@ def _write(path, state: dict) -> Path:
     return Path(path)
 
 
+def _refused(path: Path, err: Exception) -> InputError:
+    what = re.search(r"GLOBAL ([\w.]+)", str(err)).group(1)
+    return InputError(
+        f"{path}: refused: the checkpoint holds {what} (only tensors and plain values are loaded; nothing in it "
+        f"was run); a relightnet checkpoint of your own with numpy values or config objects converts with "
+        f"'relightnet convert-checkpoint {path} NEW.pt'"
+    )
+
+
 def load_checkpoint(path, map_location="cpu") -> dict:
-    """Read and validate a checkpoint dict; one clear error for every way it can be wrong."""
+    """Read and validate a checkpoint dict; one clear error for every way it can be wrong.
+
+    Reads with ``torch.load(weights_only=True)``: no code in the file runs.
+
+    Raises:
+        InputError: missing, unreadable, refused (names the object it would need), or not a
+            relightnet checkpoint.
+    """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: checkpoint not found")
     try:
-        state = torch.load(path, map_location=map_location, weights_only=False)
-    except Exception as e:  # truncated zip, pickle errors, not a torch file, ...
+        state = torch.load(path, map_location=map_location, weights_only=True)
+    except pickle.UnpicklingError as e:
+        if re.search(r"GLOBAL [\w.]+", str(e)):
+            raise _refused(path, e) from None
+        raise InputError(f"{path}: unreadable checkpoint (UnpicklingError)") from None
+    except Exception as e:  # truncated zip, bad records, not a torch file, ...
         raise InputError(f"{path}: unreadable checkpoint ({type(e).__name__})") from None
-    if not isinstance(state, dict) or state.get("format") != FORMAT:
+    return _validated(state, path)
+
+
+def _validated(state, path: Path) -> dict:
+    if not isinstance(state, dict) or state.get("format") not in READ_FORMATS:
         raise InputError(f"{path}: not a relightnet checkpoint (expected format {FORMAT!r})")
     for key in ("net_config", "model", "step"):
         if key not in state:
             raise InputError(f"{path}: checkpoint lacks {key!r}")
+    if not isinstance(state["net_config"], dict):
+        raise InputError(f"{path}: 'net_config' is not a dict")
+    model = state["model"]
+    if not isinstance(model, dict) or not all(isinstance(k, str) and isinstance(v, torch.Tensor)
+                                              for k, v in model.items()):
+        raise InputError(f"{path}: 'model' is not a state dict (names to tensors)")
+    if not isinstance(state["step"], int) or isinstance(state["step"], bool) or state["step"] < 0:
+        raise InputError(f"{path}: 'step' is not a non-negative integer")
     return state
+
+
+def _net_config(state: dict, path: Path) -> NetConfig:
+    """The :class:`NetConfig` of a checkpoint: known keys, each of its field's type, integers in range."""
+    fields = {f.name: f for f in dataclasses.fields(NetConfig)}
+    for key, value in state["net_config"].items():
+        if key not in fields:
+            raise InputError(f"{path}: unknown network configuration key {key!r}")
+        default = fields[key].default
+        kind = None if default is dataclasses.MISSING or default is None else type(default)
+        if kind is not None and (type(value) is not kind and not (kind is float and type(value) is int)):
+            raise InputError(f"{path}: net_config {key!r}: expected a {kind.__name__}, got {value!r}")
+        if type(value) is int and not 0 <= value <= _MAX_CONFIG_INT:
+            raise InputError(f"{path}: net_config {key!r}: {value} is outside [0, {_MAX_CONFIG_INT}]")
+    try:
+        return NetConfig(**state["net_config"])
+    except (TypeError, ValueError) as e:
+        raise InputError(f"{path}: unknown network configuration ({e})") from None
+
+
+def _network(cfg: NetConfig, weights: dict, path: Path) -> RelightNet:
+    """Build the network for ``cfg`` and load ``weights``; shapes are compared on the meta device
+    first, so a configuration that does not match the file allocates nothing."""
+    try:
+        with torch.device("meta"):
+            shapes = {k: tuple(v.shape) for k, v in RelightNet(cfg).state_dict().items()}
+    except (TypeError, ValueError, RuntimeError, InputError) as e:
+        raise InputError(f"{path}: unusable network configuration ({type(e).__name__}: {e})") from None
+    got = {k: tuple(v.shape) for k, v in weights.items()}
+    bad = next((k for k, v in weights.items() if v.is_floating_point() and not bool(torch.isfinite(v).all())), None)
+    if bad is not None:
+        raise InputError(f"{path}: weight {bad!r} holds NaN or Inf values")
+    if shapes != got:
+        diff = sorted(set(shapes) ^ set(got)) or [k for k in shapes if shapes[k] != got[k]]
+        raise InputError(f"{path}: weights do not match the network configuration (first difference: {diff[0]!r})")
+    model = RelightNet(cfg)
+    try:
+        model.load_state_dict(weights)
+    except RuntimeError as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else "state dict mismatch"
+        raise InputError(f"{path}: weights do not match the network configuration ({first})") from None
+    return model
 
 
 def shipped_checkpoint() -> Path:
@@ -82,19 +187,13 @@ def load_model(path=None, device="cpu") -> RelightNet:
     """A :class:`RelightNet` in eval mode from a checkpoint (default: the shipped model)."""
     device = check_device(device, "device")
     path = shipped_checkpoint() if path is None else Path(path)
-    state = load_checkpoint(path, map_location=device)
-    try:
-        cfg = NetConfig(**state["net_config"])
-    except TypeError as e:
-        raise InputError(f"{path}: unknown network configuration ({e})") from None
-    model = RelightNet(cfg)
-    try:
-        model.load_state_dict(state["model"])
-    except RuntimeError as e:
-        first = str(e).strip().splitlines()[0] if str(e).strip() else "state dict mismatch"
-        raise InputError(f"{path}: weights do not match the network configuration ({first})") from None
+    state = load_checkpoint(path, map_location="cpu")
+    model = _network(_net_config(state, path), state["model"], path)
+    size = state.get("input_size", 256)
+    if type(size) is not int or not 16 <= size <= _MAX_CONFIG_INT:
+        raise InputError(f"{path}: 'input_size' {size!r} is not a size in pixels")
     #: The side of the square crops it was trained on: the natural working size for inference.
-    model.input_size = int(state.get("input_size", 256))
+    model.input_size = size
     return model.to(device).eval()
 
 
@@ -104,4 +203,64 @@ def release_checkpoint(src, dst, **extra) -> Path:
     for key in ("optimizer", "scheduler", "rng"):
         state.pop(key, None)
     state.update(extra)
+    state["format"] = FORMAT
+    return _write(dst, state)
+
+
+def _numpy_globals() -> list:
+    import numpy as np
+
+    core = np._core if hasattr(np, "_core") else np.core
+    dtypes = [getattr(np.dtypes, n) for n in dir(np.dtypes) if n.endswith("DType")]
+    return [core.multiarray._reconstruct, core.multiarray.scalar, np.ndarray, np.dtype, *dtypes]
+
+
+def _to_plain(value, depth: int = 0):
+    """numpy arrays → tensors, numpy scalars → Python numbers, config dataclasses → dicts (recursively)."""
+    import numpy as np
+
+    if depth > 32:
+        raise InputError("checkpoint: nested deeper than 32 levels")
+    if isinstance(value, np.ndarray):
+        if value.dtype.hasobject:
+            raise InputError("checkpoint: holds a numpy object array")
+        return torch.from_numpy(value.astype(value.dtype.newbyteorder("="), copy=True))
+    if isinstance(value, np.generic):
+        return value.item()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return _to_plain(dataclasses.asdict(value), depth + 1)
+    if isinstance(value, dict):
+        return {k: _to_plain(v, depth + 1) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_to_plain(v, depth + 1) for v in value)
+    return value
+
+
+def convert_checkpoint(src, dst) -> Path:
+    """Rewrite an older checkpoint of your own in the current safe form.
+
+    It is read with ``torch.load(weights_only=True)`` allowing, besides tensors and plain values,
+    numpy arrays, scalars and dtypes and relightnet's own ``NetConfig``/``TrainConfig`` (rebuilt
+    field by field, no code of the file runs); these become tensors, Python numbers and dicts.
+    Anything else is still refused by name. The weights are copied bit for bit.
+
+    Returns:
+        ``dst``, written atomically (it may be ``src``).
+    """
+    from .training import TrainConfig
+
+    src = Path(src)
+    if not src.is_file():
+        raise InputError(f"{src}: checkpoint not found")
+    try:
+        with torch.serialization.safe_globals([*_numpy_globals(), NetConfig, TrainConfig]):
+            state = torch.load(src, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as e:
+        m = re.search(r"GLOBAL ([\w.]+)", str(e))
+        raise InputError(f"{src}: refused: it holds {m.group(1) if m else 'an object that is not allowed'}, which "
+                         "is not a tensor, plain value, numpy value or relightnet config; nothing was run") from None
+    except Exception as e:
+        raise InputError(f"{src}: unreadable checkpoint ({type(e).__name__})") from None
+    state = _validated(_to_plain(state), src)
+    state["format"] = FORMAT
     return _write(dst, state)

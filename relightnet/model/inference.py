@@ -18,7 +18,8 @@ from .network import Prediction, RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light", "estimate_light_evidence"]
+__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light", "estimate_light_evidence", "check_not_blank",
+           "check_predicted_person"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,46 @@ def _check_predicted_mask(person: torch.Tensor) -> None:
                        100 * cover, 100 * top)
 
 
+#: A predicted person covering more of the frame than this is no person found (a mask of everything).
+MAX_PERSON_COVER = 0.99
+#: An image whose values span less than this (any channel, sRGB in [0, 1]) is blank: one colour.
+BLANK_RANGE = 2 / 255
+
+
+def check_not_blank(image: torch.Tensor, name: str = "image") -> None:
+    """Refuse a blank image (black, white, one colour) before looking for a person in it.
+
+    Args:
+        image: (3, H, W) sRGB in [0, 1].
+
+    Raises:
+        InputError: its values span less than :data:`BLANK_RANGE`.
+    """
+    check_shape(image, [3, "H", "W"], name=name)
+    span = float(image.amax() - image.amin())
+    if span < BLANK_RANGE:
+        raise InputError(f"{name}: blank (a single colour, values spanning {span:.4f}): there is no person to "
+                         "find; expected a photo of a person, or give the person's mask")
+
+
+def check_predicted_person(mask: torch.Tensor, name: str = "image") -> None:
+    """Refuse a mask-head result that found no person: empty, or (nearly) the whole frame.
+
+    Args:
+        mask: (H, W) bool or {0, 1} predicted person mask.
+
+    Raises:
+        InputError: no person pixel, or more than :data:`MAX_PERSON_COVER` of the frame.
+    """
+    check_shape(mask, ["H", "W"], name="mask")
+    cover = float((mask > 0.5).float().mean())
+    if cover == 0:
+        raise InputError(f"{name}: the mask head found no person in the image; give the person's mask")
+    if cover > MAX_PERSON_COVER:
+        raise InputError(f"{name}: the mask head marked {100 * cover:.1f}% of the frame as the person, which is "
+                         "no person found (a mask of everything); give the person's mask")
+
+
 def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None, size: int | None,
                    pad: float) -> tuple[torch.Tensor, CropBox, torch.Tensor]:
     """(normalised network input (1, 4, s, s), crop box, mask (H, W)) of a photo (see predict_image)."""
@@ -108,12 +149,12 @@ def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
     if mask is None:
         if not model.config.mask_head:
             raise InputError("mask: this model has no mask head; give a mask of the person")
+        check_not_blank(image)
         full = CropBox((h - max(h, w)) // 2, (w - max(h, w)) // 2, max(h, w))
         x = F.interpolate(_crop(image[None], full), size=(size, size), mode="bilinear", align_corners=False)
         coarse = model(normalize_input(x, torch.ones_like(x[:, :1])))
         mask = _paste(coarse.mask, full, h, w)[0, 0]
-        if not (mask > 0.5).any():
-            raise InputError("image: the mask head found no person in the image")
+        check_predicted_person(mask)
         _check_predicted_mask(mask > 0.5)
     check_shape(mask, [h, w], name="mask")
     mask = mask.to(dev).float()

@@ -51,7 +51,10 @@ class OnnxRelighter:
         meta = self.session.get_modelmeta().custom_metadata_map
         self.metadata = dict(meta)
         state = self.session.get_inputs()[2].shape  # [batch, S, K, 3]
-        self.state_size, self.n_coeffs = int(state[1]), int(state[2])
+        if len(state) != 4 or not all(isinstance(n, int) and 0 < n <= 4096 for n in state[1:]):
+            raise InputError(f"{self.path}: not a relightnet model (light_state is {state}, expected "
+                             "[batch, S, K, 3] with fixed S, K)")
+        self.state_size, self.n_coeffs = state[1], state[2]
         outputs = [o.name for o in self.session.get_outputs()]
         #: the light solve's per-frame evidence outputs (solve/hybrid networks), else empty
         self.evidence_outputs = tuple(n for n in EVIDENCE_OUTPUTS if n in outputs)

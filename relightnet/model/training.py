@@ -105,13 +105,20 @@ def load_train_config(path) -> TrainConfig:
     if not path.is_file():
         raise InputError(f"{path}: training config not found")
     try:
-        d = yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as e:
-        raise InputError(f"{path}: unreadable YAML ({e})") from None
+        d = yaml.safe_load(path.read_bytes().decode("utf-8")) or {}
+    except (yaml.YAMLError, ValueError, TypeError, RecursionError) as e:  # also bad UTF-8, bad dates
+        raise InputError(f"{path}: unreadable YAML ({type(e).__name__}: {str(e)[:200]})") from None
+    if not isinstance(d, dict):
+        raise InputError(f"{path}: expected a mapping of training settings, got {type(d).__name__}")
     unknown = set(d) - {f.name for f in dataclasses.fields(TrainConfig)}
     if unknown:
-        raise InputError(f"{path}: unknown keys {sorted(unknown)}")
-    return TrainConfig(**d)
+        raise InputError(f"{path}: unknown keys {sorted(unknown, key=str)}")
+    try:
+        return TrainConfig(**d)
+    except InputError:
+        raise
+    except (TypeError, ValueError, OverflowError, AttributeError) as e:  # a value of the wrong type
+        raise InputError(f"{path}: a setting has the wrong type ({e})") from None
 
 
 class TrainData:

@@ -193,16 +193,28 @@ def _reuse(path: Path, fingerprint: str):
 
     if not path.is_file():
         return None
-    try:
-        with np.load(path) as z:
-            if str(z["fingerprint"]) != fingerprint or "raw" not in z:
-                return None
-            ev = Evidence(torch.from_numpy(z["evidence_M"]), torch.from_numpy(z["evidence_r"])) \
-                if "evidence_M" in z else None
-            prior = torch.from_numpy(z["prior"]) if "prior" in z else None
-            return torch.from_numpy(z["raw"]), ev, prior
-    except (OSError, ValueError, KeyError):
+    from ..io.arrays import read_npz
+
+    try:  # a damaged or foreign file is not reused (it is rewritten)
+        z = read_npz(path, "light estimates", ("fingerprint", "raw", "evidence_M", "evidence_r", "prior"))
+    except InputError:
         return None
+    if not ("raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint
+            and z["raw"].dtype.kind == "f" and z["raw"].ndim == 3):
+        return None
+    raw = torch.from_numpy(z["raw"])
+    t, k = raw.shape[:2]
+    ev = prior = None
+    if "evidence_M" in z and "evidence_r" in z:
+        M, r = z["evidence_M"], z["evidence_r"]
+        if M.shape != (t, 3, k, k) or r.shape != (t, 3, k) or M.dtype.kind != "f" or r.dtype.kind != "f":
+            return None
+        ev = Evidence(torch.from_numpy(M), torch.from_numpy(r))
+    if "prior" in z:
+        if z["prior"].shape != raw.shape or z["prior"].dtype.kind != "f":
+            return None
+        prior = torch.from_numpy(z["prior"])
+    return raw, ev, prior
 
 
 def _side_paths(out: Path) -> tuple[Path, Path]:

@@ -26,7 +26,6 @@ import json
 import math
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +33,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write
+from ..io.atomic import remove_stale, temp_path
 from ..io.image import linear_to_srgb
 
 __all__ = ["staging_dir", "publish", "summarize", "json_safe", "write_json", "write_lights", "side_by_side", "add_clip",
@@ -77,7 +77,11 @@ def staging_dir(out_dir: Path) -> Path:
         anchor = anchor.parent
     if not anchor.is_dir():
         raise InputError(f"{out_dir}: {anchor} is not a folder")
-    return Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=anchor))
+    target = anchor / out_dir.name
+    remove_stale(target)  # staging folders of killed runs
+    stage = temp_path(target, "stage")
+    stage.mkdir()
+    return stage
 
 
 def publish(stage: Path, out_dir: Path) -> dict:

@@ -139,7 +139,7 @@ def load_camera(spec, size) -> Camera:
         target = torch.tensor([float(x) for x in d.get("target", (0.0, 0.85, 0.0))])
         up = torch.tensor([float(x) for x in d.get("up", (0.0, 1.0, 0.0))])
         fov = float(d.get("fov_deg", 35.0))
-    except (ValueError, KeyError, TypeError) as e:
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError) as e:
         raise InputError(f"--camera {spec}: expected JSON with eye [x,y,z], target [x,y,z], fov_deg ({e})") from None
     if eye.shape != (3,) or target.shape != (3,) or up.shape != (3,) or not 0 < fov < 180 or not math.isfinite(fov):
         raise InputError(f"--camera {spec}: eye/target/up need 3 numbers and fov_deg a value in (0, 180)")

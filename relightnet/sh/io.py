@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import logging
 import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +61,11 @@ def resize_sh(sh: torch.Tensor, lmax: int) -> torch.Tensor:
 
 def _validate(sh, where: str) -> torch.Tensor:
     """Shape (K,3)|(T,K,3), valid K, finite; returns float32. Errors start with ``where``."""
-    sh = torch.as_tensor(np.asarray(sh) if not isinstance(sh, torch.Tensor) else sh)
+    if not isinstance(sh, torch.Tensor):
+        sh = np.asarray(sh)
+        if sh.dtype.kind not in "biuf":
+            raise InputError(f"{where}: expected real coefficients, got dtype {sh.dtype}")
+        sh = torch.as_tensor(sh.astype(sh.dtype.newbyteorder("=")))
     if sh.dim() not in (2, 3) or sh.shape[-1] != 3:
         raise ShapeError(f"{where}: expected a light (K, 3) or a sequence (T, K, 3), got {tuple(sh.shape)}")
     sh_order_from_count(sh.shape[-2], where)
@@ -122,7 +125,7 @@ def _check_meta(path: Path, lmax_stored, frame, units, k: int) -> None:
     if lmax_stored is not None:
         try:
             lm = int(lmax_stored)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise InputError(f"{path}: 'lmax' must be an integer, got {lmax_stored!r}") from None
         if sh_count(max(lm, 0)) != k or lm < 0:
             raise ShapeError(f"{path}: 'lmax' = {lm} needs K = {(lm + 1) ** 2} coefficients, file has {k}")
@@ -132,18 +135,24 @@ def _check_meta(path: Path, lmax_stored, frame, units, k: int) -> None:
         raise InputError(f"{path}: light units are {str(units)!r}; expected {_UNITS!r}")
 
 
+def _scalar_meta(arrays: dict, key: str, path: Path):
+    """A metadata entry (``lmax``, ``frame``, ``units``) of a light .npz: one value or None."""
+    if key not in arrays:
+        return None
+    a = arrays[key]
+    if a.size != 1:
+        raise InputError(f"{path}: {key!r} must be a single value, got shape {tuple(a.shape)}")
+    return a.reshape(()).item()
+
+
 def _read_npz(path: Path) -> torch.Tensor:
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if "sh" not in z.files:
-                raise InputError(f"{path}: no 'sh' array in the .npz (has {', '.join(z.files) or 'nothing'})")
-            sh = z["sh"]
-            meta = {k: (z[k].item() if k in z.files else None) for k in ("lmax", "frame", "units")}
-    except InputError:
-        raise
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise InputError(f"{path}: cannot read light .npz ({type(e).__name__}: {e})") from None
-    sh = _validate(sh, str(path))
+    from ..io.arrays import read_npz
+
+    z = read_npz(path, "light .npz", ("sh", "lmax", "frame", "units"))
+    if "sh" not in z:
+        raise InputError(f"{path}: no 'sh' array in the .npz (has {', '.join(sorted(z)) or 'nothing else'})")
+    meta = {k: _scalar_meta(z, k, path) for k in ("lmax", "frame", "units")}
+    sh = _validate(z["sh"], str(path))
     _check_meta(path, meta["lmax"], meta["frame"], meta["units"], sh.shape[-2])
     return sh
 
@@ -151,13 +160,13 @@ def _read_npz(path: Path) -> torch.Tensor:
 def _read_json(path: Path) -> torch.Tensor:
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:
+    except (OSError, ValueError, RecursionError) as e:
         raise InputError(f"{path}: cannot read light .json ({type(e).__name__}: {e})") from None
     if not isinstance(doc, dict) or "sh" not in doc:
         raise InputError(f"{path}: expected a JSON object with an 'sh' list")
     try:
         arr = np.asarray(doc["sh"], dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, RecursionError):
         raise ShapeError(f"{path}: 'sh' must be a K×3 (or T×K×3) list of numbers") from None
     sh = _validate(arr, str(path))
     _check_meta(path, doc.get("lmax"), doc.get("frame"), doc.get("units"), sh.shape[-2])
@@ -165,14 +174,13 @@ def _read_json(path: Path) -> torch.Tensor:
 
 
 def _read_npy(path: Path) -> torch.Tensor:
-    try:
-        arr = np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as e:
-        raise InputError(f"{path}: cannot read Kanamori-Endo light .npy ({type(e).__name__}: {e})") from None
-    if not isinstance(arr, np.ndarray) or tuple(arr.shape) != (9, 3):
+    from ..io.arrays import read_npy
+
+    arr = read_npy(path, "Kanamori-Endo light .npy")
+    if tuple(arr.shape) != (9, 3):
         raise ShapeError(f"{path}: a Kanamori-Endo light .npy must be (9, 3) BGR, got {tuple(arr.shape)}")
-    if not np.issubdtype(arr.dtype, np.number):
-        raise InputError(f"{path}: expected numeric coefficients, got dtype {arr.dtype}")
+    if not np.issubdtype(arr.dtype, np.number) or arr.dtype.kind == "c":
+        raise InputError(f"{path}: expected real coefficients, got dtype {arr.dtype}")
     return _validate(np.ascontiguousarray(arr[:, ::-1]).astype(np.float64), str(path))
 
 

@@ -78,7 +78,7 @@ def test_bad_values_and_files(tmp_path):
     with pytest.raises(InputError, match=r"m.txt: expected a .npz or .pkl"):
         load_motion(tmp_path / "m.txt")
     (tmp_path / "junk.pkl").write_bytes(b"not a pickle")
-    with pytest.raises(InputError, match="junk.pkl: cannot read"):
+    with pytest.raises(InputError, match="junk.pkl: not a readable motion file"):
         load_motion(tmp_path / "junk.pkl")
 
 

@@ -106,3 +106,32 @@ def test_file_errors(tmp_path, smpl_arrays):
     # Fewer than 6890 vertices still works (smplx's extra keypoint ids are not used).
     np.savez(tmp_path / "small.npz", **arrs)
     assert SMPLBody(tmp_path / "small.npz")().verts.shape == (1, 200, 3)
+
+
+def test_official_style_pkl_with_chumpy_objects_loads_without_chumpy(tmp_path, smpl_arrays, monkeypatch):
+    """Official SMPL .pkl files hold chumpy ``Ch`` objects and a scipy csc J_regressor (protocol 2)."""
+    import sys
+    import types
+
+    import scipy.sparse
+
+    pkg, mod = types.ModuleType("chumpy"), types.ModuleType("chumpy.ch")
+
+    class Ch:  # pickles under chumpy's own name, as the official files do
+        def __init__(self, x):
+            self.x, self._dirty_vars, self._itr = np.asarray(x, np.float64), set(), None
+
+    Ch.__module__, Ch.__qualname__ = "chumpy.ch", "Ch"
+    mod.Ch, pkg.ch = Ch, mod
+    arrs = smpl_arrays(n_verts=200)
+    official = dict(arrs, v_template=Ch(arrs["v_template"]), shapedirs=Ch(arrs["shapedirs"]),
+                    weights=Ch(arrs["weights"]), J_regressor=scipy.sparse.csc_matrix(arrs["J_regressor"]),
+                    bs_style="lbs", bs_type="lrotmin")
+    with monkeypatch.context() as m:
+        m.setitem(sys.modules, "chumpy", pkg)
+        m.setitem(sys.modules, "chumpy.ch", mod)
+        (tmp_path / "basicModel.pkl").write_bytes(pickle.dumps(official, protocol=2))
+    data = load_smpl_file(tmp_path / "basicModel.pkl")
+    assert "chumpy" not in sys.modules
+    for k in ("v_template", "shapedirs", "weights", "J_regressor"):
+        np.testing.assert_array_equal(data[k], np.asarray(arrs[k], np.float64))

@@ -1,6 +1,7 @@
 """atomic_write: all-or-nothing replacement of a file."""
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -44,3 +45,45 @@ def test_missing_folder_and_bad_mode(tmp_path):
     with pytest.raises(ValueError, match="mode"):
         with atomic_write(tmp_path / "f.bin", "a"):
             pass
+
+
+def _killed_writer(path, tag=""):
+    """The temporary file a writer killed mid-write leaves: made by a child process that is gone."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from relightnet.io.atomic import temp_path; p = temp_path(sys.argv[1], sys.argv[2]); "
+            "p.write_bytes(b'partial'); print(p)")
+    out = subprocess.run([sys.executable, "-c", code, str(path), tag], capture_output=True, text=True, check=True)
+    return Path(out.stdout.strip())
+
+
+def test_next_writer_removes_temp_files_of_dead_writers_only(tmp_path):
+    from relightnet.io.atomic import remove_stale, temp_path
+
+    out = tmp_path / "out.mp4"
+    dead, dead_stage = _killed_writer(out), _killed_writer(out, "stage")
+    assert dead.is_file() and dead.name.startswith(".out.mp4.") and dead.name.endswith(".tmp")
+    alive = temp_path(out)  # this process: still running
+    alive.write_bytes(b"mine")
+    other_host = tmp_path / ".out.mp4.elsewhere.1-1.abcd.tmp"
+    old_style = tmp_path / ".out.mp4.k3j4h5.tmp"  # no writer recorded: left alone
+    other_file = _killed_writer(tmp_path / "other.mp4")
+    for p in (other_host, old_style):
+        p.write_bytes(b"?")
+    with atomic_write(out) as f:
+        f.write(b"complete")
+    assert out.read_bytes() == b"complete"
+    assert not dead.exists() and not dead_stage.exists()
+    assert alive.exists() and other_host.exists() and old_style.exists() and other_file.exists()
+    assert remove_stale(tmp_path / "other.mp4") == [other_file]
+    alive.unlink()
+
+
+def test_temp_names_record_the_writer(tmp_path):
+    from relightnet.io.atomic import temp_path
+
+    a, b = temp_path(tmp_path / "x.png"), temp_path(tmp_path / "x.png", "video")
+    assert a != b and a.parent == tmp_path and f".{os.getpid()}-" in a.name and ".video." in b.name
+    with pytest.raises(ValueError, match="letters"):
+        temp_path(tmp_path / "x.png", "a.b")

@@ -3,6 +3,7 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet, estimate_light, mask_crop_box, predict_image
+from relightnet.model.inference import _check_predicted_mask, check_predicted_person
 
 
 @pytest.fixture(scope="module")
@@ -37,14 +38,22 @@ def test_without_mask_uses_the_mask_head_or_fails_clearly(net, caplog):
     head = net.albedo_dec.head
     with torch.no_grad():
         saved = head.bias[3].item()
-        head.bias[3] = 50.0  # the mask head says "person" everywhere
-        pred, box = predict_image(net, img, None, size=32)
-        assert pred.mask.shape == (1, 1, 40, 64) and pred.mask.min() > 0.99 and box.size >= 64
-        # ... which looks like the background: the whole frame and its top edge.
-        assert "may have taken the background for the person" in caplog.text
+        head.bias[3] = 50.0  # the mask head says "person" everywhere: a mask of everything is no person
+        with pytest.raises(InputError, match="100.0% of the frame.*mask of everything"):
+            predict_image(net, img, None, size=32)
         head.bias[3] = -50.0  # ... or nowhere: a clear error
         with pytest.raises(InputError, match="found no person"):
             predict_image(net, img, None, size=32)
         head.bias[3] = saved
+    # A black or one-colour frame is refused before the network looks for a person in it.
+    for blank in (torch.zeros(3, 40, 64), torch.full((3, 40, 64), 0.5)):
+        with pytest.raises(InputError, match="image: blank"):
+            predict_image(net, blank, None, size=32)
+    # Most of the frame and its top edge (not all of it): accepted with a warning.
+    person = torch.zeros(40, 64, dtype=torch.bool)
+    person[:, :50] = True
+    check_predicted_person(person)
+    _check_predicted_mask(person)
+    assert "may have taken the background for the person" in caplog.text
     with pytest.raises(InputError, match="multiple of 16"):
         predict_image(net, img, torch.ones(40, 64), size=40)

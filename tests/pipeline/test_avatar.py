@@ -232,3 +232,16 @@ def test_antialias_changes_only_the_silhouette(target, anny_body, tmp_path):
         band = silhouette_pixels(covered).numpy()
         np.testing.assert_array_equal(s[~band], h[~band])
         assert (s[band] != h[band]).any()
+
+
+def test_killed_avatar_leaves_no_temp_file_after_a_rerun(target, tmp_path, kill_mid_run):
+    from .conftest import temp_files
+
+    video, masks, _ = target
+    out = tmp_path / "o.mkv"
+    argv = ["avatar", "--target", str(video), "--target-masks", str(masks), "--n-dirs", "8", "--motion", "idle",
+            "--out", str(out)]
+    left = kill_mid_run(argv, tmp_path)  # SIGKILL while the video is being written
+    assert left and not out.exists()
+    assert main(["-q", *argv]) == 0
+    assert temp_files(tmp_path) == [] and len(list(read_video(out))) == N

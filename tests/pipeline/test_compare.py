@@ -245,3 +245,15 @@ def test_onnx_backend_matches_torch(seq_dir, tmp_path, anny_body):
     with pytest.raises(InputError, match="needs --backend onnx"):
         compare(seq_dir, tmp_path / "x", checkpoint=tmp_path / "tiny.onnx", **kw)
     assert _no_leftovers(tmp_path, "x")
+
+
+def test_killed_compare_leaves_no_staging_folder_after_a_rerun(seq_dir, tmp_path, kill_mid_run):
+    from .conftest import temp_files
+
+    out = tmp_path / "report"
+    argv = ["compare", "--data", str(seq_dir), "--out", str(out), "--n-dirs", "8"]
+    # SIGKILL once the report is being staged (its staging folder holds a file).
+    left = kill_mid_run(argv, tmp_path, ready=lambda temps: any(p.is_dir() and any(p.rglob("*")) for p in temps))
+    assert left and not (out / "metrics.json").exists()
+    assert main(["-q", *argv]) == 0
+    assert temp_files(tmp_path) == [] and len(json.loads((out / "metrics.json").read_text())["clips"]) == 2

@@ -74,3 +74,16 @@ def test_one_mask_image_is_not_a_mask_sequence(tmp_path, masked_clip, capsys):
                  "--out", str(tmp_path / "x.mkv")]) == 1
     assert "turntable: expected degrees per second" in capsys.readouterr().err
     assert not (tmp_path / "x.mkv").exists()
+
+
+def test_killed_relight_video_leaves_no_temp_file_after_a_rerun(tmp_path, masked_clip, kill_mid_run):
+    from .conftest import temp_files
+
+    video, masks = masked_clip(tmp_path, n=40)
+    out = tmp_path / "out" / "relit.mkv"
+    out.parent.mkdir()
+    argv = ["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--out", str(out)]
+    left = kill_mid_run(argv, out.parent)  # SIGKILL while the video is being written
+    assert left and not out.exists()
+    assert main(["-q", *argv]) == 0  # the rerun starts clean and removes the dead run's file
+    assert temp_files(out.parent) == [] and len(list(read_video(out))) == 40

@@ -1,0 +1,90 @@
+"""Checkpoints: plain content only, weights_only loading, refusals by name, conversion, the shipped model."""
+
+import dataclasses
+import os
+
+import numpy as np
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.cli import main
+from relightnet.model import NetConfig, RelightNet, load_checkpoint, load_model, save_checkpoint
+from relightnet.model.checkpoint import FORMAT, SHIPPED, convert_checkpoint
+
+CFG = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
+
+
+class _Payload:
+    def __init__(self, path):
+        self.path = path
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.path}",)
+
+
+def _state(**extra):
+    torch.manual_seed(0)
+    return {"format": FORMAT, "net_config": dataclasses.asdict(CFG), "model": RelightNet(CFG).state_dict(),
+            "step": 1, **extra}
+
+
+def test_save_and_load_plain_content(tmp_path):
+    net = RelightNet(CFG)
+    save_checkpoint(tmp_path / "c.pt", net, CFG, step=5, train_config={"lr": 1e-3, "net": {"width": 4}})
+    state = torch.load(tmp_path / "c.pt", weights_only=True)  # what any reader can do safely
+    assert state["format"] == FORMAT and state["step"] == 5
+    m = load_model(tmp_path / "c.pt")
+    assert all(torch.equal(a, b) for a, b in zip(m.state_dict().values(), net.state_dict().values(), strict=True))
+    with pytest.raises(TypeError, match=r"checkpoint\['cfg'\] is a relightnet.model.network.NetConfig"):
+        save_checkpoint(tmp_path / "d.pt", net, CFG, cfg=CFG)
+    assert not (tmp_path / "d.pt").exists()
+
+
+def test_payload_is_refused_by_name_and_not_run(tmp_path):
+    marker = tmp_path / "made"
+    torch.save(_state(extra=_Payload(marker)), tmp_path / "evil.pt")
+    with pytest.raises(InputError, match=r"evil.pt: refused: the checkpoint holds posix.system .*convert-checkpoint"):
+        load_model(tmp_path / "evil.pt")
+    with pytest.raises(InputError, match="refused: it holds posix.system"):
+        convert_checkpoint(tmp_path / "evil.pt", tmp_path / "new.pt")
+    assert not marker.exists() and not (tmp_path / "new.pt").exists()
+
+
+def test_older_checkpoint_with_numpy_and_config_objects_converts(tmp_path, capsys):
+    torch.manual_seed(0)
+    net = RelightNet(CFG)
+    old = {"format": "relightnet-ckpt-1", "net_config": CFG, "model": net.state_dict(), "step": np.int64(7),
+           "input_size": np.int32(32), "stats": np.arange(3.0)}
+    torch.save(old, tmp_path / "old.pt")
+    with pytest.raises(InputError, match="holds .*relightnet.model.network.NetConfig|holds numpy"):
+        load_checkpoint(tmp_path / "old.pt")
+    assert main(["-q", "convert-checkpoint", str(tmp_path / "old.pt"), str(tmp_path / "new.pt")]) == 0
+    state = load_checkpoint(tmp_path / "new.pt")
+    assert state["format"] == FORMAT and state["step"] == 7 and type(state["step"]) is int
+    assert state["net_config"] == dataclasses.asdict(CFG) and torch.equal(state["stats"], torch.arange(3.0).double())
+    m = load_model(tmp_path / "new.pt")
+    assert m.input_size == 32 and all(torch.equal(a, b) for a, b in zip(m.state_dict().values(),
+                                                                         net.state_dict().values(), strict=True))
+
+
+def test_bad_configurations_and_weights_allocate_nothing(tmp_path):
+    def fails(state, text):
+        torch.save(state, tmp_path / "x.pt")
+        with pytest.raises(InputError, match=text):
+            load_model(tmp_path / "x.pt")
+
+    fails(_state(net_config={**dataclasses.asdict(CFG), "width": 10**9}), "outside")
+    fails(_state(net_config={**dataclasses.asdict(CFG), "mask_head": "yes"}), "expected a bool")
+    fails(_state(net_config={**dataclasses.asdict(CFG), "width": 64}), "weights do not match")
+    bad = _state()
+    bad["model"] = {k: v * float("nan") for k, v in bad["model"].items()}
+    fails(bad, "NaN or Inf")
+    fails(_state(step=-1), "'step'")
+    fails(_state(input_size=10**9), "input_size")
+
+
+def test_shipped_model_is_in_the_safe_form():
+    state = torch.load(SHIPPED, weights_only=True)
+    assert state["format"] == FORMAT and "optimizer" not in state
+    load_model()
