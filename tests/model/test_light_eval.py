@@ -33,7 +33,7 @@ def test_still_metrics_group_by_source():
     true = torch.randn(6, 9, 3)
     res = still_metrics(true * 2, true, ["hdri", "hdri", "window", "window", "window", "preetham"])
     assert res["hdri"]["n"] == 2 and res["window"]["n"] == 3 and res["all"]["n"] == 6
-    assert res["all"]["error"]["median"] < 1e-6  # exposure does not count
+    assert res["all"]["error"]["median"] < 1e-5  # exposure does not count
     assert res["all"]["ambient_error"]["median"] > 0
 
 
@@ -52,8 +52,8 @@ def test_evaluate_light_end_to_end(tiny_dataset, tiny_clips):
     assert res["stills"]["all"]["n"] == 3
     assert 0 <= res["stills"]["all"]["error"]["median"] <= 1
     assert res["clips"]["raw"]["clips_constant"] == 1 and res["clips"]["raw"]["clips_switch"] == 1
-    # pooled over the shot, a constant light gives a constant estimate
-    assert res["clips"]["smoothed"]["drift_p90"] < 1e-4
+    # pooled over a second of frames, a constant light drifts much less than the per-frame estimate
+    assert res["clips"]["smoothed"]["drift_p90"] < 0.5 * res["clips"]["raw"]["drift_p90"]
     text = format_light_report(res)
     assert "| all | 3 |" in text and "drift" in text
     json.dumps(res)

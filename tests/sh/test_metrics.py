@@ -17,8 +17,8 @@ from relightnet.sh.metrics import (
 
 def test_error_is_scale_invariant_but_not_colour_invariant():
     L = directional_light([0.3, 0.5, 0.8], [1.0, 0.8, 0.6], sharpness=8.0) + ambient_light(0.1)
-    assert float(scale_invariant_light_error(L, L)) < 1e-6
-    assert float(scale_invariant_light_error(3.7 * L, L)) < 1e-6
+    assert float(scale_invariant_light_error(L, L)) < 1e-5
+    assert float(scale_invariant_light_error(3.7 * L, L)) < 1e-5
     tinted = L * torch.tensor([1.0, 1.0, 0.5])
     assert float(scale_invariant_light_error(tinted, L)) > 0.05
 
