@@ -46,7 +46,8 @@ class TrainConfig:
     convolutions; losses and the light solve stay float32) and ``channels_last`` (NHWC
     memory format) are speed settings (BENCHMARKS.md measures them); ``data_dtype`` ``float16``
     halves the memory of the training split held in RAM (10,000 people at 128²: 5 GB instead of
-    10 GB; images and maps keep 11 bits of mantissa)."""
+    10 GB; images and maps keep 11 bits of mantissa); ``train_items`` trains on the first N items of
+    the split only (a smaller run on the same dataset)."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -67,6 +68,7 @@ class TrainConfig:
     precision: str = "fp32"
     channels_last: bool = False
     data_dtype: str = "float32"
+    train_items: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -80,6 +82,9 @@ class TrainConfig:
             )
         if self.precision not in ("fp32", "bf16"):
             raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {self.precision!r}")
+        if self.train_items is not None and (not isinstance(self.train_items, int) or isinstance(self.train_items, bool)
+                                             or self.train_items < 1):
+            raise InputError(f"train config train_items: expected an integer >= 1, got {self.train_items!r}")
         if self.data_dtype not in ("float32", "float16"):
             raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {self.data_dtype!r}")
         if self.render_target not in ("image", "model"):
@@ -129,11 +134,13 @@ class TrainData:
         split: which split.
         target: transport field to learn.
         dtype: how the maps are held in memory (``torch.float16`` halves it); batches are float32.
+        limit: keep the first ``limit`` items only (None: all).
     """
 
     FIELDS = ("image", "mask", "albedo", "light")
 
-    def __init__(self, root, split: str = "train", target: str = "transport", dtype=torch.float32) -> None:
+    def __init__(self, root, split: str = "train", target: str = "transport", dtype=torch.float32,
+                 limit: int | None = None) -> None:
         from ..data.dataset import SynthDataset
 
         ds = SynthDataset(root, split, fields=(*self.FIELDS, target), cache_shards=1)
@@ -142,9 +149,10 @@ class TrainData:
         self.target = target
         keys = (*self.FIELDS, target)
         first = ds[0]
-        self.tensors = {k: torch.empty((len(ds), *first[k].shape), dtype=torch.float32 if k == "light" else dtype)
+        n = len(ds) if limit is None else min(limit, len(ds))
+        self.tensors = {k: torch.empty((n, *first[k].shape), dtype=torch.float32 if k == "light" else dtype)
                         for k in keys}
-        for i in range(len(ds)):  # shard order: each shard is read once
+        for i in range(n):  # shard order: each shard is read once
             item = first if i == 0 else ds[i]
             for k in keys:
                 self.tensors[k][i] = item[k]
@@ -221,7 +229,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     out = Path(out_dir)
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
-    data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype))
+    data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items)
     net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
