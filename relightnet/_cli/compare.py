@@ -47,9 +47,10 @@ def register(sub) -> None:
     p.add_argument("--prt-seed", type=nonneg_int, default=0,
                    help="rotation seed of the 3D path's PRT directions (default: 0)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces of the 3D path (default: 0)")
-    p.add_argument("--smoothing", default="hermite", choices=SMOOTHING,
-                   help="light smoothing over time, with 3-MAD outlier correction and switch detection "
-                        "(default: hermite)")
+    p.add_argument("--smoothing", default="auto", choices=SMOOTHING,
+                   help="light over time: pooled (one light solve per shot, split at detected light switches), "
+                        "hermite/poly/savgol (robust smoothing of per-frame lights), none; default auto: pooled "
+                        "when the model solves its light, else hermite")
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")
     p.add_argument("--size", type=work_size, help="CNN working size, a multiple of 16 (default: its training size)")

@@ -29,8 +29,12 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
     model = load_model(args.checkpoint, device=args.device)
-    twin = load_model(args.ablation, device=args.device) if args.ablation else None
     out = Path(args.out)
+    if args.light:
+        return _evaluate_light(args, model, out)
+    if args.clips:
+        raise ValueError("--clips: only with --light (the light report)")
+    twin = load_model(args.ablation, device=args.device) if args.ablation else None
     out.mkdir(parents=True, exist_ok=True)
     base = baseline_from_train(args.data) if not args.no_baseline else None
     result = evaluate(model, args.data, split=args.split, baseline=base, sheet=out / "contact_sheet.png", twin=twin,
@@ -43,6 +47,21 @@ def run_evaluate(args: argparse.Namespace) -> int:
     logger.info("evaluated %d %s items:\n%s%s", result["n"], args.split, format_table(result), extra)
     with atomic_write(out / "metrics.json", "w") as f:
         json.dump(result, f, indent=2)
+    return 0
+
+
+def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
+    from ..io import atomic_write
+    from ..model.light_eval import evaluate_light, format_light_report
+
+    result = evaluate_light(model, args.data, clips=args.clips or (), split=args.split)
+    text = format_light_report(result, str(args.checkpoint or "shipped model"))
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / "light_report.md", "w") as f:
+        f.write(f"# Light estimation: {args.checkpoint or 'shipped model'} on {args.data}\n\n{text}")
+    with atomic_write(out / "light_metrics.json", "w") as f:
+        json.dump(result, f, indent=2)
+    logger.info("light report (%s):\n%s", out / "light_report.md", text)
     return 0
 
 
@@ -76,7 +95,9 @@ def register(sub) -> None:
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"
                     "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
                     "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
-                    "--data data/medium --out reports/ablation\n")
+                    "--data data/medium --out reports/ablation\n"
+                    "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
+                    "--out reports/light\n")
     add_checkpoint_args(p)
     p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
     p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
@@ -85,6 +106,11 @@ def register(sub) -> None:
     p.add_argument("--ablation", metavar="CHECKPOINT",
                    help="KE18's occlusion ablation: a twin trained on transport that ignores occlusion "
                         "(target: transport_unoccluded); adds relit RMSE overall and on concave pixels of both")
+    p.add_argument("--light", action="store_true",
+                   help="the light report instead: irradiance error by light family, direction and colour errors "
+                        "(light_report.md, light_metrics.json)")
+    p.add_argument("--clips", nargs="+", metavar="DATA",
+                   help="with --light: clip datasets (clip_lights constant/switch) for drift and lag")
     p.set_defaults(func=run_evaluate)
 
     p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person.",

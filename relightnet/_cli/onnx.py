@@ -17,8 +17,9 @@ def run_export(args: argparse.Namespace) -> int:
 
     ckpt = Path(args.checkpoint) if args.checkpoint else shipped_checkpoint()
     net = load_model(ckpt)
-    opts = {"alpha": args.alpha} if args.smoothing == "ema" else {}
-    out = export_onnx(net, args.out, smoothing=args.smoothing,
+    smoothing = args.smoothing if args.smoothing != "auto" else ("pooled" if net.solves else "ema")
+    opts = {"alpha": args.alpha} if smoothing == "ema" else {}
+    out = export_onnx(net, args.out, smoothing=smoothing,
                       train_config=load_checkpoint(ckpt).get("train_config"), **opts)
     if args.int8:
         from ..model.onnx_serving import quantize_int8
@@ -45,7 +46,9 @@ def register(sub) -> None:
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
     add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
-    p.add_argument("--smoothing", choices=SMOOTHERS, default="ema", help="light smoothing in the graph (default: ema)")
+    p.add_argument("--smoothing", choices=("auto", *SMOOTHERS), default="auto",
+                   help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
+                        "since the last light switch — for a network that solves its light, else ema)")
     p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")
     p.add_argument("--int8-mode", choices=("static", "dynamic"), default="static",

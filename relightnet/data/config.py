@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -53,6 +54,12 @@ class SynthConfig:
         jitter: random shift/scale of the crop (fraction of the crop side).
         ages: range of Anny's age parameter (default: teens to adults).
         sequence_frames: frames per clip when making sequences (0: still samples).
+        light_mix: optional weights of the light sources (``relightnet.data.lights.LIGHT_SOURCES``:
+            hdri, sky_sun, lobes, fills, preetham, window, mixture); when given it replaces
+            ``synthetic_light_prob``. Empty: the original draw (env maps and three procedural kinds).
+        clip_lights: how a clip's light changes: ``random`` (turning, changing level, sometimes a
+            switch), ``constant`` (one fixed light) or ``switch`` (fixed lights, one switch half-way);
+            the last two make the clips that measure drift and lag.
     """
 
     seed: int = 0
@@ -71,6 +78,8 @@ class SynthConfig:
     jitter: float = 0.03
     ages: tuple = (0.6, 1.0)
     sequence_frames: int = 0
+    light_mix: dict = field(default_factory=dict)
+    clip_lights: str = "random"
 
     def __post_init__(self) -> None:
         try:
@@ -120,6 +129,15 @@ class SynthConfig:
             bad("ages", "(low, high) within Anny's age range [-1/3, 1]")
         if not isinstance(self.sequence_frames, int) or not 0 <= self.sequence_frames <= 10000:
             bad("sequence_frames", "an integer from 0 to 10000")
+        if self.clip_lights not in ("random", "constant", "switch"):
+            bad("clip_lights", "'random', 'constant' or 'switch'")
+        from .lights import LIGHT_SOURCES
+
+        mix = self.light_mix
+        if not isinstance(mix, dict) or set(mix) - set(LIGHT_SOURCES) or any(
+            isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < math.inf for v in mix.values()
+        ) or (mix and not sum(mix.values()) > 0):
+            bad("light_mix", f"a mapping from {LIGHT_SOURCES} to finite weights >= 0 (not all 0)")
 
     @property
     def n_coeffs(self) -> int:

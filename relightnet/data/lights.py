@@ -47,6 +47,7 @@ from ..sh import (
     rotate_sh,
     rotate_sh_up,
 )
+from .light_families import FAMILIES, family_light
 
 __all__ = [
     "LIGHT_SOURCES",
@@ -63,7 +64,7 @@ __all__ = [
     "light_at",
 ]
 
-LIGHT_SOURCES = ("hdri", "sky_sun", "lobes", "fills")
+LIGHT_SOURCES = ("hdri", "sky_sun", "lobes", "fills", *FAMILIES)
 
 #: Range of the light level (max luminance of the irradiance over all normals), log-uniform.
 LEVEL_RANGE = (0.8, 2.0)
@@ -194,7 +195,7 @@ def synthetic_light(kind: str, rng: np.random.Generator, lmax: int = 2) -> tuple
         sh += ambient_light(amb, lmax).double()
         params = {"lobes": lobes, "ambient": amb}
     else:
-        raise InputError(f"synthetic light kind: expected one of {LIGHT_SOURCES[1:]}, got {kind!r}")
+        raise InputError(f"synthetic light kind: expected one of {LIGHT_SOURCES[1:4]}, got {kind!r}")
     return sh, {k: float(v) if isinstance(v, float | np.floating) else v for k, v in params.items()}
 
 
@@ -219,26 +220,42 @@ class LightDraw:
     info: dict = field(default_factory=dict)
 
 
-def sample_light(rng: np.random.Generator, hdris, lmax: int = 2, synthetic_prob: float = 0.3) -> LightDraw:
+def _draw_source(rng: np.random.Generator, synthetic_prob: float, mix: dict | None) -> str:
+    """The light source of a sample: the legacy draw (``mix`` None) or one weighted by ``mix``."""
+    if not mix:
+        synthetic = bool(rng.uniform() < synthetic_prob)
+        kind = ("sky_sun", "lobes", "fills")[int(rng.choice(3, p=[0.4, 0.4, 0.2]))]
+        return kind if synthetic else "hdri"
+    names = sorted(mix)
+    p = np.array([float(mix[n]) for n in names])
+    return names[int(rng.choice(len(names), p=p / p.sum()))]
+
+
+def sample_light(rng: np.random.Generator, hdris, lmax: int = 2, synthetic_prob: float = 0.3,
+                 mix: dict | None = None) -> LightDraw:
     """Draw a light: an env map of ``hdris`` or, with ``synthetic_prob``, a procedural one.
 
     Args:
         rng: the random generator (every draw is made in a fixed order).
         hdris: env-map names the split may use (``SynthConfig.hdris(split)``).
         lmax: SH order.
-        synthetic_prob: probability of a procedural light.
+        synthetic_prob: probability of a procedural light (when ``mix`` is not given).
+        mix: optional weights of the sources (:data:`LIGHT_SOURCES`), e.g.
+            ``{"hdri": 0.3, "preetham": 0.2, "window": 0.2, ...}``; replaces ``synthetic_prob``.
     """
     hdris = tuple(hdris)
     if not hdris:
         raise InputError("sample_light: no env maps to choose from")
-    synthetic = bool(rng.uniform() < synthetic_prob)
-    kind = ("sky_sun", "lobes", "fills")[int(rng.choice(3, p=[0.4, 0.4, 0.2]))]
+    kind = _draw_source(rng, synthetic_prob, mix)
     name = hdris[int(rng.integers(len(hdris)))]
     angle = float(rng.uniform(0.0, 2 * math.pi))
     mirror = bool(rng.uniform() < 0.5)
     gains = white_balance(rng)
     level = float(math.exp(rng.uniform(math.log(LEVEL_RANGE[0]), math.log(LEVEL_RANGE[1]))))
-    if synthetic:
+    if kind in FAMILIES:
+        raw, params = family_light(kind, rng, lmax, hdris)
+        source, hdri = kind, None
+    elif kind != "hdri":
         raw, params = synthetic_light(kind, rng, lmax)
         source, hdri = kind, None
         if kind == "lobes":

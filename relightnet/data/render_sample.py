@@ -101,13 +101,16 @@ def _light_to_env(draw: LightDraw, angle: float, tilt: torch.Tensor) -> torch.Te
 
 def _light_schedule(rng, cfg: SynthConfig, split: str, n: int | None) -> tuple[list, list, list]:
     """Draws and per-frame (draw index, angle, level) for a still (n None) or a clip of n frames."""
-    a = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob)
+    a = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob, cfg.light_mix)
     if n is None:
         return [a], [(0, a.angle, a.level)], []
-    b = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob)
+    b = sample_light(rng, cfg.hdris(split), cfg.lmax, cfg.synthetic_light_prob, cfg.light_mix)
     rates = [(0.0 if rng.uniform() < 0.25 else math.radians(rng.uniform(-60, 60)), rng.uniform(-0.4, 0.4))
              for _ in range(2)]
     switch = int(rng.integers(1, n)) if n > 1 and rng.uniform() < _SWITCH_PROB else None
+    if cfg.clip_lights != "random":  # evaluation clips: a fixed light, with one switch half-way or none
+        rates = [(0.0, 0.0), (0.0, 0.0)]
+        switch = n // 2 if cfg.clip_lights == "switch" and n > 1 else None
     frames = []
     for t in range(n):
         i = 0 if switch is None or t < switch else 1

@@ -18,7 +18,7 @@ from .network import Prediction, RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light", "check_not_blank",
+__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light", "estimate_light_evidence", "check_not_blank",
            "check_predicted_person"]
 
 
@@ -189,6 +189,8 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
         transport=_paste(pred.transport, box, h, w) * inside,
         light=pred.light,
         mask=mask[None, None],
+        evidence=pred.evidence,
+        light_head=pred.light_head,
     ), box
 
 
@@ -201,3 +203,20 @@ def estimate_light(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
     """
     x, _, _ = _network_input(model, image, mask, size, pad)
     return model(x).light[0]
+
+
+@torch.no_grad()
+def estimate_light_evidence(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
+                            size: int | None = None, pad: float = 0.05):
+    """The light of a photo with what a video needs to pool it over a shot.
+
+    Same arguments as :func:`predict_image`.
+
+    Returns:
+        ``(light (K, 3), evidence, prior)``: the solve's :class:`~relightnet.model.light_solve.Evidence`
+        (``M`` (1, 3, K, K), ``r`` (1, 3, K)) and its prior light (K, 3) — None for a network that
+        regresses its light (``light_mode="head"``), and the prior None for ``"solve"``.
+    """
+    x, _, _ = _network_input(model, image, mask, size, pad)
+    p = model(x)
+    return p.light[0], p.evidence, None if p.light_head is None else p.light_head[0]

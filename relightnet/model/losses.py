@@ -11,7 +11,11 @@ masked by the person mask M and averaged over masked pixels:
 - relighting (off by default): |Â ⊙ S(T̂, L′) − A ⊙ S(T, L′)| with L′ the light of another
   item of the batch (rolled by one), what the model is used for: a new light;
 - total variation of T̂ and Â inside the eroded mask;
-- mask: binary cross-entropy of the mask head against M (when present).
+- mask: binary cross-entropy of the mask head against M (when present);
+- light head (``hybrid`` networks): |L̂_head − L|, so that the solve's prior is a light too;
+- light shape (off by default): the scale-invariant irradiance error of L̂ against L over the
+  sphere (:func:`relightnet.sh.metrics.scale_invariant_light_error`): direction and colour, not
+  exposure.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from dataclasses import asdict, dataclass
 import torch
 from torch.nn import functional as F
 
+from ..sh.metrics import scale_invariant_light_error
 from .network import Prediction, shading_map
 
 __all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses"]
@@ -40,6 +45,8 @@ class LossWeights:
     relit_novel: float = 0.0
     tv: float = 0.05
     mask: float = 0.5
+    light_head: float = 0.0
+    light_si: float = 0.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -80,7 +87,7 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
     """
     M = batch["mask"]
     I, A, T, L = batch.get("render", batch["image"]), batch["albedo"], batch["transport"], batch["light"]
-    Ah, Th, Lh = pred.albedo, pred.transport, pred.light
+    Ah, Th, Lh = pred.albedo.float(), pred.transport.float(), pred.light.float()
     S = shading_map(T, L)
     S_tl = shading_map(Th, Lh)
     terms = {
@@ -100,7 +107,11 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
     inner = erode(M)
     terms["tv"] = total_variation(Th, inner) + total_variation(Ah, inner)
     if pred.mask is not None:
-        terms["mask"] = F.binary_cross_entropy(pred.mask.clamp(1e-6, 1 - 1e-6), M)
+        terms["mask"] = F.binary_cross_entropy(pred.mask.float().clamp(1e-6, 1 - 1e-6), M)
+    if weights.light_si:
+        terms["light_si"] = scale_invariant_light_error(Lh, L).mean()
+    if pred.light_head is not None and weights.light_head:
+        terms["light_head"] = (pred.light_head.float() - L).abs().mean()
     w = weights.to_dict()
     terms["total"] = sum(w[k] * v for k, v in terms.items() if w.get(k, 0.0))
     return terms

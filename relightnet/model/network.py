@@ -4,9 +4,12 @@ An encoder–decoder with skip connections reads a masked image of a person and 
 
 - ``transport`` (B, K, H, W): per-pixel SH transport, occlusion included, unbounded;
 - ``albedo`` (B, 3, H, W): linear albedo in (0, 1) (sigmoid);
-- ``light`` (B, K, 3): the scene's SH light (camera-relative light frame), from a head on
-  the pooled bottleneck and decoder features — any batch size and any H, W that are
-  multiples of 16 (no fixed reshape as in KE18);
+- ``light`` (B, K, 3): the scene's SH light (camera-relative light frame). ``light_mode``
+  chooses how: ``"head"`` regresses it from the pooled bottleneck and decoder features (KE18);
+  ``"solve"`` solves it from the predicted maps — the light that makes A ⊙ (T · L) explain the
+  image over the person, weighted by a predicted per-pixel confidence
+  (:mod:`relightnet.model.light_solve`); ``"hybrid"`` solves with the head's light as the
+  prior. Any batch size and any H, W that are multiples of 16 (no fixed reshape as in KE18);
 - optionally ``mask`` (B, 1, H, W) logits, so the 2D path runs without a user mask.
 
 Normalisation (``normalize_input``) is KE18's: the 8-bit sRGB image mapped to [−1, 1] and
@@ -17,6 +20,7 @@ GroupNorm keeps the network independent of the batch size.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import torch
@@ -24,14 +28,21 @@ from torch import nn
 from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError, check_shape
+from ..io import srgb_to_linear
+from .light_solve import Evidence, light_evidence, solve_light
 
-__all__ = ["NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "photo_albedo", "pad_to_multiple",
-           "shading_map"]
+__all__ = ["LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "photo_albedo",
+           "pad_to_multiple", "shading_map"]
+
+
+#: How the network gets its light (see the module docstring).
+LIGHT_MODES = ("head", "solve", "hybrid")
 
 
 @dataclass(frozen=True)
 class NetConfig:
-    """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``."""
+    """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``;
+    ``light_mode`` ``head``, ``solve`` or ``hybrid`` (module docstring), ``solve_reg`` the solve's λ."""
 
     lmax: int = 2
     width: int = 32
@@ -39,6 +50,14 @@ class NetConfig:
     levels: int = 4
     mask_head: bool = True
     light_hidden: int = 256
+    light_mode: str = "head"
+    solve_reg: float = 1e-2
+
+    def __post_init__(self) -> None:
+        if self.light_mode not in LIGHT_MODES:
+            raise InputError(f"net config light_mode: expected one of {LIGHT_MODES}, got {self.light_mode!r}")
+        if not self.solve_reg > 0:
+            raise InputError(f"net config solve_reg: expected > 0, got {self.solve_reg!r}")
 
     @property
     def n_coeffs(self) -> int:
@@ -58,12 +77,19 @@ class Prediction:
         transport: (B, K, H, W) SH transport.
         light: (B, K, 3) SH light, linear RGB, camera-relative light frame.
         mask: (B, 1, H, W) probability of "person", or None without a mask head.
+        evidence: the solve's normal equations (``M`` (B, 3, K, K), ``r`` (B, 3, K)) when the
+            light is solved (pooled over frames to share a light across a shot), else None.
+        light_head: (B, K, 3) the light head's estimate (``hybrid``: the solve's prior), or None.
+        confidence: (B, 1, H, W) the solve's per-pixel weights, or None.
     """
 
     albedo: torch.Tensor
     transport: torch.Tensor
     light: torch.Tensor
     mask: torch.Tensor | None = None
+    evidence: Evidence | None = None
+    light_head: torch.Tensor | None = None
+    confidence: torch.Tensor | None = None
 
     def shading(self, light: torch.Tensor | None = None) -> torch.Tensor:
         """(B, 3, H, W) S = T · L with the predicted or a given (K, 3) / (B, K, 3) light."""
@@ -200,12 +226,15 @@ class RelightNet(nn.Module):
         self.stem = _Block(4, widths[0])
         self.down = nn.ModuleList(_Block(widths[i], widths[i + 1], stride=2) for i in range(cfg.levels))
         k = cfg.n_coeffs
-        self.transport_dec = _Decoder(widths, k)
+        self.solves = cfg.light_mode != "head"
+        self.transport_dec = _Decoder(widths, k + (1 if self.solves else 0))  # + the solve's confidence
         self.albedo_dec = _Decoder(widths, 3 + (1 if cfg.mask_head else 0))
         pooled = widths[-1] + sum(widths[:-1])
-        self.light_head = nn.Sequential(
-            nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
-        )
+        self.light_head = None
+        if cfg.light_mode != "solve":
+            self.light_head = nn.Sequential(
+                nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
+            )
 
     def forward(self, x: torch.Tensor) -> Prediction:
         """Args: x (B, 4, H, W) from :func:`normalize_input`, H and W multiples of 2**levels.
@@ -223,11 +252,32 @@ class RelightNet(nn.Module):
         feats = [self.stem(x)]
         for d in self.down:
             feats.append(d(feats[-1]))
-        transport, t_inner = self.transport_dec(feats)
+        out, t_inner = self.transport_dec(feats)
+        k = self.config.n_coeffs
+        transport = out[:, :k]
         a, a_inner = self.albedo_dec(feats)
-        # Light: pooled bottleneck + pooled decoder features (both decoders see the whole person).
-        pooled = [feats[-1].mean((2, 3))] + [(t + u).mean((2, 3)) for t, u in zip(t_inner, a_inner, strict=True)]
-        light = self.light_head(torch.cat(pooled, 1)).view(x.shape[0], self.config.n_coeffs, 3)
         albedo = torch.sigmoid(a[:, :3])
         mask = torch.sigmoid(a[:, 3:4]) if self.config.mask_head else None
-        return Prediction(albedo=albedo, transport=transport, light=light, mask=mask)
+        head = None
+        if self.light_head is not None:
+            # Pooled bottleneck + pooled decoder features (both decoders see the whole person).
+            pooled = [feats[-1].mean((2, 3))] + [(t + u).mean((2, 3)) for t, u in zip(t_inner, a_inner, strict=True)]
+            head = self.light_head(torch.cat(pooled, 1)).view(x.shape[0], k, 3)
+        if not self.solves:
+            return Prediction(albedo=albedo, transport=transport, light=head, mask=mask)
+        return self._solve(x, albedo, transport, out[:, k:], head, mask)
+
+    def _solve(self, x, albedo, transport, conf_logit, head, mask) -> Prediction:
+        """The light that makes the maps explain the input image (module docstring)."""
+        m = x[:, 3:4].float()
+        person = (m > 0.5).float()
+        srgb = (x[:, :3].float() / m.clamp_min(1e-3) + 1) / 2  # undo normalize_input inside the person
+        weight = person * F.softplus(conf_logit.float() + 0.5413)  # 1 at a zero logit
+        # The solve runs in float32 whatever the network's precision (bf16 autocast in training).
+        fp32 = torch.autocast(x.device.type, enabled=False) if torch.is_autocast_enabled(x.device.type) \
+            else contextlib.nullcontext()
+        with fp32:
+            ev = light_evidence(srgb_to_linear(srgb.clamp(0, 1)), albedo, transport, weight)
+            light = solve_light(ev, head.float() if head is not None else None, self.config.solve_reg)
+        return Prediction(albedo=albedo, transport=transport, light=light, mask=mask, evidence=ev,
+                          light_head=head, confidence=weight)

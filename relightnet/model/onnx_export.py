@@ -8,7 +8,11 @@ The exported graph is one step of a stream (loop-free, so any video length works
              light_smoothed (B, K, 3), light_state_out (B, S, K, 3)
 
 B, H and W are dynamic (H, W multiples of 16). ``is_first`` starts a new sequence (the
-smoother's state is ignored and reset). The smoother is any module with
+smoother's state is ignored and reset). A network that solves its light adds three outputs,
+the solve's per-frame evidence ``evidence_M`` (B, 3, K, K), ``evidence_r`` (B, 3, K) and
+``light_prior`` (B, K, 3) (zeros without a prior), so that a whole video can be pooled offline;
+its ``pooled`` smoother pools the evidence inside the graph
+(:class:`relightnet.temporal.pooling.PooledSolve`). The smoother is any module with
 ``forward(x (B, K, 3), state (B, S, K, 3), is_first (B,)) -> (y, new_state)`` and an int
 attribute ``state_size`` (S); ``"none"`` passes the raw light through (S = 1).
 """
@@ -29,10 +33,12 @@ from .network import RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["PassThrough", "StreamingRelighter", "make_smoother", "export_onnx", "INPUTS", "OUTPUTS", "SMOOTHERS"]
+__all__ = ["PassThrough", "StreamingRelighter", "make_smoother", "export_onnx", "INPUTS", "OUTPUTS",
+           "EVIDENCE_OUTPUTS", "SMOOTHERS"]
 
 INPUTS = ("image", "mask", "light_state", "is_first")
 OUTPUTS = ("albedo", "transport", "light_raw", "light_smoothed", "light_state_out")
+EVIDENCE_OUTPUTS = ("evidence_M", "evidence_r", "light_prior")
 
 
 class PassThrough(nn.Module):
@@ -45,14 +51,15 @@ class PassThrough(nn.Module):
 
 
 #: Streaming smoothers that can live inside the exported graph.
-SMOOTHERS = ("none", "ema", "one-euro", "fir", "gated-one-euro")
+SMOOTHERS = ("none", "ema", "one-euro", "fir", "gated-one-euro", "pooled")
 
 
 def make_smoother(name: str, lmax: int = 2, **opts) -> nn.Module:
     """A streaming smoother module by name (see :mod:`relightnet.temporal.causal`).
 
     ``gated-one-euro`` puts an outlier gate in front of the one-euro filter: a frame far from
-    the running output is dropped, a jump that persists is taken as a light switch.
+    the running output is dropped, a jump that persists is taken as a light switch. ``pooled``
+    pools the light solve's evidence since the last switch (solve/hybrid networks only).
     """
     from ..temporal.causal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate
 
@@ -66,6 +73,10 @@ def make_smoother(name: str, lmax: int = 2, **opts) -> nn.Module:
         return OneEuroFilter(lmax=lmax, **opts)
     if name == "gated-one-euro":
         return OutlierGate(OneEuroFilter(lmax=lmax), lmax=lmax, **opts)
+    if name == "pooled":
+        from ..temporal.pooling import PooledSolve
+
+        return PooledSolve(lmax=lmax, **opts)
     raise InputError(f"smoothing: expected one of {SMOOTHERS}, got {name!r}")
 
 
@@ -78,8 +89,15 @@ class StreamingRelighter(nn.Module):
 
     def forward(self, image, mask, light_state, is_first):
         p = self.net(normalize_input(image, mask))
-        smoothed, state = self.smoother(p.light, light_state, is_first)
-        return p.albedo, p.transport, p.light, smoothed, state
+        if getattr(self.smoother, "uses_evidence", False):
+            smoothed, state = self.smoother(p.light, light_state, is_first, evidence=p.evidence, prior=p.light_head)
+        else:
+            smoothed, state = self.smoother(p.light, light_state, is_first)
+        out = (p.albedo, p.transport, p.light, smoothed, state)
+        if p.evidence is None:
+            return out
+        prior = torch.zeros_like(p.light) if p.light_head is None else p.light_head
+        return (*out, p.evidence[0], p.evidence[1], prior)
 
 
 def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: dict | None) -> dict:
@@ -91,6 +109,8 @@ def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: di
         "relightnet.input": "image: sRGB in [0,1] RGB (B,3,H,W); mask (B,1,H,W); normalised inside the graph "
                             "as KE18: (2*image-1)*mask, mask appended; H, W multiples of 16",
         "relightnet.smoothing": smoothing,
+        "relightnet.light_mode": net.config.light_mode,
+        "relightnet.solve_reg": repr(net.config.solve_reg),
         "relightnet.state_size": str(state_size),
         "relightnet.input_size": str(getattr(net, "input_size", 128)),
         "relightnet.train_config_sha256": hashlib.sha256(cfg_text.encode()).hexdigest(),
@@ -117,6 +137,11 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
         raise InputError(f"{out}: expected an .onnx output file")
     if example_size % 16:
         raise InputError(f"example_size: expected a multiple of 16, got {example_size}")
+    if smoothing == "pooled":
+        if not net.solves:
+            raise InputError("smoothing pooled: this network regresses its light (light_mode head); "
+                             "pooling needs a solve or hybrid network")
+        smoother_opts = {"reg": net.config.solve_reg, **smoother_opts}
     smoother = make_smoother(smoothing, lmax=net.config.lmax, **smoother_opts)
     model = StreamingRelighter(net.eval(), smoother).eval()
     k, s = net.config.n_coeffs, smoother.state_size
@@ -139,7 +164,8 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
         with warnings.catch_warnings(), torch.no_grad():
             warnings.simplefilter("ignore")
             prog = torch.onnx.export(model, args, dynamo=True, dynamic_shapes=shapes, input_names=list(INPUTS),
-                                     output_names=list(OUTPUTS), verbose=False)
+                                     output_names=list(OUTPUTS) + (list(EVIDENCE_OUTPUTS) if net.solves else []),
+                                     verbose=False)
     finally:
         for q, lv in zip(quiet, levels, strict=True):
             q.setLevel(lv)

@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_shape
-from .onnx_export import INPUTS
+from .onnx_export import EVIDENCE_OUTPUTS, INPUTS
 
 logger = logging.getLogger(__name__)
 
@@ -55,6 +55,9 @@ class OnnxRelighter:
             raise InputError(f"{self.path}: not a relightnet model (light_state is {state}, expected "
                              "[batch, S, K, 3] with fixed S, K)")
         self.state_size, self.n_coeffs = state[1], state[2]
+        outputs = [o.name for o in self.session.get_outputs()]
+        #: the light solve's per-frame evidence outputs (solve/hybrid networks), else empty
+        self.evidence_outputs = tuple(n for n in EVIDENCE_OUTPUTS if n in outputs)
         self._state: np.ndarray | None = None
 
     def reset(self) -> None:
@@ -102,7 +105,8 @@ class OnnxRelighter:
             mask: (B, 1, H, W) float32.
 
         Returns:
-            ``albedo``, ``transport``, ``light_raw``, ``light_smoothed`` numpy arrays.
+            ``albedo``, ``transport``, ``light_raw``, ``light_smoothed`` numpy arrays, and for a
+            network that solves its light ``evidence_M``, ``evidence_r``, ``light_prior``.
         """
         image, mask = self._check(image, mask)
         b = image.shape[0]
@@ -110,8 +114,10 @@ class OnnxRelighter:
         state = np.zeros((b, self.state_size, self.n_coeffs, 3), np.float32) if first else self._state
         outs = self.run({"image": image, "mask": mask, "light_state": state,
                          "is_first": np.full((b,), first, dtype=bool)})
-        albedo, transport, raw, smoothed, self._state = outs
-        return {"albedo": albedo, "transport": transport, "light_raw": raw, "light_smoothed": smoothed}
+        albedo, transport, raw, smoothed, self._state = outs[:5]
+        res = {"albedo": albedo, "transport": transport, "light_raw": raw, "light_smoothed": smoothed}
+        res.update(zip(self.evidence_outputs, outs[5:], strict=True))
+        return res
 
     def step_photo(self, image: torch.Tensor, mask: torch.Tensor, size: int):
         """Run one frame of any size: crop around the mask (KE18 framing), resize to ``size``, :meth:`step`.

@@ -42,7 +42,12 @@ class TrainConfig:
     (A ⊙ (T·L) with the target transport, so that the rendering terms agree with the transport the
     network learns — for ``transport_unoccluded`` the photo's occlusion shading would otherwise leak
     into the albedo); ``init`` starts from the weights of a checkpoint (fine-tuning) instead of a
-    random initialisation."""
+    random initialisation; ``precision`` ``fp32`` or ``bf16`` (autocast of the network's
+    convolutions; losses and the light solve stay float32) and ``channels_last`` (NHWC
+    memory format) are speed settings (BENCHMARKS.md measures them); ``data_dtype`` ``float16``
+    halves the memory of the training split held in RAM (10,000 people at 128²: 5 GB instead of
+    10 GB; images and maps keep 11 bits of mantissa); ``train_items`` trains on the first N items of
+    the split only (a smaller run on the same dataset)."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -60,6 +65,10 @@ class TrainConfig:
                                                    "intensity": [0.5, 2.0], "white_balance": 0.1})
     threads: int = 0
     init: str | None = None
+    precision: str = "fp32"
+    channels_last: bool = False
+    data_dtype: str = "float32"
+    train_items: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -71,6 +80,13 @@ class TrainConfig:
             raise InputError(
                 f"train config target: expected 'transport' or 'transport_unoccluded', got {self.target!r}"
             )
+        if self.precision not in ("fp32", "bf16"):
+            raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {self.precision!r}")
+        if self.train_items is not None and (not isinstance(self.train_items, int) or isinstance(self.train_items, bool)
+                                             or self.train_items < 1):
+            raise InputError(f"train config train_items: expected an integer >= 1, got {self.train_items!r}")
+        if self.data_dtype not in ("float32", "float16"):
+            raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {self.data_dtype!r}")
         if self.render_target not in ("image", "model"):
             raise InputError(f"train config render_target: expected 'image' or 'model', got {self.render_target!r}")
         NetConfig(**self.net)
@@ -117,19 +133,29 @@ class TrainData:
         root: dataset folder made by ``relightnet synth``.
         split: which split.
         target: transport field to learn.
+        dtype: how the maps are held in memory (``torch.float16`` halves it); batches are float32.
+        limit: keep the first ``limit`` items only (None: all).
     """
 
     FIELDS = ("image", "mask", "albedo", "light")
 
-    def __init__(self, root, split: str = "train", target: str = "transport") -> None:
+    def __init__(self, root, split: str = "train", target: str = "transport", dtype=torch.float32,
+                 limit: int | None = None) -> None:
         from ..data.dataset import SynthDataset
 
         ds = SynthDataset(root, split, fields=(*self.FIELDS, target), cache_shards=1)
         if len(ds) == 0:
             raise InputError(f"{root}: the {split} split is empty")
-        items = [ds[i] for i in range(len(ds))]  # shard order: each shard is read once
         self.target = target
-        self.tensors = {k: torch.stack([it[k] for it in items]) for k in (*self.FIELDS, target)}
+        keys = (*self.FIELDS, target)
+        first = ds[0]
+        n = len(ds) if limit is None else min(limit, len(ds))
+        self.tensors = {k: torch.empty((n, *first[k].shape), dtype=torch.float32 if k == "light" else dtype)
+                        for k in keys}
+        for i in range(n):  # shard order: each shard is read once
+            item = first if i == 0 else ds[i]
+            for k in keys:
+                self.tensors[k][i] = item[k]
         self.tensors["transport"] = self.tensors.pop(target)
         self.n_coeffs = self.tensors["transport"].shape[1]
         self.size = int(self.tensors["image"].shape[-1])
@@ -141,7 +167,7 @@ class TrainData:
         """Gather items (augmented one by one with their own generators)."""
         out = []
         for j, i in enumerate(idx.tolist()):
-            s = {k: v[i] for k, v in self.tensors.items()}
+            s = {k: v[i].float() for k, v in self.tensors.items()}
             if augment is not None:
                 s = augment(s, gens[j])
             out.append(s)
@@ -203,13 +229,15 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     out = Path(out_dir)
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
-    data = TrainData(data_dir, "train", cfg.target)
+    data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items)
     net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
+    if cfg.channels_last:
+        model = model.to(memory_format=torch.channels_last)
     if cfg.init and not resume:
         init = load_checkpoint(cfg.init, map_location=device)
-        if init["net_config"] != dataclasses.asdict(net_cfg):
+        if NetConfig(**init["net_config"]) != net_cfg:
             raise InputError(f"{cfg.init}: its network configuration differs from the training config's")
         model.load_state_dict(init["model"])
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
@@ -237,7 +265,11 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
         if cfg.render_target == "model":
             batch["render"] = batch["albedo"] * shading_map(batch["transport"], batch["light"])
-        pred = ddp(batch_to_input(batch))
+        x = batch_to_input(batch)
+        if cfg.channels_last:
+            x = x.contiguous(memory_format=torch.channels_last)
+        with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+            pred = ddp(x)
         terms = relight_losses(pred, batch, weights)
         opt.zero_grad(set_to_none=True)
         terms["total"].backward()

@@ -42,7 +42,8 @@ from .scene import avatar_albedo, load_body, open_motion
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "smooth_video_lights", "avatar"]
+__all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "estimate_video_evidence", "smooth_video_lights",
+           "avatar"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,34 +76,71 @@ def estimate_video_lights(model, video, masks=None, progress: bool = True, mask_
     Returns:
         (T, K, 3) raw lights, camera-relative light frame, linear RGB.
     """
+    return estimate_video_evidence(model, video, masks, progress, mask_source)[0]
+
+
+@torch.no_grad()
+def estimate_video_evidence(model, video, masks=None, progress: bool = True, mask_source: str = "segment"):
+    """Per-frame lights of a video with the light solve's evidence (for pooling over shots).
+
+    Same arguments as :func:`estimate_video_lights`.
+
+    Returns:
+        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.model.light_solve.Evidence`
+        (``M`` (T, 3, K, K), ``r`` (T, 3, K)) and priors (T, K, 3) — None for a network that
+        regresses its light (and the prior None for ``light_mode="solve"``).
+    """
     from tqdm import tqdm
 
+    from ..model.light_solve import Evidence
     from ..segment.sources import video_masks
 
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --target-masks or use 'segment'")
     info, _, frames = video_masks(video, masks, mask_source)
-    lights = []
+    lights, Ms, rs, priors = [], [], [], []
     for _, img, mask in tqdm(frames, total=info.n_frames or None, desc="estimate light",
                              unit="frame", disable=not progress):
-        lights.append(predict.light(img, mask).float().cpu())
+        light, ev, prior = predict.light_evidence(img, mask)
+        lights.append(light.float().cpu())
+        if ev is not None:
+            Ms.append(ev[0][0].float().cpu())
+            rs.append(ev[1][0].float().cpu())
+        if prior is not None:
+            priors.append(prior.float().cpu())
     if not lights:
         raise InputError(f"{video}: the video has no frames")
-    return torch.stack(lights)
+    ev = Evidence(torch.stack(Ms), torch.stack(rs)) if Ms else None
+    return torch.stack(lights), ev, (torch.stack(priors) if priors else None)
 
 
-def smooth_video_lights(raw: torch.Tensor, method: str = "hermite"):
+def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
+                        fps: float = 30.0):
     """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
 
-    ``hermite``/``poly``/``savgol`` use :func:`relightnet.temporal.smooth_lights` with 3-MAD
-    outlier correction and automatic switch detection; ``none`` returns the raw lights.
+    ``pooled`` shares the light across frames: the per-frame evidence of the light solve
+    (``evidence``, ``prior`` from :func:`estimate_video_evidence`, ``reg`` the network's λ) of the
+    frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular weights, at the
+    video's ``fps``) and between the same detected light switches is solved jointly
+    (:func:`relightnet.temporal.pool_shot_lights`); ``hermite``/``poly``/``savgol`` use
+    :func:`relightnet.temporal.smooth_lights` with 3-MAD outlier correction and automatic switch
+    detection; ``auto`` is ``pooled`` when there is evidence, else ``hermite``; ``none`` returns
+    the raw lights.
     """
-    from ..temporal import smooth_lights
+    from ..temporal import pool_shot_lights, pool_window, smooth_lights
 
     if method not in SMOOTHING:
         raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
+    if method == "auto":
+        method = "pooled" if evidence is not None else "hermite"
     none = torch.zeros(raw.shape[0], dtype=torch.bool)
+    if method == "pooled":
+        if evidence is None:
+            raise InputError("smoothing pooled: the model regresses its light (no solve to pool); "
+                             "use hermite, poly, savgol or none")
+        pooled, _, switches = pool_shot_lights(evidence, prior, reg, window=pool_window(fps))
+        return pooled, none, switches
     if method == "none" or raw.shape[0] < 3:
         return raw.clone(), none, none
     res = smooth_lights(raw, method, outlier_eps="3mad", switches="auto")
@@ -142,19 +180,34 @@ def _plate_frames(plate, target, size):
     return read_video(p)
 
 
-def _reuse(path: Path, fingerprint: str) -> torch.Tensor | None:
+def _reuse(path: Path, fingerprint: str):
+    """``(raw, evidence, prior)`` saved by an earlier run with the same inputs, or None."""
+    from ..model.light_solve import Evidence
+
     if not path.is_file():
         return None
     from ..io.arrays import read_npz
 
     try:  # a damaged or foreign file is not reused (it is rewritten)
-        z = read_npz(path, "light estimates", ("fingerprint", "raw"))
+        z = read_npz(path, "light estimates", ("fingerprint", "raw", "evidence_M", "evidence_r", "prior"))
     except InputError:
         return None
-    if "raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint \
-            and z["raw"].dtype.kind == "f":
-        return torch.from_numpy(z["raw"])
-    return None
+    if not ("raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint
+            and z["raw"].dtype.kind == "f" and z["raw"].ndim == 3):
+        return None
+    raw = torch.from_numpy(z["raw"])
+    t, k = raw.shape[:2]
+    ev = prior = None
+    if "evidence_M" in z and "evidence_r" in z:
+        M, r = z["evidence_M"], z["evidence_r"]
+        if M.shape != (t, 3, k, k) or r.shape != (t, 3, k) or M.dtype.kind != "f" or r.dtype.kind != "f":
+            return None
+        ev = Evidence(torch.from_numpy(M), torch.from_numpy(r))
+    if "prior" in z:
+        if z["prior"].shape != raw.shape or z["prior"].dtype.kind != "f":
+            return None
+        prior = torch.from_numpy(z["prior"])
+    return raw, ev, prior
 
 
 def _side_paths(out: Path) -> tuple[Path, Path]:
@@ -190,7 +243,7 @@ def avatar(
     plate=None,
     light: torch.Tensor | None = None,
     camera: Camera | None = None,
-    smoothing: str = "hermite",
+    smoothing: str = "auto",
     n_dirs: int = 64,
     occlusion: bool = True,
     bounces: int = 0,
@@ -246,20 +299,20 @@ def avatar(
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     reused = False
-    raw = outliers = switches = None
+    raw = outliers = switches = ev = prior = None
     if light is None:
         if model is None:
             raise InputError("model: give a model (or predictor) to estimate the light, or a light")
         predict = as_predictor(model)
         fp = _fingerprint(target, target_masks, model_name, mask_source)
-        raw = _reuse(lights_file, fp)
-        reused = raw is not None
+        cached = _reuse(lights_file, fp)
+        reused = cached is not None
         if reused:
             logger.info("reusing the light estimates in %s", lights_file)
-        else:
-            raw = estimate_video_lights(predict, target, target_masks, progress, mask_source)
+        raw, ev, prior = cached if reused else estimate_video_evidence(predict, target, target_masks, progress,
+                                                                       mask_source)
         n = raw.shape[0]
-        smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
+        smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, info.fps)
     else:
         fp = ""
         n = _count_frames(target)
@@ -278,6 +331,10 @@ def avatar(
     if raw is not None:
         arrays.update(raw=raw.numpy(), outliers=outliers.numpy(), switches=switches.numpy(),
                       smoothing=np.array(smoothing))
+    if ev is not None:
+        arrays.update(evidence_M=ev[0].numpy(), evidence_r=ev[1].numpy())
+    if prior is not None:
+        arrays.update(prior=prior.numpy())
     with atomic_write(lights_file) as f:
         np.savez_compressed(f, **arrays)
     png = light_curves_png(raw[:n] if raw is not None else None, smoothed,

@@ -2,8 +2,11 @@
 
 Both backends are *predictors*: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
 at the photo's own resolution (crop around the mask, resize to the working size, run, paste
-back), ``predictor.light(image, mask) -> (K, 3)`` (the light only, nothing pasted back), and
-``predictor.lmax`` the SH order of the model. The jobs take either.
+back), ``predictor.light(image, mask) -> (K, 3)`` (the light only, nothing pasted back),
+``predictor.light_evidence(image, mask) -> (light (K, 3), Evidence | None, prior (K, 3) | None)``
+(what a video pools over a shot, :mod:`relightnet.temporal.pooling`; None for a network that
+regresses its light), ``predictor.lmax`` the SH order of the model and ``predictor.solve_reg``
+its light solve's λ. The jobs take either.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ class TorchPredictor:
         self.model, self.size = model.to(memory_format=torch.channels_last), size
         self.lmax = model.config.lmax
         self.has_mask_head = bool(model.config.mask_head)
+        self.solve_reg = model.config.solve_reg
 
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
         from ..model.inference import predict_image
@@ -47,6 +51,12 @@ class TorchPredictor:
         from ..model.inference import estimate_light
 
         return estimate_light(self.model, image, mask, size=self.size)
+
+    def light_evidence(self, image: torch.Tensor, mask: torch.Tensor | None = None):
+        """``(light (K, 3), evidence | None, prior (K, 3) | None)`` (module docstring)."""
+        from ..model.inference import estimate_light_evidence
+
+        return estimate_light_evidence(self.model, image, mask, size=self.size)
 
 
 class OnnxPredictor:
@@ -70,6 +80,8 @@ class OnnxPredictor:
             raise InputError(f"size: expected a multiple of 16, got {self.size}")
         self.lmax = sh_order_from_count(self.relighter.n_coeffs, "ONNX model light")
         self.has_mask_head = False
+        self.solve_reg = float(self.relighter.metadata.get("relightnet.solve_reg", 1e-2))
+        self._has_prior = self.relighter.metadata.get("relightnet.light_mode") == "hybrid"
 
     def _step(self, image: torch.Tensor, mask: torch.Tensor | None):
         if mask is None:
@@ -79,6 +91,12 @@ class OnnxPredictor:
     def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
         """Only the light (K, 3) (the maps are not pasted back)."""
         return torch.from_numpy(self._step(image, mask)[0]["light_raw"][0])
+
+    def light_evidence(self, image: torch.Tensor, mask: torch.Tensor | None = None):
+        """``(light (K, 3), evidence | None, prior (K, 3) | None)`` (module docstring)."""
+        res = self._step(image, mask)[0]
+        prior = torch.from_numpy(res["light_prior"][0]) if self._has_prior and "light_prior" in res else None
+        return torch.from_numpy(res["light_raw"][0]), _evidence(res), prior
 
     @torch.no_grad()
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
@@ -92,7 +110,18 @@ class OnnxPredictor:
             transport=_paste(torch.from_numpy(res["transport"]), box, h, w) * inside,
             light=torch.from_numpy(res["light_raw"]),
             mask=inside,
+            evidence=_evidence(res),
+            light_head=torch.from_numpy(res["light_prior"]) if self._has_prior and "light_prior" in res else None,
         )
+
+
+def _evidence(res: dict):
+    """The light solve's evidence among an ONNX step's outputs, or None."""
+    from ..model.light_solve import Evidence
+
+    if "evidence_M" not in res:
+        return None
+    return Evidence(torch.from_numpy(res["evidence_M"]), torch.from_numpy(res["evidence_r"]))
 
 
 def as_predictor(model) -> TorchPredictor | OnnxPredictor:

@@ -11,7 +11,8 @@ outside ``mask``. Per clip:
    over a background, 8-bit sRGB) with its mask; L̃_t =
    :func:`~relightnet.temporal.smooth_lights` (L̂, method, outlier_eps="3mad",
    switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.pipeline.avatar.smooth_video_lights`):
-   by default the robust Hermite spline (``smoothing="none"``, or fewer than 3 frames: L̃ = L̂).
+   by default one light solve per shot for a network that solves its light (``pooled``), else
+   the robust Hermite spline (``smoothing="none"``, or fewer than 3 frames: L̃ = L̂).
 2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
    photo" under a fixed *source* light: I_src,t = albedo_t ⊙ (transport_t · L_src), exact from
    the clip's stored albedo and transport, L_src the ``studio`` preset scaled to level 1
@@ -65,6 +66,8 @@ __all__ = ["PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "so
 #: The two paths and the three lights each is shaded with (the row order of the tables).
 PATHS = ("2d", "3d")
 LIGHTS = ("true", "raw", "smoothed")
+#: Frame rate of the generated clips (``meta["fps"]``).
+CLIP_FPS = 30.0
 #: Arrays of a clip that the comparison reads.
 CLIP_FIELDS = ("image", "image_composite", "mask", "albedo", "transport", "light", "background")
 
@@ -122,7 +125,7 @@ def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) 
     return albedo * torch.einsum("thwk,tkc->thwc", transport, lights.to(transport))
 
 
-def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "hermite",
+def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "auto",
                  source: str = "studio", bounces: int = 0, tick=None, cnn_albedo: bool = False) -> ClipOutputs:
     """Run both paths on one clip (module docstring).
 
@@ -156,10 +159,13 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
     if geometry.verts.shape[0] != T:
         raise InputError(f"geometry: {geometry.verts.shape[0]} frames for a clip of {T}")
     secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
-    raw, a2, t2, a3, t3, al3 = [], [], [], [], [], []
+    raw, evs, priors, a2, t2, a3, t3, al3 = [], [], [], [], [], [], [], []
     for t in range(T):
         c0 = time.perf_counter()
-        raw.append(resize_sh(predict.light(comp[t], mask[t]).float().cpu(), lmax))
+        light, ev, prior = predict.light_evidence(comp[t], mask[t])
+        raw.append(resize_sh(light.float().cpu(), lmax))
+        evs.append(ev)
+        priors.append(prior)
         img = to_uint8(src[t]).permute(2, 0, 1)
         p2 = predict(img, mask[t])
         a = p2.albedo if cnn_albedo else photo_albedo(srgb_to_linear(img.float() / 255)[None].to(p2.albedo), p2)
@@ -182,7 +188,9 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         if tick is not None:
             tick()
     raw = torch.stack(raw)
-    smoothed, outliers, switches = smooth_video_lights(raw, smoothing)
+    smoothed, outliers, switches = smooth_video_lights(raw, smoothing, *_stack_evidence(evs, priors),
+                                                       predict.solve_reg, CLIP_FPS)
+    smoothed = resize_sh(smoothed, lmax)
     lights = {"true": true, "raw": raw, "smoothed": smoothed}
     a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
     renders = {}
@@ -296,9 +304,19 @@ def _one_thread_geometry(cfg, split, index, T, assets):
         torch.set_num_threads(n)
 
 
+def _stack_evidence(evs: list, priors: list):
+    """Per-frame (Evidence | None, prior | None) lists → (Evidence (T, ...) | None, priors (T, K, 3) | None)."""
+    from ..model.light_solve import Evidence
+
+    if any(e is None for e in evs):
+        return None, None
+    ev = Evidence(torch.cat([e[0] for e in evs]).float().cpu(), torch.cat([e[1] for e in evs]).float().cpu())
+    return ev, (None if any(p is None for p in priors) else torch.stack(priors).float().cpu())
+
+
 @torch.no_grad()
 def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int | None = None, n_dirs: int = 64,
-            smoothing: str = "hermite", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
+            smoothing: str = "auto", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
             source: str = "studio", size: int | None = None, bounces: int = 0, backend: str = "torch",
             body=None, cnn_albedo: bool = False) -> CompareResult:
     """Compare the 2D and 3D paths on the clips of a sequence dataset and write a report (module docstring).
@@ -313,7 +331,8 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         split: which split's clips.
         clips: the first N clips (default: all).
         n_dirs, prt_seed, bounces: the 3D path's PRT directions, their rotation seed, interreflections.
-        smoothing: ``"hermite"`` (default), ``"poly"``, ``"savgol"`` or ``"none"``.
+        smoothing: one of :data:`SMOOTHING` (default ``auto``: ``pooled`` for a network that solves its
+            light, else ``hermite``).
         device: for the CNN (``"cpu"``, ``"cuda"``); PRT and rasterization run on the CPU.
         progress: show a tqdm bar (frames/s).
         source: preset name of the 2D path's source light.
@@ -366,7 +385,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         records, light_arrays = [], {}
         secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
         with (tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True) as bar,
-              VideoWriter(stage / "side_by_side.mp4", fps=30.0) as video):
+              VideoWriter(stage / "side_by_side.mp4", fps=CLIP_FPS) as video):
             for meta, clip in _clips(files, clips):
                 index = int(meta["seed"]["index"])
                 geo = _one_thread_geometry(cfg, split, index, T, assets)

@@ -2,8 +2,11 @@
 
 Frames and masks are read one at a time and the output is written as it goes, so memory
 does not depend on the video's length. The light estimated from each source frame is
-smoothed causally (EMA) before it sets the exposure reference, so the relit person does
-not flicker with the per-frame estimate; the new light can turn about the up axis over time.
+smoothed causally before it sets the exposure reference, so the relit person does not
+flicker with the per-frame estimate: a network that solves its light pools the solve's
+evidence since the last light switch (:class:`relightnet.temporal.PooledSolve`: under a
+constant light the estimate settles instead of following each frame), one that regresses it
+is smoothed by an EMA; the new light can turn about the up axis over time.
 As for photos, the albedo relit is the frame divided by the predicted shading, so the
 frames keep their detail.
 """
@@ -23,6 +26,7 @@ from ..io.image import linear_to_srgb, srgb_to_linear
 from ..model.network import photo_albedo, shading_map
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
+from ..temporal.pooling import PooledSolve
 from .backends import as_predictor
 from .relight_image import match_exposure, to_model_order
 
@@ -46,7 +50,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
-        smoothing: EMA weight of the newest frame in the source-light estimate (1 = none).
+        smoothing: EMA weight of the newest frame in the source-light estimate of a network that
+            regresses its light; 1 = no smoothing (also no pooling for a network that solves it).
         detail: relight each frame's own albedo (frame / predicted shading under the smoothed
             source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
         mask_source: without ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`).
@@ -65,7 +70,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
     info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
     light = to_model_order(light, predict.lmax)
-    src = None
+    pool = PooledSolve(reg=predict.solve_reg, lmax=predict.lmax) if smoothing < 1 else None
+    src = state = None
     n = 0
     empty: list[int] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
@@ -78,7 +84,12 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 continue
             pred = predict(img, mask)
             est = pred.light[0]
-            src = est if src is None else smoothing * est + (1 - smoothing) * src
+            if pool is not None and pred.evidence is not None:
+                y, state = pool(pred.light, state, None if state is None else torch.zeros(1, dtype=torch.bool),
+                                evidence=pred.evidence, prior=pred.light_head)
+                src = y[0]
+            else:
+                src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
             # Exposure reference: the smoothed source light, not this frame's raw estimate.
             ref = dataclasses.replace(pred, light=src[None])

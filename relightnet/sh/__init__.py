@@ -21,6 +21,13 @@ from .frames import (
 )
 from .io import LIGHT_SUFFIXES, load_light, resize_sh, save_light
 from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
+from .metrics import (
+    chromaticity_error,
+    direction_error,
+    dominant_direction,
+    irradiance_samples,
+    scale_invariant_light_error,
+)
 from .presets import (
     ambient_light,
     directional_light,
@@ -41,6 +48,7 @@ __all__ = [
     "world_to_light",
     "Irradiance", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
     "project", "project_envmap", "radiance", "sh_to_envmap",
+    "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",
     "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
     "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light",
     "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",

@@ -37,6 +37,7 @@ from .offline import (
     smooth_poly,
     smooth_savgol,
 )
+from .pooling import POOL_SECONDS, PooledSolve, pool_shot_lights, pool_window, pooled_step, pooling_weights
 from .smoothers import METHODS, hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
 
 __all__ = [
@@ -48,4 +49,5 @@ __all__ = [
     "METHODS", "SmoothResult", "detect_switches", "hermite_basis", "hermite_matrix", "poly_matrix",
     "running_median", "savgol_matrix", "smooth_hermite", "smooth_lights", "smooth_poly", "smooth_savgol",
     "smoothing_matrix",
+    "POOL_SECONDS", "PooledSolve", "pool_shot_lights", "pool_window", "pooled_step", "pooling_weights",
 ]

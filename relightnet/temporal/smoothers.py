@@ -33,8 +33,10 @@ __all__ = [
 
 #: Offline methods: keys of :func:`smoothing_matrix`.
 METHODS = ("hermite", "poly", "savgol")
-#: What the video jobs (avatar, compare) accept for their light smoothing: a method, or none.
-SMOOTHING = (*METHODS, "none")
+#: What the video jobs (avatar, compare) accept for their light smoothing: ``auto`` (``pooled`` when
+#: the network solves its light, else ``hermite``), ``pooled`` (one light solve per shot from the
+#: pooled evidence, :mod:`relightnet.temporal.pooling`), an offline method, or none.
+SMOOTHING = ("auto", "pooled", *METHODS, "none")
 
 _F64 = torch.float64
 

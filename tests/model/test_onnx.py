@@ -110,3 +110,31 @@ def test_calibration_set_draws_generated_people():
         assert img.shape == (1, 3, 32, 32) and img.dtype == np.float32 and 0 <= img.min() and img.max() <= 1
         assert mask.shape == (1, 1, 32, 32) and 0 < mask.mean() < 1
     assert not np.array_equal(pairs[0][0], pairs[1][0])
+
+
+def test_pooled_solve_in_the_graph_equals_torch_over_12_frames(tmp_path):
+    """A hybrid network exported with the 'pooled' smoother: evidence outputs and the pooled light match torch
+    frame by frame, and the predictor hands the evidence to the video jobs."""
+    from relightnet.pipeline.backends import OnnxPredictor
+
+    torch.manual_seed(1)
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32, light_mode="hybrid")).eval()
+    path = export_onnx(net, tmp_path / "p.onnx", smoothing="pooled", example_size=32)
+    r = OnnxRelighter(path)
+    assert r.evidence_outputs == ("evidence_M", "evidence_r", "light_prior")
+    assert r.metadata["relightnet.light_mode"] == "hybrid"
+    ref = StreamingRelighter(net, make_smoother("pooled", reg=net.config.solve_reg)).eval()
+    state = torch.zeros(1, ref.smoother.state_size, 9, 3)
+    for t in range(12):
+        img, mask = _inputs(1, 32, 32, seed=t % 3)  # three "poses" under one light
+        out = r.step(img.numpy(), mask.numpy())
+        with torch.no_grad():
+            exp = ref(img, mask, state, torch.tensor([t == 0]))
+        state = exp[4]
+        for name, e in zip(("light_raw", "light_smoothed", "evidence_M", "evidence_r", "light_prior"),
+                           (exp[2], exp[3], exp[5], exp[6], exp[7]), strict=True):
+            np.testing.assert_allclose(out[name], e.numpy(), rtol=1e-3, atol=1e-4)
+    light, ev, prior = OnnxPredictor(path).light_evidence(img[0], mask[0, 0])
+    assert ev is not None and prior is not None and light.shape == (9, 3)
+    with pytest.raises(InputError, match="pooled"):
+        export_onnx(RelightNet(NET).eval(), tmp_path / "h.onnx", smoothing="pooled")

@@ -158,3 +158,26 @@ def test_training_with_render_target_model_runs_on_unoccluded_transport(tiny_dat
     last = train(cfg, tiny_dataset, tmp_path / "u")
     assert last["step"] == 2 and torch.isfinite(torch.tensor(last["total"]))
     assert load_checkpoint(tmp_path / "u" / "last.pt")["train_config"]["render_target"] == "model"
+
+
+def test_training_data_subset_half_precision_and_bf16(tiny_dataset, tmp_path):
+    """train_items keeps the first items; float16 storage gives float32 batches close to the stored data;
+    a bf16-autocast hybrid network trains (its light solve stays float32)."""
+    from relightnet.model.training import TrainData
+
+    full = TrainData(tiny_dataset)
+    half = TrainData(tiny_dataset, dtype=torch.float16, limit=4)
+    assert len(full) == 6 and len(half) == 4 and half.tensors["image"].dtype == torch.float16
+    b = half.batch(torch.tensor([0, 3]))
+    assert b["image"].dtype == torch.float32
+    assert torch.allclose(b["image"], full.tensors["image"][[0, 3]], rtol=1e-3, atol=1e-3)
+    cfg = TrainConfig(steps=2, batch_size=2, log_every=1, checkpoint_every=2, train_items=4, data_dtype="float16",
+                      precision="bf16", net={"width": 8, "max_width": 32, "light_hidden": 16, "light_mode": "hybrid"},
+                      loss={"light_head": 1.0, "light_si": 1.0})
+    last = train(cfg, tiny_dataset, tmp_path / "run")
+    assert last["step"] == 2 and all(torch.isfinite(torch.tensor(v)) for v in last.values())
+    assert load_model(tmp_path / "run" / "last.pt").config.light_mode == "hybrid"
+    with pytest.raises(InputError, match="train_items"):
+        TrainConfig(train_items=0)
+    with pytest.raises(InputError, match="precision"):
+        TrainConfig(precision="fp8")

@@ -1,0 +1,150 @@
+"""The light as a solve: the SH light that makes the predicted maps explain the image.
+
+With the image I (linear), albedo A, transport T and per-pixel weights w, the light of
+channel c minimises a confidence-weighted, regularised least squares
+
+    Σ_p w_p (I_pc − A_pc Σ_k T_pk L_kc)² + λ s_c ‖L_c − L⁰_c‖²,
+
+whose normal equations are K × K per channel: with a_p = A_pc T_p,
+``M_c = Σ_p w_p a_p a_pᵀ / N`` and ``r_c = Σ_p w_p a_p I_pc / N`` (N the number of person
+pixels), ``L_c = (M_c + λ s_c 1)⁻¹ (r_c + λ s_c L⁰_c)`` with ``s_c = tr(M_c) / K`` so that λ
+does not depend on the exposure. L⁰ is a prior light (zero, or the network's light head in
+the hybrid). Everything is differentiable, so the network is trained end to end through the
+solve; the K × K system is solved by an unrolled Cholesky factorisation (a fixed number of
+tensor ops, so it exports to ONNX and runs the same in torch and ONNX Runtime).
+
+Evidence adds up: the normal equations of several frames under the same light are summed
+before one solve (:func:`pool_evidence`), which is how a video shares its light across a shot
+(:mod:`relightnet.temporal.pooling`).
+"""
+
+from __future__ import annotations
+
+import torch
+
+from ..checks import check_shape
+
+__all__ = ["Evidence", "light_evidence", "spd_solve", "solve_light", "pool_evidence"]
+
+
+class Evidence(tuple):
+    """Normal equations of a light solve: ``(M (B, 3, K, K), r (B, 3, K))`` (a plain tuple)."""
+
+    __slots__ = ()
+
+    def __new__(cls, M: torch.Tensor, r: torch.Tensor):
+        return super().__new__(cls, (M, r))
+
+    @property
+    def M(self) -> torch.Tensor:  # noqa: N802
+        return self[0]
+
+    @property
+    def r(self) -> torch.Tensor:
+        return self[1]
+
+
+def light_evidence(image: torch.Tensor, albedo: torch.Tensor, transport: torch.Tensor,
+                   weight: torch.Tensor) -> Evidence:
+    """Per-channel normal equations of I ≈ A ⊙ (T · L) over the weighted pixels.
+
+    Args:
+        image: (B, 3, H, W) linear RGB.
+        albedo: (B, 3, H, W).
+        transport: (B, K, H, W).
+        weight: (B, 1, H, W) non-negative pixel weights (mask × confidence).
+
+    Returns:
+        :class:`Evidence` ``M`` (B, 3, K, K), ``r`` (B, 3, K), averaged over the person's pixels
+        (``weight > 0``), float32 whatever the inputs' dtype.
+    """
+    dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
+    b, h, w = dims["B"], dims["H"], dims["W"]
+    check_shape(image, [b, 3, h, w], name="image")
+    check_shape(albedo, [b, 3, h, w], name="albedo")
+    check_shape(weight, [b, 1, h, w], name="weight")
+    image, albedo, transport, weight = (t.float() for t in (image, albedo, transport, weight))
+    n = (weight > 0).float().sum((2, 3)).clamp_min(1.0)[:, :, None]  # (B, 1, 1)
+    a = (albedo[:, :, None] * transport[:, None]).flatten(3)  # (B, 3, K, P)
+    aw = a * weight.flatten(2)[:, :, None]  # (B, 3, K, P)
+    M = aw @ a.transpose(-1, -2) / n[..., None]
+    r = (aw @ image.flatten(2)[..., None])[..., 0] / n
+    return Evidence(M, r)
+
+
+def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Solve A x = b for symmetric positive definite A by an unrolled Cholesky factorisation.
+
+    K is fixed by the shape, so the loops unroll to a fixed graph (ONNX export works) and
+    autograd differentiates through them.
+
+    Args:
+        A: (..., K, K) SPD.
+        b: (..., K).
+
+    Returns:
+        (..., K).
+    """
+    k = A.shape[-1]
+    cols: list[torch.Tensor] = []  # columns of the lower factor G (A = G Gᵀ)
+    for j in range(k):
+        v = A[..., :, j]
+        for i in range(j):
+            v = v - cols[i] * cols[i][..., j : j + 1]
+        d = v[..., j : j + 1].clamp_min(1e-12).sqrt()
+        mask = (torch.arange(k, device=A.device) >= j).to(A.dtype)
+        cols.append(v / d * mask)
+    G = torch.stack(cols, -1)  # (..., K, K), G[..., i, j] = cols[j][i]
+    y: list[torch.Tensor] = []  # forward substitution G y = b
+    for i in range(k):
+        s = b[..., i]
+        for j in range(i):
+            s = s - G[..., i, j] * y[j]
+        y.append(s / G[..., i, i])
+    x: list[torch.Tensor | None] = [None] * k  # back substitution Gᵀ x = y
+    for i in reversed(range(k)):
+        s = y[i]
+        for j in range(i + 1, k):
+            s = s - G[..., j, i] * x[j]
+        x[i] = s / G[..., i, i]
+    return torch.stack(x, -1)
+
+
+def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: float = 1e-2) -> torch.Tensor:
+    """The light from (pooled) normal equations, regularised toward a prior.
+
+    Args:
+        evidence: :class:`Evidence` with ``M`` (B, 3, K, K) and ``r`` (B, 3, K).
+        prior: (B, K, 3) prior light L⁰ (None: zero).
+        reg: λ, relative to the mean diagonal of each channel's M.
+
+    Returns:
+        (B, K, 3) light, float32.
+    """
+    M, r = evidence
+    dims = check_shape(M, ["B", 3, "K", "K"], name="evidence M")
+    check_shape(r, [dims["B"], 3, dims["K"]], name="evidence r")
+    k = dims["K"]
+    eye = torch.eye(k, dtype=M.dtype, device=M.device)
+    s = M.diagonal(dim1=-2, dim2=-1).mean(-1, keepdim=True).clamp_min(1e-8)  # (B, 3, 1)
+    rhs = r
+    if prior is not None:
+        check_shape(prior, [dims["B"], k, 3], name="prior")
+        rhs = r + reg * s * prior.transpose(1, 2).to(r)
+    return spd_solve(M + reg * s[..., None] * eye, rhs).transpose(1, 2)
+
+
+def pool_evidence(evidence: Evidence, weights: torch.Tensor) -> Evidence:
+    """Weighted sums of per-frame normal equations: one solve for several frames.
+
+    Args:
+        evidence: per-frame :class:`Evidence`, ``M`` (T, 3, K, K), ``r`` (T, 3, K).
+        weights: (T', T) how much frame t counts for output t' (e.g. a window inside a shot).
+
+    Returns:
+        :class:`Evidence` with leading dimension T'.
+    """
+    M, r = evidence
+    check_shape(weights, ["U", M.shape[0]], name="pooling weights")
+    w = weights.to(M)
+    return Evidence(torch.einsum("ut,tckl->uckl", w, M), torch.einsum("ut,tck->uck", w, r))

@@ -1,0 +1,161 @@
+"""A video's light estimated as a video: the per-frame evidence of the light solve, pooled over a shot.
+
+A network that solves its light (``light_mode`` ``solve``/``hybrid``,
+:mod:`relightnet.model.light_solve`) gives, with every frame, the normal equations of its
+solve (:class:`~relightnet.model.light_solve.Evidence`). Frames under the same light add
+their evidence and share one solve, so a constant light gives a constant estimate however
+the person turns, while a light switch splits the shot:
+
+- offline (:func:`pool_shot_lights`): per-frame solves → :func:`~relightnet.temporal.offline.detect_switches`
+  → one joint solve per segment (``window=None``) or per sliding window of frames inside the
+  segment (``window`` frames, triangular weights, for light that changes slowly);
+- causal (:class:`PooledSolve`, one step with explicit state, loop-free, so it lives inside the
+  exported ONNX graph): an outlier gate on the per-frame light (:func:`~relightnet.temporal.causal.gate_step`:
+  isolated outliers are dropped, a jump that persists ``persist`` frames restarts the pool) and
+  a running mean of the evidence since the last restart, with a floor ``alpha`` on the new
+  frame's weight so that slow changes are followed (memory about ``1/alpha`` frames).
+"""
+
+from __future__ import annotations
+
+import torch
+
+from ..checks import InputError, check_shape
+from ..model.light_solve import Evidence, pool_evidence, solve_light
+from .causal import _Causal, _check_alpha, _check_positive, _weights, gate_step
+from .offline import detect_switches
+
+__all__ = ["POOL_SECONDS", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step", "PooledSolve"]
+
+#: How far (seconds) the video jobs pool a frame's evidence to either side, inside its segment: a
+#: constant light stays constant, a light that turns (a camera pan) is still followed.
+POOL_SECONDS = 1.0
+
+
+def pool_window(fps: float, seconds: float = POOL_SECONDS) -> int:
+    """Triangular pooling half-width in frames for a video at ``fps`` (at least 1)."""
+    if not (fps > 0 and seconds > 0):
+        raise InputError(f"pooling window: expected positive fps and seconds, got {fps!r}, {seconds!r}")
+    return max(1, round(fps * seconds))
+
+
+def pooling_weights(switches: torch.Tensor, window: int | None = None) -> torch.Tensor:
+    """(T, T) weights: how much frame t's evidence counts for frame u.
+
+    Args:
+        switches: (T,) bool, True on the first frame of each new segment.
+        window: None: every frame of the segment counts the same; else frames closer than
+            ``window`` count with triangular weights ``1 − |u − t| / window``.
+
+    Returns:
+        (T, T) float64, zero across segment boundaries.
+    """
+    check_shape(switches, ["T"], name="switches")
+    seg = switches.long().cumsum(0)
+    same = (seg[:, None] == seg[None, :]).double()
+    if window is None:
+        return same
+    if int(window) != window or window < 1:
+        raise InputError(f"pooling window: expected a positive number of frames, got {window!r}")
+    t = torch.arange(switches.shape[0], dtype=torch.float64)
+    return same * (1 - (t[:, None] - t[None, :]).abs() / window).clamp_min(0)
+
+
+def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg: float = 1e-2,
+                     window: int | None = None, switches="auto") -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Lights of a whole video from its per-frame evidence (offline).
+
+    Args:
+        evidence: per-frame :class:`Evidence`, ``M`` (T, 3, K, K), ``r`` (T, 3, K).
+        prior: (T, K, 3) per-frame prior lights (the hybrid's head), pooled with the same weights; or None.
+        reg: the solve's λ (the network's ``solve_reg``).
+        window: see :func:`pooling_weights`.
+        switches: ``"auto"`` (detected on the per-frame lights), ``None`` (one segment) or a (T,) bool tensor.
+
+    Returns:
+        ``(pooled (T, K, 3), per_frame (T, K, 3), switches (T,) bool)``.
+    """
+    M, r = evidence
+    dims = check_shape(M, ["T", 3, "K", "K"], name="evidence M")
+    per_frame = solve_light(evidence, prior, reg)
+    if isinstance(switches, str) and switches == "auto":
+        switches = detect_switches(per_frame.double())
+    elif switches is None:
+        switches = torch.zeros(dims["T"], dtype=torch.bool)
+    else:
+        switches = torch.as_tensor(switches, dtype=torch.bool)
+        check_shape(switches, [dims["T"]], name="switches")
+    w = pooling_weights(switches, window)
+    pooled_prior = None
+    if prior is not None:
+        pooled_prior = (w @ prior.double().flatten(1) / w.sum(1, keepdim=True)).view_as(prior).float()
+    pooled = solve_light(pool_evidence(Evidence(M.double(), r.double()), w), pooled_prior, reg)
+    return pooled.float(), per_frame, switches
+
+
+def pooled_step(light: torch.Tensor, evidence: Evidence, prior: torch.Tensor | None, state: torch.Tensor,
+                is_first: torch.Tensor | None, alpha: float = 0.05, reg: float = 1e-2, eps: float = 3.0,
+                persist: int = 2, weights: torch.Tensor | None = None):
+    """One causal step of :class:`PooledSolve`.
+
+    Args:
+        light: (B, K, 3) this frame's own solve (what the gate tests).
+        evidence: this frame's :class:`Evidence` (``M`` (B, 3, K, K), ``r`` (B, 3, K)).
+        prior: (B, K, 3) this frame's prior, or None.
+        state: (B, K + 6, K, 3): pooled M (K slots, ``M[c, i, j]`` at ``[i, j, c]``), pooled r,
+            pooled prior, frames pooled (a constant slot), gate (previous output, scale, count).
+        is_first: (B,) restart flags, or None.
+        alpha: the smallest weight of a new frame in the running mean.
+        reg, eps, persist, weights: the solve's λ; the gate's options (:func:`gate_step`).
+
+    Returns:
+        ``(y (B, K, 3), new_state)``.
+    """
+    k = light.shape[-2]
+    M_prev, r_prev, p_prev = state[:, :k].permute(0, 3, 1, 2), state[:, k].transpose(1, 2), state[:, k + 1]
+    count = state[:, k + 2, 0, 0]
+    _, first, switch, outlier, scale, gcount = gate_step(light, state[:, k + 3:], is_first, eps, persist,
+                                                         weights=weights)
+    restart = first | switch
+    n = torch.where(restart, torch.ones_like(count), torch.where(outlier, count, count + 1))
+    a = torch.where(outlier, torch.zeros_like(n), torch.maximum(1 / n, torch.full_like(n, alpha)))
+    a = torch.where(restart, torch.ones_like(a), a)
+    M_new = (1 - a)[:, None, None, None] * M_prev + a[:, None, None, None] * evidence[0]
+    r_new = (1 - a)[:, None, None] * r_prev + a[:, None, None] * evidence[1]
+    p = light if prior is None else prior
+    p_new = (1 - a)[:, None, None] * p_prev + a[:, None, None] * p
+    y = solve_light(Evidence(M_new, r_new), p_new if prior is not None else None, reg)
+    ones = torch.ones_like(light)
+    new_state = torch.cat([M_new.permute(0, 2, 3, 1), r_new.transpose(1, 2)[:, None], p_new[:, None],
+                           (n[:, None, None] * ones)[:, None], y[:, None], (scale[:, None, None] * ones)[:, None],
+                           (gcount[:, None, None] * ones)[:, None]], 1)
+    return y, new_state
+
+
+class PooledSolve(_Causal):
+    """Causal shot pooling of the light solve's evidence (module docstring).
+
+    ``forward(light (B, K, 3), state (B, K + 6, K, 3), is_first (B,), evidence=..., prior=None) -> (y, state)``.
+    The state size depends on K, so ``lmax`` is given at construction.
+    """
+
+    uses_evidence = True
+
+    def __init__(self, alpha: float = 0.05, reg: float = 1e-2, eps: float = 3.0, persist: int = 2,
+                 lmax: int = 2) -> None:
+        super().__init__()
+        self.register_buffer("weights", _weights(lmax), persistent=False)
+        self.alpha = _check_alpha(alpha)
+        self.reg = _check_positive(reg, "reg")
+        self.eps = _check_positive(eps, "eps")
+        if isinstance(persist, bool) or int(persist) != persist or persist < 1:
+            raise InputError(f"persist: expected a positive integer, got {persist!r}")
+        self.persist = int(persist)
+        self.state_size = (lmax + 1) ** 2 + 6
+
+    def forward(self, x, state=None, is_first=None, evidence: Evidence | None = None, prior=None):
+        if evidence is None:
+            raise InputError("pooled smoothing needs the light solve's evidence (a solve or hybrid network)")
+        state, is_first = self._prepare(x, state, is_first)
+        return pooled_step(x, evidence, prior, state, is_first, self.alpha, self.reg, self.eps, self.persist,
+                           self.weights)

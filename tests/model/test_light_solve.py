@@ -1,0 +1,121 @@
+"""The light solve: exact with exact maps, differentiable, regularised toward its prior, pooled over frames."""
+
+import pytest
+import torch
+
+from relightnet.model.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
+from relightnet.model.network import NetConfig, RelightNet, normalize_input
+from relightnet.sh import directional_light, irradiance
+
+
+def _scene(b=2, k=9, h=24, w=20, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    T = torch.randn(b, k, h, w, generator=g)
+    A = torch.rand(b, 3, h, w, generator=g) * 0.8 + 0.1
+    L = torch.randn(b, k, 3, generator=g)
+    return T, A, L, A * torch.einsum("bkhw,bkc->bchw", T, L)
+
+
+def test_spd_solve_matches_linalg():
+    g = torch.Generator().manual_seed(1)
+    A = torch.randn(3, 4, 9, 9, generator=g, dtype=torch.float64)
+    A = A @ A.transpose(-1, -2) + 0.1 * torch.eye(9, dtype=torch.float64)
+    b = torch.randn(3, 4, 9, generator=g, dtype=torch.float64)
+    assert torch.allclose(spd_solve(A, b), torch.linalg.solve(A, b), atol=1e-10)
+
+
+def test_exact_maps_recover_the_light():
+    T, A, L, I = _scene()
+    ev = light_evidence(I, A, T, torch.ones(2, 1, 24, 20))
+    assert ev.M.shape == (2, 3, 9, 9) and ev.r.shape == (2, 3, 9)
+    assert torch.allclose(solve_light(ev, None, 1e-7), L, atol=1e-3)
+
+
+def test_weights_select_pixels():
+    """Pixels of zero weight do not count: corrupting them leaves the solve unchanged."""
+    T, A, L, I = _scene(b=1)
+    w = torch.ones(1, 1, 24, 20)
+    w[..., :8, :] = 0
+    bad = I.clone()
+    bad[..., :8, :] = 5.0
+    a, b = (solve_light(light_evidence(x, A, T, w), None, 1e-6) for x in (I, bad))
+    assert torch.allclose(a, b, atol=1e-5)
+
+
+def test_regularisation_pulls_toward_the_prior():
+    T, A, L, I = _scene(b=1)
+    ev = light_evidence(I, A, T, torch.ones(1, 1, 24, 20))
+    prior = torch.zeros_like(L) + 0.3
+    weak, strong = solve_light(ev, prior, 1e-6), solve_light(ev, prior, 1e4)
+    assert (weak - L).abs().max() < 1e-2
+    assert (strong - prior).abs().max() < 1e-2
+
+
+def test_exposure_does_not_change_the_balance():
+    """λ is relative to the evidence's scale: a brighter image gives the same light up to that scale."""
+    T, A, L, I = _scene(b=1)
+    prior = torch.randn_like(L)
+    ones = torch.ones(1, 1, 24, 20)
+    a = solve_light(light_evidence(I, A, T, ones), prior, 0.5)
+    b = solve_light(light_evidence(4 * I, A, T, ones), 4 * prior, 0.5)
+    assert torch.allclose(4 * a, b, rtol=1e-4, atol=1e-4)
+
+
+def test_gradients_flow_to_every_map():
+    T, A, L, I = _scene(b=1)
+    T, A = T.requires_grad_(), A.requires_grad_()
+    w = torch.ones(1, 1, 24, 20, requires_grad=True)
+    solve_light(light_evidence(I, A, T, w), None, 1e-2).square().sum().backward()
+    assert all(x.grad is not None and torch.isfinite(x.grad).all() and x.grad.abs().sum() > 0 for x in (T, A, w))
+
+
+def test_pooling_frames_of_one_light():
+    """Frames that each see half of the pixels pool into the full solve."""
+    T, A, L, I = _scene(b=1)
+    top, bottom = torch.zeros(1, 1, 24, 20), torch.zeros(1, 1, 24, 20)
+    top[..., :12, :], bottom[..., 12:, :] = 1, 1
+    e1, e2 = light_evidence(I, A, T, top), light_evidence(I, A, T, bottom)
+    both = Evidence(torch.cat([e1.M, e2.M]), torch.cat([e1.r, e2.r]))
+    pooled = pool_evidence(both, torch.ones(1, 2))
+    full = light_evidence(I, A, T, torch.ones(1, 1, 24, 20))
+    assert torch.allclose(solve_light(pooled, None, 1e-3), solve_light(full, None, 1e-3), atol=1e-4)
+
+
+@pytest.mark.parametrize("mode", ["head", "solve", "hybrid"])
+def test_network_modes(mode):
+    torch.manual_seed(0)
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=16, levels=2, light_mode=mode))
+    x = normalize_input(torch.rand(2, 3, 32, 32), torch.ones(2, 1, 32, 32))
+    p = net(x)
+    assert p.light.shape == (2, 9, 3) and p.transport.shape == (2, 9, 32, 32)
+    assert (p.evidence is None) == (mode == "head")
+    assert (p.light_head is None) == (mode != "hybrid")  # head: the light is the head itself
+    if mode != "head":  # the returned light is the solve of the returned evidence
+        assert torch.allclose(p.light, solve_light(p.evidence, p.light_head, net.config.solve_reg), atol=1e-5)
+    with torch.autocast("cpu", dtype=torch.bfloat16):
+        q = net(x)
+    if mode != "head":
+        assert q.light.dtype == torch.float32
+
+
+def test_solve_network_reads_the_image_it_was_given():
+    """The network's solve undoes normalize_input: given exact maps, it recovers the light that
+    rendered the (sRGB, masked) input image."""
+    from relightnet.io import linear_to_srgb
+    from relightnet.sh import cosine_lobe_per_coeff, sh_basis
+
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=16, levels=2, light_mode="solve", solve_reg=1e-6))
+    h = w = 32
+    ys, xs = torch.meshgrid(torch.linspace(-0.9, 0.9, h), torch.linspace(-0.9, 0.9, w), indexing="ij")
+    inside = (xs**2 + ys**2 < 0.8).float()[None, None]
+    n = torch.stack([(1 - xs**2 - ys**2).clamp_min(0.05).sqrt(), xs, -ys], -1)
+    n = n / n.norm(dim=-1, keepdim=True)
+    light = directional_light([0.6, 0.5, 0.62], [0.9, 0.8, 0.7], sharpness=5.0) + 0.1 * torch.eye(9, 3)[:, :1] * 3
+    T = (sh_basis(n, 2) * cosine_lobe_per_coeff(2)).permute(2, 0, 1)[None]
+    albedo = torch.full((1, 3, h, w), 0.5)
+    image = albedo * irradiance(light, n).permute(2, 0, 1)[None]
+    assert 0 < image.min() and image.max() < 1
+    x = normalize_input(linear_to_srgb(image), inside)
+    p = net._solve(x, albedo, T, torch.zeros(1, 1, h, w), None, None)
+    assert torch.allclose(p.light[0], light, atol=2e-3)
+    assert torch.allclose(p.confidence, inside, atol=1e-4)  # softplus(0.5413) = 1

@@ -1,0 +1,115 @@
+"""Shot pooling of the light solve's evidence: offline per segment/window, causal with a gate."""
+
+import torch
+
+from relightnet.model.light_solve import Evidence, light_evidence, solve_light
+from relightnet.temporal import PooledSolve, pool_shot_lights, pooling_weights
+from relightnet.temporal.distance import light_distance, light_norm
+
+
+def _frames(lights, n_pix=200, noise=0.05, seed=0):
+    """Per-frame evidence of frames that see different (random) transport under the given lights."""
+    g = torch.Generator().manual_seed(seed)
+    Ms, rs = [], []
+    for L in lights:
+        T = torch.randn(1, 9, n_pix, 1, generator=g)
+        A = torch.rand(1, 3, n_pix, 1, generator=g) * 0.5 + 0.25
+        I = A * torch.einsum("bkhw,kc->bchw", T, L)
+        I = I + noise * torch.randn(I.shape, generator=g)  # the frame's own estimation error
+        ev = light_evidence(I, A, T, torch.ones(1, 1, n_pix, 1))
+        Ms.append(ev.M)
+        rs.append(ev.r)
+    return Evidence(torch.cat(Ms), torch.cat(rs))
+
+
+def _light(seed):
+    dc = torch.zeros(9, 1)
+    dc[0] = 3.0
+    return torch.randn(9, 3, generator=torch.Generator().manual_seed(seed)) + dc
+
+
+def test_weights_respect_segments_and_windows():
+    sw = torch.zeros(6, dtype=torch.bool)
+    sw[3] = True
+    w = pooling_weights(sw)
+    assert w[0, 3] == 0 and w[4, 5] == 1 and w[0, 2] == 1
+    tri = pooling_weights(sw, window=2)
+    assert tri[0, 0] == 1 and tri[0, 1] == 0.5 and tri[0, 2] == 0
+
+
+def test_constant_light_gives_a_constant_estimate_closer_to_the_truth():
+    L = _light(1)
+    ev = _frames([L] * 20, noise=0.3)
+    pooled, per_frame, switches = pool_shot_lights(ev, None, 1e-6, switches=None)
+    assert not switches.any()
+    assert torch.allclose(pooled, pooled[:1].expand_as(pooled))
+    err_pooled = light_distance(pooled[0], L) / light_norm(L)
+    err_frames = (light_distance(per_frame, L) / light_norm(L)).mean()
+    assert err_pooled < 0.5 * err_frames
+
+
+def test_a_switch_splits_the_pool():
+    a, b = _light(2), _light(3) * 1.5
+    ev = _frames([a] * 15 + [b] * 15, noise=0.05)
+    pooled, _, switches = pool_shot_lights(ev, None, 1e-6)
+    assert switches.nonzero().flatten().tolist() == [15]
+    assert float(light_distance(pooled[:15], a).max() / light_norm(a)) < 0.05
+    assert float(light_distance(pooled[15:], b).max() / light_norm(b)) < 0.05
+
+
+def test_prior_is_pooled_with_the_evidence():
+    L = _light(4)
+    ev = _frames([L] * 6)
+    prior = L.expand(6, 9, 3) + 0.1
+    strong = pool_shot_lights(ev, prior, 1e4, switches=None)[0]
+    assert torch.allclose(strong, prior, atol=1e-2)
+
+
+def test_causal_pool_settles_and_follows_a_switch():
+    a, b = _light(5), _light(6) * 2
+    lights = [a] * 20 + [b] * 10
+    ev = _frames(lights, noise=0.2)
+    per_frame = solve_light(ev, None, 1e-6)
+    f = PooledSolve(alpha=0.02, reg=1e-6)
+    state, ys = None, []
+    for t in range(len(lights)):
+        first = torch.tensor([t == 0])
+        y, state = f(per_frame[t:t + 1], state, first, evidence=Evidence(ev.M[t:t + 1], ev.r[t:t + 1]))
+        ys.append(y[0])
+        assert state.shape == (1, 15, 9, 3)
+    ys = torch.stack(ys)
+    # constant part: the pooled estimate moves less and is closer to the truth than the per-frame one
+    step = light_distance(ys[11:20], ys[10:19]).mean()
+    raw_step = light_distance(per_frame[11:20], per_frame[10:19]).mean()
+    assert step < 0.3 * raw_step
+    assert light_distance(ys[19], a) < light_distance(per_frame[10:20], a).mean()
+    # the switch is taken within 2 frames (persist = 2)
+    assert float(light_distance(ys[22], b) / light_norm(b)) < 0.25
+
+
+def test_causal_pool_equals_the_offline_pool_on_a_constant_shot():
+    """Before the floor on the new frame's weight is reached, the running mean is the offline pool."""
+    L = _light(7)
+    ev = _frames([L] * 8, noise=0.01)
+    per_frame = solve_light(ev, None, 1e-3)
+    f = PooledSolve(alpha=0.01, reg=1e-3)
+    state = None
+    for t in range(8):
+        y, state = f(per_frame[t:t + 1], state, torch.tensor([t == 0]), evidence=Evidence(ev.M[t:t + 1], ev.r[t:t + 1]))
+    offline = pool_shot_lights(ev, None, 1e-3, switches=None)[0][-1]
+    assert torch.allclose(y[0], offline, atol=1e-4)
+
+
+def test_a_window_follows_a_turning_light():
+    from relightnet.sh import rotate_sh_up
+    from relightnet.temporal import pool_window
+
+    base = _light(8)
+    lights = [rotate_sh_up(base, 0.05 * t) for t in range(40)]  # ~90° over the shot, no switch
+    ev = _frames(lights, noise=0.05)
+    truth = torch.stack(lights)
+    win = pool_shot_lights(ev, None, 1e-6, window=pool_window(10.0, 0.5), switches=None)[0]
+    shot = pool_shot_lights(ev, None, 1e-6, switches=None)[0]
+    rel = lambda x: float((light_distance(x, truth) / light_norm(truth)).mean())  # noqa: E731
+    assert rel(win) < 0.5 * rel(shot)
+    assert pool_window(30.0) == 30 and pool_window(0.5) == 1
