@@ -90,7 +90,7 @@ def child_e2e(args) -> dict:
 
 
 def child_stages(args) -> dict:
-    """Median wall ms per frame of each step the job takes, over the clip's frames."""
+    """Median wall and CPU ms per frame of each step the job takes, over the clip's frames."""
     import numpy as np
     import torch
 
@@ -108,9 +108,9 @@ def child_stages(args) -> dict:
     bgs, times = [], {s: [] for s in STAGES}
 
     def timed(stage, fn, *a, **k):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn(*a, **k)
-        times[stage].append((time.perf_counter() - t0) * 1e3)
+        times[stage].append(((time.perf_counter() - t0) * 1e3, (time.process_time() - c0) * 1e3))
         return out
 
     for _ in range(n):
@@ -118,9 +118,9 @@ def child_stages(args) -> dict:
     body = AnnyBody()
     motion = make_motion("walk", 16)
     for _ in range(3):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = body(motion)
-        times[STAGES[1]].append((time.perf_counter() - t0) * 1e3 / 16)
+        times[STAGES[1]].append(((time.perf_counter() - t0) * 1e3 / 16, (time.process_time() - c0) * 1e3 / 16))
     faces = out.faces
     h, w = bgs[0].shape[:2]
     cam, tex, light = default_camera((h, w)), avatar_albedo(body), preset_light("studio")
@@ -146,7 +146,7 @@ def child_stages(args) -> dict:
             r = timed(STAGES[6], render_mesh, v, faces, T, tex, light, cam, normals=nrm, frags=frags)
             frame = timed(STAGES[7], composite, r, bgs[i])
             timed(STAGES[8], wr.write, np.ascontiguousarray(frame))
-    return {s: statistics.median(x) for s, x in times.items()}
+    return {s: [statistics.median(t[0] for t in x), statistics.median(t[1] for t in x)] for s, x in times.items()}
 
 
 def run_child(kind: str, pkg: Path, args, mode: str = "light") -> dict:
@@ -170,10 +170,13 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--n-dirs", type=int, default=64)
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--runs", type=int, default=3, help="end-to-end runs per package and mode")
+    ap.add_argument("--runs", type=int, default=3, help="rounds: end-to-end runs (first mode) and stage runs")
+    ap.add_argument("--modes", default="light,estimate",
+                    help="light: given (the 3D path alone); estimate: the CNN estimates it (once per package)")
     ap.add_argument("--stage-frames", type=int, default=12)
     ap.add_argument("--baseline", type=Path, help="a folder holding another copy of the relightnet package")
-    ap.add_argument("--target", type=Path, help="use this target video (with TARGET.masks.mp4 for estimation)")
+    ap.add_argument("--target", type=Path, help="use this target video (with TARGET.masks.mp4 for estimation); "
+                    "made there first (kept) when missing")
     ap.add_argument("--child", choices=("e2e", "stages"), help=argparse.SUPPRESS)
     ap.add_argument("--mode", choices=("light", "estimate"), default="light", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -188,41 +191,48 @@ def main() -> None:
         return
     h, w = _size(args.size)
     with tempfile.TemporaryDirectory() as tmp:
-        if args.target is None:
-            args.target = Path(tmp) / f"target_{w}x{h}.mp4"
+        if args.target is None or not args.target.exists():
+            args.target = args.target or Path(tmp) / f"target_{w}x{h}.mp4"
             sys.path.insert(0, str(ROOT))
             make_target(args.target, h, w, args.frames)
         pkgs = ([("before", args.baseline.resolve())] if args.baseline else []) + [("this", ROOT)]
+        modes = args.modes.split(",")
         stages = {name: [] for name, _ in pkgs}
-        runs = {(name, mode): [] for name, _ in pkgs for mode in ("light", "estimate")}
-        for _ in range(args.runs):  # interleaved, so both packages see the same machine load
-            for name, pkg in pkgs:
-                for mode in ("light", "estimate"):
+        runs = {(name, mode): [] for mode in modes for name, _ in pkgs}
+        for r in range(args.runs):  # interleaved, so both packages see the same machine load
+            for mode in modes if r == 0 else modes[:1]:
+                for name, pkg in pkgs:
                     runs[name, mode].append(run_child("e2e", pkg, args, mode))
             for name, pkg in pkgs:
                 stages[name].append(run_child("stages", pkg, args))
-        cpu = open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": \t")
-        print(f"avatar job, target {w}x{h} (W x H), {args.frames} frames, PRT {args.n_dirs} directions, "
-              f"{args.threads} threads, {cpu}; medians of {args.runs} interleaved runs\n")
-        rows = []
-        for (name, mode), rs in runs.items():
-            fps = sorted(r["frames"] / r["wall"] for r in rs)
-            cpu_ms = statistics.median(1e3 * r["cpu"] / r["frames"] for r in rs)
-            rows.append([name, "given light" if mode == "light" else "estimated light", f"{statistics.median(fps):.2f}",
-                         f"{1e3 / statistics.median(fps):.0f}", f"{cpu_ms:.0f}", " / ".join(f"{x:.2f}" for x in fps)])
-        print(table(["package", "light", "frames/s", "ms/frame", "CPU ms/frame", "all runs (frames/s)"], rows))
-        if args.baseline:
-            for mode in ("light", "estimate"):
-                ratio = statistics.median(runs["before", mode][i]["wall"] / runs["this", mode][i]["wall"]
-                                          for i in range(args.runs))
-                print(f"\nspeed-up ({mode}, median of the per-round ratios): {ratio:.2f}x")
-        print(f"\nPer stage (median wall ms per frame over {args.stage_frames} frames, median of {args.runs} runs)\n")
-        names = [n for n, _ in pkgs]
-        med = {(n, s): statistics.median(r[s] for r in stages[n]) for n in names for s in STAGES}
-        srows = [[s] + [f"{med[n, s]:.1f}" for n in names] for s in STAGES]
-        srows.append(["sum (the BVH row is inside PRT)"]
-                     + [f"{sum(med[n, s] for s in STAGES if not s.startswith(' ')):.0f}" for n in names])
-        print(table(["stage"] + [f"ms ({n})" for n in names], srows))
+        report(args, pkgs, runs, stages, h, w)
+
+
+def report(args, pkgs, runs, stages, h, w) -> None:
+    cpu = open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": \t")
+    n = next(iter(runs.values()))[0]["frames"]
+    print(f"avatar job, target {w}x{h} (W x H), {n} frames, PRT {args.n_dirs} directions, "
+          f"{args.threads} threads, {cpu}; {args.runs} interleaved runs (the estimated light: 1)\n")
+    rows = []
+    for (name, mode), rs in runs.items():
+        fps = sorted(r["frames"] / r["wall"] for r in rs)
+        cpu_ms = statistics.median(1e3 * r["cpu"] / r["frames"] for r in rs)
+        rows.append([name, "given" if mode == "light" else "estimated", f"{statistics.median(fps):.2f}",
+                     f"{1e3 / statistics.median(fps):.0f}", f"{cpu_ms:.0f}", " / ".join(f"{x:.2f}" for x in fps)])
+    print(table(["package", "light", "frames/s", "ms/frame", "CPU ms/frame", "all runs (frames/s)"], rows))
+    if args.baseline:
+        for mode in {m for _, m in runs}:
+            b, t = runs["before", mode], runs["this", mode]
+            wall = statistics.median(x["wall"] / y["wall"] for x, y in zip(b, t, strict=True))
+            cpu = statistics.median(x["cpu"] / y["cpu"] for x, y in zip(b, t, strict=True))
+            print(f"\nbefore / this ({mode} light, median over rounds): wall {wall:.2f}x, CPU {cpu:.2f}x")
+    print(f"\nPer stage (ms per frame: median over {args.stage_frames} frames, then over {args.runs} runs)\n")
+    names = [n for n, _ in pkgs]
+    med = {(n, s, i): statistics.median(r[s][i] for r in stages[n]) for n in names for s in STAGES for i in (0, 1)}
+    srows = [[s] + [f"{med[n, s, i]:.1f}" for n in names for i in (0, 1)] for s in STAGES]
+    srows.append(["sum (the BVH row is inside PRT)"]
+                 + [f"{sum(med[n, s, i] for s in STAGES if not s.startswith(' ')):.0f}" for n in names for i in (0, 1)])
+    print(table(["stage"] + [f"{k} ms ({n})" for n in names for k in ("wall", "CPU")], srows))
 
 
 if __name__ == "__main__":
