@@ -156,7 +156,9 @@ def run_child(kind: str, pkg: Path, args, mode: str = "light") -> dict:
     res = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
     if res.returncode:
         raise RuntimeError(f"{kind} child ({pkg}) failed:\n{res.stderr[-3000:]}")
-    return json.loads(res.stdout.strip().splitlines()[-1])
+    out = json.loads(res.stdout.strip().splitlines()[-1])
+    sys.stderr.write(f"{kind} {mode} {pkg}: {json.dumps(out)}\n")  # progress: runs take minutes on a busy machine
+    return out
 
 
 def _size(s: str) -> tuple[int, int]:
