@@ -1,9 +1,10 @@
 """Access to Blender's Python module (``bpy``, the optional ``relightnet[blender]`` extra).
 
 ``bpy`` is one global Blender session per process: every scene built here starts from
-:func:`reset` (factory settings, empty scene). Importing it prints a numpy-ABI warning of its
-sound module (audaspace, unused here) and Blender logs lines to stdout while saving and
-rendering; :func:`quiet` captures those file-descriptor writes and logs them at DEBUG level.
+:func:`reset` (factory settings, empty scene). Importing it prints a numpy-ABI message of its sound
+module (audaspace, built for NumPy 1.x, unused here: reduced to one DEBUG line) and Blender
+logs lines to stdout while saving and rendering; :func:`quiet` captures those
+file-descriptor writes and logs them at DEBUG level.
 """
 
 from __future__ import annotations
@@ -25,22 +26,33 @@ BPY_VERSION = "5.0.1"
 
 @contextlib.contextmanager
 def quiet(fds: tuple[int, ...] = (1, 2)) -> Iterator[None]:
-    """Capture writes to the given OS file descriptors (C code included); log them at DEBUG."""
+    """Capture writes to the given OS file descriptors (C code included) and to Python's
+    ``sys.stdout``/``sys.stderr`` (whatever they are); log them at DEBUG."""
+    import io
+
     for s in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             s.flush()
     saved = {fd: os.dup(fd) for fd in fds}
+    py = io.StringIO()
     with tempfile.TemporaryFile(mode="w+b") as tmp:
         try:
             for fd in fds:
                 os.dup2(tmp.fileno(), fd)
-            yield
+            with contextlib.redirect_stdout(py if 1 in fds else sys.stdout), \
+                    contextlib.redirect_stderr(py if 2 in fds else sys.stderr):
+                yield
         finally:
             for fd, old in saved.items():
                 os.dup2(old, fd)
                 os.close(old)
             tmp.seek(0)
-            text = tmp.read().decode("utf-8", "replace").strip()
+            text = (tmp.read().decode("utf-8", "replace") + py.getvalue()).strip()
+            if "numpy.core.multiarray failed to import" in text:  # bpy's sound module (audaspace), built for
+                # NumPy 1.x, does not load under NumPy 2 and says so at length; Blender runs on without sound,
+                # which relightnet never uses: one line instead of the message, even at DEBUG
+                text = ""
+                logger.debug("bpy: its sound module did not load (built for NumPy 1.x); sound is not used")
             if text:
                 logger.debug("blender output:\n%s", text)
 
