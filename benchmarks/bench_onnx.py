@@ -1,8 +1,10 @@
 """ONNX serving speed and int8 quality: torch eager vs ONNX Runtime fp32 vs ONNX Runtime int8.
 
-Run: ``.venv/bin/python benchmarks/bench_onnx.py`` (the shipped model with EMA smoothing in the
-graph; 2 threads; B = 1). int8 quality: relit RMSE (each test item relit with the next item's
-light) of the int8 model relative to the fp32 one, on generated test-split samples.
+Run: ``.venv/bin/python benchmarks/bench_onnx.py [--checkpoint C]`` (default: the shipped model,
+with its default smoothing in the graph; 2 threads; B = 1). int8 quality: relit RMSE (each test
+item relit with the next item's light) of the int8 models relative to the fp32 one, on generated
+test-split samples; static int8 with 7-bit weights (the default) and 8-bit weights (for CPUs with
+VNNI/AMX).
 """
 
 from __future__ import annotations
@@ -69,14 +71,20 @@ _CONV_OPS = {"Conv", "QLinearConv", "ConvInteger", "FusedConv", "NhwcFusedConv"}
 
 
 def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--checkpoint", default=None, help="model (default: the shipped one)")
+    args = ap.parse_args()
     torch.set_num_threads(2)
-    net = load_model()
+    net = load_model(args.checkpoint)
     tmp = Path(tempfile.mkdtemp())
-    fp32 = export_onnx(net, tmp / "m.onnx", smoothing="ema")
+    fp32 = export_onnx(net, tmp / "m.onnx", smoothing="pooled" if net.solves else "ema")
     int8 = quantize_int8(fp32, tmp / "m_int8.onnx", mode="static")
+    int8w8 = quantize_int8(fp32, tmp / "m_int8_w8.onnx", mode="static", reduce_range=False)
     dyn = quantize_int8(fp32, tmp / "m_int8_dynamic.onnx", mode="dynamic")
     sess = {"fp32": OnnxRelighter(fp32, threads=2), "int8": OnnxRelighter(int8, threads=2),
-            "int8 dynamic": OnnxRelighter(dyn, threads=2)}
+            "int8 8-bit": OnnxRelighter(int8w8, threads=2), "int8 dynamic": OnnxRelighter(dyn, threads=2)}
     rows = []
     for size in (256, 512):
         img = np.random.default_rng(0).random((1, 3, size, size), dtype=np.float32)
@@ -84,10 +92,10 @@ def main() -> None:
         x = normalize_input(torch.from_numpy(img), torch.from_numpy(mask)).contiguous(memory_format=torch.channels_last)
         m = net.to(memory_format=torch.channels_last)
         with torch.no_grad():
-            eager = median_ms(lambda m=m, x=x: m(x), repeat=5)
-        times = {k: median_ms(lambda r=r, img=img, mask=mask: r.step(img, mask), repeat=5) for k, r in sess.items()}
-        rows.append([f"{size}²", eager, times["fp32"], times["int8"], times["int8 dynamic"], eager / times["fp32"],
-                     eager / times["int8"]])
+            eager = median_ms(lambda m=m, x=x: m(x), repeat=7)
+        times = {k: median_ms(lambda r=r, img=img, mask=mask: r.step(img, mask), repeat=7) for k, r in sess.items()}
+        rows.append([f"{size}²", eager, times["fp32"], times["int8"], times["int8 8-bit"], times["int8 dynamic"],
+                     eager / times["fp32"], eager / times["int8"], eager / times["int8 8-bit"]])
     from relightnet.body import AnnyBody
     from relightnet.data import SynthConfig, generate_sample
 
@@ -96,12 +104,14 @@ def main() -> None:
     q = {k: relit_rmse(r, samples) for k, r in sess.items()}
     img = np.random.default_rng(0).random((1, 3, 256, 256), dtype=np.float32)
     ones = np.ones((1, 1, 256, 256), np.float32)
-    share = {k: conv_share_ms(p, img, ones) for k, p in (("fp32", fp32), ("int8", int8))}
-    print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 dynamic ms",
-                 "eager/fp32", "eager/int8 static"], rows))
+    share = {k: conv_share_ms(p, img, ones) for k, p in (("fp32", fp32), ("int8", int8), ("int8 8-bit", int8w8))}
+    print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 8-bit ms",
+                 "ORT int8 dynamic ms", "eager/fp32", "eager/int8 static", "eager/int8 8-bit"], rows))
     print()
     print(table(["model", "relit RMSE (12 test samples, 128²)", "vs fp32"],
-                [["ORT fp32", q["fp32"], 1.0], ["ORT int8 static (QDQ)", q["int8"], q["int8"] / q["fp32"]],
+                [["ORT fp32", q["fp32"], 1.0],
+                 ["ORT int8 static (QDQ, 7-bit weights)", q["int8"], q["int8"] / q["fp32"]],
+                 ["ORT int8 static (QDQ, 8-bit weights)", q["int8 8-bit"], q["int8 8-bit"] / q["fp32"]],
                  ["ORT int8 dynamic", q["int8 dynamic"], q["int8 dynamic"] / q["fp32"]]]))
     print()
     print(table(["256², ORT profiler", "convolution kernels ms", "whole graph ms", "convolutions / eager 256²"],
