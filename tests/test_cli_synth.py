@@ -53,7 +53,7 @@ def test_make_verify_preview(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--out", "{t}/ds", "--res", "100"], "config res: expected a positive multiple of 16, got 100"),
+    (["--out", "{t}/ds", "--res", "100"], "config res: expected a multiple of 16 from 16 to 4096, got 100"),
     (["--out", "{t}/ds", "--count", "-3"], "--count: expected an integer >= 0, got -3"),
     (["--out", "{t}/ds", "--split-count", "val=-1"], "--split-count val: expected an integer >= 0"),
     (["--out", "{t}/ds", "--workers", "-1"], "--workers: expected an integer >= 0"),

@@ -130,10 +130,7 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
     """
     from ..temporal import pool_shot_lights, pool_window, smooth_lights
 
-    if method not in SMOOTHING:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
-    if method == "auto":
-        method = "pooled" if evidence is not None else "hermite"
+    method = resolve_smoothing(method, evidence is not None)
     none = torch.zeros(raw.shape[0], dtype=torch.bool)
     if method == "pooled":
         if evidence is None:
@@ -145,6 +142,16 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
         return raw.clone(), none, none
     res = smooth_lights(raw, method, outlier_eps="3mad", switches="auto")
     return res.smoothed, res.outliers, res.switches
+
+
+def resolve_smoothing(method: str, has_evidence: bool) -> str:
+    """The smoothing ``method`` actually used: ``auto`` is ``pooled`` for a model that solves its
+    light (``has_evidence``), else ``hermite``; other names are checked and returned."""
+    if method not in SMOOTHING:
+        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
+    if method == "auto":
+        return "pooled" if has_evidence else "hermite"
+    return method
 
 
 def _fingerprint(video, masks, predictor_name: str, mask_source: str = "segment") -> str:
@@ -324,6 +331,7 @@ def avatar(
         raw, ev, prior = cached if reused else estimate_video_evidence(predict, target, target_masks, progress,
                                                                        mask_source)
         n = raw.shape[0]
+        smoothing = resolve_smoothing(smoothing, ev is not None)  # the file and plot name what was used
         smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, info.fps)
     else:
         fp = ""
