@@ -6,12 +6,13 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, nonneg_int, pos_float, pos_int
+from ..names import CAUSAL_METHODS, OFFLINE_METHODS
+from .common import add_command, nonneg_int, out_file, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
 
-OFFLINE = ("hermite", "poly", "savgol")
-CAUSAL = ("ema", "one-euro", "fir")
+OFFLINE = OFFLINE_METHODS
+CAUSAL = CAUSAL_METHODS
 
 
 def _smooth(args, sh):
@@ -59,12 +60,8 @@ def run_smooth(args: argparse.Namespace) -> int:
     if args.method not in methods:
         raise InputError(f"--method: expected one of {', '.join(methods)}, got {args.method!r}")
     parse_eps(args.outlier_eps)
-    out = Path(args.output)
-    if out.suffix.lower() not in (".npz", ".json"):
-        raise InputError(f"{out}: a light sequence is written as .npz or .json")
-    plot = Path(args.plot) if args.plot else None
-    if plot is not None and plot.suffix.lower() != ".png":
-        raise InputError(f"{plot}: expected a .png plot file")
+    out = out_file(args.output, "OUT", (".npz", ".json"))
+    plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
     sh = load_light(args.input)
     if sh.dim() != 3:
         raise ShapeError(f"{args.input}: expected a light sequence (T, K, 3), got one light {tuple(sh.shape)}")
@@ -89,9 +86,6 @@ def run_smooth(args: argparse.Namespace) -> int:
     title = f"{Path(args.input).name}: {summary}"
     png = light_curves_png(sh, smoothed, truth, outliers, switches, title) if plot else None
 
-    for p in (out, plot):
-        if p is not None and not p.parent.exists():
-            p.parent.mkdir(parents=True, exist_ok=True)
     save_light(out, smoothed)
     if png is not None:
         with atomic_write(plot) as f:

@@ -6,9 +6,8 @@ import argparse
 import logging
 import math
 import sys
-from pathlib import Path
 
-from .common import add_command, key_value_arg, nonneg_int, pos_float
+from .common import add_command, key_value_arg, nonneg_int, out_dir, out_file, pos_float
 
 logger = logging.getLogger("relightnet.synth")
 
@@ -83,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     if args.preview:
         from ..data.preview import preview
 
-        path = preview(args.preview, args.out, n=args.n, split=args.split)
+        path = preview(args.preview, out_file(args.out) if args.out else None, n=args.n,
+                       split=args.split)
         logger.info("wrote %s", path)
         return 0
     if not args.out:
@@ -92,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from ..data.synth import default_workers, run_synth
 
     cfg = build_config(args)
+    out = out_dir(args.out)
     workers = default_workers() if args.workers is None else args.workers
     if workers < 0:
         raise InputError(f"--workers: expected an integer >= 0, got {workers}")
@@ -101,12 +102,8 @@ def run(args: argparse.Namespace) -> int:
 
         ray = RayOptions(address=args.ray or None, cpus_per_task=args.cpus_per_task)
     splits = None if not args.splits else [s.strip() for s in args.splits.split(",") if s.strip()]
-    try:
-        m = run_synth(Path(args.out), cfg, workers=workers, splits=splits, progress=not args.quiet,
-                      compression=args.compression, ray=ray, max_retries=args.max_retries)
-    except KeyboardInterrupt:
-        sys.stderr.write(f"relightnet synth: interrupted; run the same command again to resume {args.out}\n")
-        return 130
+    m = run_synth(out, cfg, workers=workers, splits=splits, progress=not args.quiet,
+                  compression=args.compression, ray=ray, max_retries=args.max_retries)
     made = ", ".join(f"{s} {sum(e['count'] for e in v['shards'])}/{v['count']}"
                      for s, v in sorted(m["splits"].items(), key=lambda kv: SPLITS.index(kv[0])) if v["count"])
     logger.info("%s: %s (%s)", args.out, "complete" if m["complete"] else "partial", made)
@@ -157,4 +154,4 @@ def register(sub) -> None:
                    help="shard compression (default: deflate)")
     p.add_argument("--n", type=int, default=8, help="--preview: samples (rows) in the sheet (default: 8)")
     p.add_argument("--split", help="--preview: split to show (default: the first with shards)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, interrupt_hint=lambda a: f"run the same command again to resume {a.out}")

@@ -13,6 +13,7 @@ import logging
 import torch
 
 from ..checks import InputError
+from ..names import MASK_SOURCES
 from .models import PersonModels
 from .person import segment_person
 from .video import track_person
@@ -21,8 +22,6 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["MASK_SOURCES", "check_mask_source", "person_mask", "video_masks"]
 
-#: ``segment``: the shipped segmentation models; ``head``: the CNN's mask head.
-MASK_SOURCES = ("segment", "head")
 
 
 def check_mask_source(source: str) -> str:
