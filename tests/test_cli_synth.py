@@ -26,7 +26,7 @@ def test_count_rules_and_config_file(tmp_path):
 
 
 def test_make_verify_preview(tmp_path, capsys):
-    d = tmp_path / "ds"
+    d = tmp_path / "data" / "ds"  # missing parent folders are made, as for every command's output
     argv = ["-q", "synth", "--out", str(d), "--count", "2", "--split-count", "val=0", "--split-count", "test=1", *TINY]
     assert main(argv) == 0
     m = json.loads((d / "manifest.json").read_text())
@@ -34,8 +34,8 @@ def test_make_verify_preview(tmp_path, capsys):
     assert main(argv) == 0  # nothing to do: checked and kept
     assert main(["synth", "--verify", str(d)]) == 0
     assert f"{d}: ok (2 shards; train 2, test 1 samples)" in capsys.readouterr().out
-    assert main(["-q", "synth", "--preview", str(d), "--out", str(tmp_path / "sheet.png"), "--n", "2"]) == 0
-    assert read_image(tmp_path / "sheet.png").shape == (64, 320, 3)
+    assert main(["-q", "synth", "--preview", str(d), "--out", str(tmp_path / "sheets" / "sheet.png"), "--n", "2"]) == 0
+    assert read_image(tmp_path / "sheets" / "sheet.png").shape == (64, 320, 3)
     # A damaged shard: one line per problem, exit 1.
     p = d / "test-00000.npz"
     data = bytearray(p.read_bytes())
@@ -53,12 +53,13 @@ def test_make_verify_preview(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--out", "{t}/ds", "--res", "100"], "config res: expected a positive multiple of 16, got 100"),
+    (["--out", "{t}/ds", "--res", "100"], "config res: expected a multiple of 16 from 16 to 4096, got 100"),
     (["--out", "{t}/ds", "--count", "-3"], "--count: expected an integer >= 0, got -3"),
     (["--out", "{t}/ds", "--split-count", "val=-1"], "--split-count val: expected an integer >= 0"),
     (["--out", "{t}/ds", "--workers", "-1"], "--workers: expected an integer >= 0"),
     (["--out", "{t}/ds", "--splits", "train,dev"], "splits: expected names from"),
-    (["--out", "{t}/no/such/ds"], "parent folder"),
+    (["--out", "{t}/no/such/ds", "--splits", "train,dev"], "splits: expected names from"),  # made folders removed
+    (["--out", "{t}/f/ds", "--count", "-3"], "--count: expected an integer >= 0, got -3"),
     (["--out", "{t}/ds", "--config", "{t}/missing.yaml"], "config file not found"),
     (["--verify", "{t}/none"], "{t}/none: dataset folder not found"),
     (["--preview", "{t}/none"], "{t}/none: dataset folder not found"),

@@ -99,8 +99,12 @@ def _albedo(body):
 def _body_outputs(args) -> tuple[Path, Path | None, Path | None]:
     """(--out, --mask-out, --save-maps) by the output rule: videos for a motion (a mask video
     beside the video), else an image (a mask image beside it)."""
-    out = out_file(args.out, suffixes=_VIDEO if args.motion else None)
+    out = out_file(args.out)
     video = out.suffix.lower() in _VIDEO
+    if args.motion and not video:
+        from ..checks import InputError
+
+        raise InputError(f"--out {out}: a motion renders a video; expected a suffix in {', '.join(_VIDEO)}")
     mask = out_file(args.mask_out, "--mask-out", _VIDEO if video else None) if args.mask_out else None
     if mask is not None and not video and mask.suffix.lower() in _VIDEO:
         from ..checks import InputError
