@@ -73,14 +73,21 @@ def _max_pixels(text: str) -> int:
     return v
 
 
+class _OwnMessages(logging.Filter):
+    """Passes relightnet's messages and every library's warnings and errors."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= logging.WARNING or record.name == "relightnet" or record.name.startswith("relightnet.")
+
+
 def configure_logging(verbose: bool = False, quiet: bool = False) -> None:
-    """relightnet's loggers at INFO (DEBUG with ``verbose``, WARNING with ``quiet``); the root
-    logger, which third-party libraries (onnxruntime's quantiser, ray, ...) log to, at WARNING
-    (INFO with ``verbose``)."""
+    """Log to stderr: relightnet's messages from INFO (DEBUG with ``verbose``, WARNING with ``quiet``);
+    third-party libraries (ONNX Runtime's quantiser, Ray, ...) only from WARNING unless ``verbose``."""
     level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
-    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s", force=True)
-    logging.getLogger("relightnet").setLevel(level)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", force=True)
+    if not verbose:
+        for handler in logging.getLogger().handlers:
+            handler.addFilter(_OwnMessages())
 
 
 def error_line(e: BaseException) -> str | None:
@@ -113,8 +120,9 @@ def main(argv: list[str] | None = None) -> int:
         from .io.limits import set_max_pixels
 
         set_max_pixels(args.max_pixels)
-    from ._cli.common import remove_made_folders
+    from ._cli.common import forget_made_folders, remove_made_folders
 
+    forget_made_folders()
     try:
         return int(args.func(args) or 0)
     except KeyboardInterrupt:

@@ -99,9 +99,3 @@ def test_bad_inputs_exit_1_with_one_line_and_nothing_written(tmp_path, sequences
     assert "png" in line
     assert "missing" in _one_line_error(capsys, main(["smooth-light", str(tmp_path / "missing.npz"), *tail]))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["k4.npz", "k5.npz", "nan.npz", "one.npz"]
-
-
-def test_help_lists_the_command(capsys):
-    with pytest.raises(SystemExit):
-        main(["smooth-light", "--help"])
-    assert "--outlier-eps" in capsys.readouterr().out

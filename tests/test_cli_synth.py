@@ -71,11 +71,3 @@ def test_bad_inputs_fail_cleanly(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message.format(t=tmp_path) in err[0], err
     assert list(tmp_path.iterdir()) == []
-
-
-def test_help_has_examples(capsys):
-    with pytest.raises(SystemExit) as e:
-        main(["synth", "--help"])
-    out = capsys.readouterr().out
-    assert e.value.code == 0 and "examples:" in out and "--verify data/synth" in out
-    assert "N/8 and N/4" in out and "--sequence T" in out

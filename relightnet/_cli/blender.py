@@ -10,7 +10,6 @@ from .common import (
     add_body_args,
     add_command,
     exposure_arg,
-    in_path,
     nonneg_int,
     out_dir,
     out_file,
@@ -81,7 +80,6 @@ def run_export(args: argparse.Namespace) -> int:
 def run_render(args: argparse.Namespace) -> int:
     from ..blender import render_blend
 
-    in_path(args.blend, "BLEND", "a .blend file from 'relightnet blender-export'")
     out = out_dir(args.out)
     n = 0
     for fr in render_blend(args.blend, out, spp=args.spp, bounces=args.bounces, frames=args.frames,

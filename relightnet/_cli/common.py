@@ -50,6 +50,11 @@ def _check_writable_parent(path: Path, option: str) -> None:
     _MADE.extend(reversed(missing))
 
 
+def forget_made_folders() -> None:
+    """Start a command: folders made by an earlier command of this process are not its own."""
+    _MADE.clear()
+
+
 def remove_made_folders() -> None:
     """Remove the folders the output rule made that are still empty (after a failed command)."""
     while _MADE:

@@ -1,6 +1,6 @@
 """Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O.
 
-Conventions are those of DESIGN.md: real orthonormal SH without the
+Conventions are those of docs/design.md ("Conventions"): real orthonormal SH without the
 Condon–Shortley phase, k = l(l+1)+m, directions in the light frame.
 """
 

@@ -1,4 +1,4 @@
-"""Light files: save and load SH lights (DESIGN.md "Contracts").
+"""Light files: save and load SH lights (docs/design.md, "File contracts").
 
 Formats, chosen by the file extension:
 
