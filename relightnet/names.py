@@ -18,6 +18,7 @@ __all__ = [
     "ONNX_SMOOTHERS",
     "POSE_PRESETS",
     "SMOOTHING",
+    "envmap_dir",
     "light_presets",
 ]
 

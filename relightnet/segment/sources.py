@@ -25,6 +25,7 @@ __all__ = ["MASK_SOURCES", "check_mask_source", "person_mask", "video_masks"]
 
 
 def check_mask_source(source: str) -> str:
+    """``source`` if it is one of :data:`MASK_SOURCES`, else an InputError listing them."""
     if source not in MASK_SOURCES:
         raise InputError(f"mask source: expected one of {', '.join(MASK_SOURCES)}, got {source!r}")
     return source
