@@ -53,7 +53,8 @@ def test_all_names_exist_are_documented_and_complete(sub):
         assert hasattr(pkg, name), f"relightnet.{sub}.{name} is listed in __all__ but does not exist"
         obj = getattr(pkg, name)
         if inspect.isfunction(obj) or inspect.isclass(obj):
-            assert inspect.getdoc(obj), f"relightnet.{sub}.{name} has no docstring"
+            doc = inspect.getdoc(obj) or ""
+            assert doc and not doc.startswith(f"{obj.__name__}("), f"relightnet.{sub}.{name} has no docstring"
         else:
             assert _documented_constant(name, files), f"relightnet.{sub}.{name}: no '#:' comment where it is set"
     # nothing public missing: what a module defines with a docstring and the package imports is listed
