@@ -14,6 +14,11 @@ def _cfg(*argv):
     return build_config(build_parser().parse_args(["synth", "--out", "x", *argv]))
 
 
+def test_ctrl_c_hint_names_the_folder():
+    args = build_parser().parse_args(["synth", "--out", "data/big", "--count", "10"])
+    assert args.interrupt_hint(args) == "run the same command again to resume data/big"
+
+
 def test_count_rules_and_config_file(tmp_path):
     assert _cfg().counts == {"train": 64, "val": 8, "test": 16}
     assert _cfg("--count", "100").counts == {"train": 100, "val": 13, "test": 25}

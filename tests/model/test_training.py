@@ -103,11 +103,12 @@ def test_every_config_in_train_configs_loads_with_its_values():
 
 
 def test_distributed_two_cpu_processes_stay_in_sync(tiny_dataset, tmp_path):
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2", "-m", "train",
-           "--config", str(REPO / "train" / "configs" / "tiny.yaml"), "--data", str(tiny_dataset),
+    # the documented launch from any folder: torchrun -m relightnet train (-m train works from the repository root)
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2", "-m", "relightnet",
+           "train", "--config", str(REPO / "train" / "configs" / "tiny.yaml"), "--data", str(tiny_dataset),
            "--out", str(tmp_path / "ddp")]
     env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(REPO)}
-    r = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    r = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stderr.count("ranks in sync: 2 replicas") == 2
     assert load_checkpoint(tmp_path / "ddp" / "last.pt")["step"] == 6
