@@ -229,6 +229,18 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
     return light.float()
 
 
+def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
+    """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
+    uint8 elsewhere. Only the covered pixels are converted; the same bytes as compositing the
+    whole float frame (fg·α + bg·(1−α)) and quantising it."""
+    pix = r.frags.pix
+    fg = r.image.reshape(-1, 3).index_select(0, pix)
+    fg = (linear_to_srgb(fg.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
+    out = torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))
+    out.view(-1, 3).index_copy_(0, pix, fg)
+    return out.numpy()
+
+
 def _count_frames(video) -> int:
     """Frames of a video: from the container, else by decoding it (streaming)."""
     return count_frames(video)
@@ -357,13 +369,15 @@ def avatar(
             if written == n:
                 break
             r = fr.render
-            a = r.alpha[0][..., None]
-            bgf = torch.from_numpy(bg).float() / 255
-            comp = linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a)
             if antialias:
+                a = r.alpha[0][..., None]
+                bgf = torch.from_numpy(bg).float() / 255
+                comp = linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a)
                 smooth = aa(comp[None], r.frags, camera.transform(fr.verts), body_model.faces)[0]
                 comp = torch.where(silhouette_pixels(a[..., 0] > 0)[..., None], smooth, comp)
-            writer.write(comp)
+                writer.write(comp)
+            else:
+                writer.write(_composite_covered(r, bg))
             written += 1
         if written < n:
             raise InputError(f"{plate or target}: only {written} frames decoded, {n} expected")
