@@ -69,10 +69,16 @@ def test_make_verify_preview(tmp_path, capsys):
     (["--verify", "{t}/none"], "{t}/none: dataset folder not found"),
     (["--preview", "{t}/none"], "{t}/none: dataset folder not found"),
     ([], "--out: a dataset folder is required"),
+    (["--verify", "{t}/d", "--count", "3"], "--count: not used with --verify"),  # honoured or refused
+    (["--preview", "{t}/d", "--res", "32", "--seed", "1"], "--res, --seed: not used with --preview"),
+    (["--out", "{t}/d", "--n", "4", "--split", "val"], "--n, --split: not used with making a dataset"),
+    (["--out", "{t}/d", "--cpus-per-task", "2"], "--cpus-per-task: not used with making a dataset"),
+    (["--out", "{t}/d", "--ray", "--workers", "2"], "--workers: not used with --ray"),
 ])
 def test_bad_inputs_fail_cleanly(tmp_path, capsys, argv, message):
     argv = [a.format(t=tmp_path) for a in argv]
-    assert main(["synth", *argv, "--workers", "0"] if "--workers" not in argv else ["synth", *argv]) == 1
+    making = "--out" in argv and "--workers" not in argv and "--preview" not in argv
+    assert main(["synth", *argv, "--workers", "0"] if making else ["synth", *argv]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message.format(t=tmp_path) in err[0], err
     assert list(tmp_path.iterdir()) == []

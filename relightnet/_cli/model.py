@@ -32,6 +32,9 @@ def run_evaluate(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     if args.clips and not args.light:
         raise ValueError("--clips: only with --light (the light report)")
+    unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline)) if given]
+    if args.light and unused:
+        raise ValueError(f"{', '.join(unused)}: not used with --light (the light report has no baseline or twin)")
     model = load_model(args.checkpoint, device=args.device)
     if args.light:
         return _evaluate_light(args, model, out)
