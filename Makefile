@@ -3,6 +3,9 @@
 #
 # Override the torch wheel on a CUDA machine, e.g.
 #   make test TORCH_SPEC="torch==2.13.0 --index-url https://download.pytorch.org/whl/cu128"
+# and run the kernel tests (SH, rasterizer, renderer, PRT bounces) on the GPU with
+#   make test PYTEST_ARGS="--device cuda"          (also: --dtype float64)
+# PYTEST_ARGS defaults to --device cuda when the installed torch sees a CUDA device.
 PYTHON      ?= python3
 VENV        ?= .venv
 TORCH_SPEC  ?= torch==2.13.0
@@ -12,6 +15,8 @@ export MPLBACKEND = Agg
 
 PY  := $(VENV)/bin/python
 PIP := $(VENV)/bin/python -m pip
+# Where the kernel tests run: the GPU when torch sees one (checked when `make test` runs).
+PYTEST_ARGS ?= $$($(PY) -c "import torch; print('--device cuda' if torch.cuda.is_available() else '')")
 
 .PHONY: demo test lint bench bench-deps setup clean-venv system-deps
 
@@ -21,7 +26,7 @@ demo: setup
 	$(VENV)/bin/relightnet demo --out out/demo
 
 test: setup
-	$(PY) -m pytest -q tests; rc=$$?; \
+	$(PY) -m pytest -q tests $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 lint: setup

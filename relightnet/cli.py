@@ -2,7 +2,18 @@
 
 Each subcommand lives in ``relightnet/_cli/<name>.py`` and exposes
 ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``.
-Heavy imports happen inside ``func`` so ``relightnet --help`` stays fast.
+Heavy imports (torch and everything built on it) happen inside ``func``, never at
+import or registration time, so every ``--help`` answers without importing torch;
+the names listed in the help come from :mod:`relightnet.names`.
+
+The rules every command follows (see ``docs/design.md``, "Command line"):
+
+- Output paths are checked, and their missing parent folders made, before any work
+  (:func:`relightnet._cli.common.out_file` / :func:`~relightnet._cli.common.out_dir`).
+- Bad input ends in one line on stderr, ``relightnet COMMAND: ...``, and exit status 1;
+  Ctrl-C in one line (with the command's resume hint, if it has one) and status 130.
+- Only relightnet's own loggers speak at INFO; third-party libraries at WARNING (all at
+  ``-v``).
 """
 
 from __future__ import annotations
@@ -13,7 +24,6 @@ import logging
 import sys
 
 from . import __version__
-from .checks import RelightError
 
 logger = logging.getLogger("relightnet")
 
@@ -63,12 +73,43 @@ def _max_pixels(text: str) -> int:
     return v
 
 
+class _OwnMessages(logging.Filter):
+    """Passes relightnet's messages and every library's warnings and errors."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= logging.WARNING or record.name == "relightnet" or record.name.startswith("relightnet.")
+
+
 def configure_logging(verbose: bool = False, quiet: bool = False) -> None:
+    """Log to stderr: relightnet's messages from INFO (DEBUG with ``verbose``, WARNING with ``quiet``);
+    third-party libraries (ONNX Runtime's quantiser, Ray, ...) only from WARNING unless ``verbose``."""
     level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", force=True)
+    if not verbose:
+        for handler in logging.getLogger().handlers:
+            handler.addFilter(_OwnMessages())
+
+
+def error_line(e: BaseException) -> str | None:
+    """The one-line message of an error caused by the user's input, or None for a bug.
+
+    Input errors are relightnet's :class:`~relightnet.checks.RelightError`, ``ValueError``
+    and ``OSError`` (a missing file or folder, no permission, a full disk).
+    """
+    from .checks import RelightError  # imports torch: only once something went wrong
+
+    if isinstance(e, OSError) and e.filename is not None and not isinstance(e, RelightError):
+        text = f"{e.filename}: {(e.strerror or str(e)).lower()}"
+    elif isinstance(e, (RelightError, OSError, ValueError)):
+        text = str(e) or type(e).__name__
+    else:
+        return None
+    first = text.strip().splitlines()[0] if text.strip() else type(e).__name__
+    return f"{type(e).__name__}: {first}"
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``relightnet`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args.verbose, args.quiet)
@@ -79,12 +120,22 @@ def main(argv: list[str] | None = None) -> int:
         from .io.limits import set_max_pixels
 
         set_max_pixels(args.max_pixels)
+    from ._cli.common import forget_made_folders, remove_made_folders
+
+    forget_made_folders()
     try:
         return int(args.func(args) or 0)
-    except (RelightError, FileNotFoundError, ValueError) as e:
-        # One line naming the input and what was expected; no traceback.
-        msg = f"{type(e).__name__}: {e}"
-        sys.stderr.write(f"relightnet {args.command}: {msg}\n")
+    except KeyboardInterrupt:
+        remove_made_folders()
+        hint = getattr(args, "interrupt_hint", None)
+        sys.stderr.write(f"relightnet {args.command}: interrupted{'; ' + hint(args) if hint else ''}\n")
+        return 130
+    except Exception as e:  # input errors become one line; anything else is a bug and keeps its traceback
+        remove_made_folders()  # a failed command leaves no empty output folder behind
+        line = error_line(e)
+        if line is None:
+            raise
+        sys.stderr.write(f"relightnet {args.command}: {line}\n")
         return 1
 
 

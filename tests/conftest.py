@@ -1,4 +1,5 @@
-"""Fixtures shared by every test folder: the Anny cache location and one Anny model per session."""
+"""Fixtures shared by every test folder: the Anny cache location, one Anny model per session, and the
+``--device`` / ``--dtype`` options (fixtures ``device``, ``dtype``) of the kernel tests."""
 
 from __future__ import annotations
 
@@ -10,6 +11,38 @@ import pytest
 # `make test` exports ANNY_CACHE_DIR; a bare `pytest` run uses the same repo cache.
 os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache" / "anny"))
 os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+def pytest_addoption(parser):
+    group = parser.getgroup("relightnet")
+    group.addoption("--device", default="cpu",
+                    help="torch device of the kernel tests (SH, rasterizer, renderer, PRT): cpu (default), cuda, "
+                         "cuda:N; `make test PYTEST_ARGS=\"--device cuda\"` on a GPU machine")
+    group.addoption("--dtype", default="float32", choices=("float32", "float64"),
+                    help="floating-point type of the kernel tests (default: float32)")
+
+
+@pytest.fixture(scope="session")
+def device(request):
+    """The torch.device the kernel tests run on (``--device``); a missing CUDA is a usage error."""
+    import torch
+
+    name = request.config.getoption("--device")
+    try:
+        dev = torch.device(name)
+    except RuntimeError as e:
+        raise pytest.UsageError(f"--device {name}: {e}") from None
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise pytest.UsageError(f"--device {name}: this torch build or machine has no CUDA device")
+    return dev
+
+
+@pytest.fixture(scope="session")
+def dtype(request):
+    """The torch dtype of the kernel tests (``--dtype``)."""
+    import torch
+
+    return getattr(torch, request.config.getoption("--dtype"))
 
 
 @pytest.fixture(scope="session")

@@ -47,6 +47,10 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
     assert main(["train", "--config", str(REPO / "train/configs/tiny.yaml"), "--data", str(tmp_path),
                  "--out", str(tmp_path / "r")]) == 1
     assert "no manifest.json" in capsys.readouterr().err
+    # options of the other report are refused, not ignored (before the model is loaded)
+    assert main(["evaluate", "--light", "--no-baseline", "--data", str(tiny_dataset),
+                 "--out", str(tmp_path / "e")]) == 1
+    assert "--no-baseline: not used with --light" in capsys.readouterr().err
     (tmp_path / "junk.pt").write_bytes(b"junk")
     assert main(["evaluate", "--checkpoint", str(tmp_path / "junk.pt"), "--data", str(tiny_dataset),
                  "--out", str(tmp_path / "e")]) == 1

@@ -52,6 +52,25 @@ def test_other_methods(tmp_path, sequences, method, extra):
         assert light_error(sm, truth) < 0.7 * light_error(noisy, truth)
 
 
+def test_a_smoothed_file_is_smoothed_again_from_its_raw_estimates(tmp_path, sequences):
+    """avatar's OUT.lights.npz and this command's .npz output hold sh (smoothed) and raw: the same format."""
+    from relightnet.sh import load_light_sequence, save_light_sequence
+
+    noisy_f, _, noisy, truth = sequences
+    lights = save_light_sequence(tmp_path / "clip.lights.npz", truth, raw=noisy, smoothed=truth.numpy(),
+                                 outliers=np.zeros(len(noisy), bool), smoothing="pooled")  # as avatar writes it
+    assert main(["-q", "smooth-light", str(lights), str(tmp_path / "a.npz"), "--method", "poly"]) == 0
+    assert main(["-q", "smooth-light", str(noisy_f), str(tmp_path / "b.npz"), "--method", "poly"]) == 0
+    a, side = load_light_sequence(tmp_path / "a.npz")
+    assert torch.equal(a, load_light(tmp_path / "b.npz"))  # the raw estimates were smoothed, not the sh
+    assert torch.equal(torch.from_numpy(side["raw"]), noisy) and str(side["smoothing"]) == "poly"
+    assert side["outliers"].shape == side["switches"].shape == (len(noisy),) and side["outliers"].any()
+    # smoothing the output again with another method starts from the same raw estimates
+    assert main(["-q", "smooth-light", str(tmp_path / "a.npz"), str(tmp_path / "c.npz"), "--method", "savgol"]) == 0
+    assert main(["-q", "smooth-light", str(noisy_f), str(tmp_path / "d.npz"), "--method", "savgol"]) == 0
+    assert torch.equal(load_light(tmp_path / "c.npz"), load_light(tmp_path / "d.npz"))
+
+
 def test_higher_order_sequence_with_a_causal_gate(tmp_path):
     seq = torch.stack([rotate_sh_up(preset_light("forest", lmax=3), 0.02 * t) for t in range(40)])
     seq[17] *= 3.0
@@ -99,9 +118,3 @@ def test_bad_inputs_exit_1_with_one_line_and_nothing_written(tmp_path, sequences
     assert "png" in line
     assert "missing" in _one_line_error(capsys, main(["smooth-light", str(tmp_path / "missing.npz"), *tail]))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["k4.npz", "k5.npz", "nan.npz", "one.npz"]
-
-
-def test_help_lists_the_command(capsys):
-    with pytest.raises(SystemExit):
-        main(["smooth-light", "--help"])
-    assert "--outlier-eps" in capsys.readouterr().out

@@ -5,8 +5,17 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..temporal.smoothers import SMOOTHING
-from .common import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args, nonneg_int, pos_int
+from ..names import MOTION_KINDS, SMOOTHING
+from .common import (
+    LIGHT_HELP,
+    add_command,
+    add_mask_source_arg,
+    add_model_args,
+    in_path,
+    nonneg_int,
+    out_file,
+    pos_int,
+)
 
 logger = logging.getLogger("relightnet.avatar")
 
@@ -18,11 +27,16 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.scene import load_camera
     from ..sh import load_light
 
+    out = out_file(args.out, suffixes=(".mp4", ".mkv"))
+    for option, value in (("--target-masks", args.target_masks), ("--plate", args.plate),
+                          ("--camera", args.camera), ("--albedo", None if args.albedo == "default" else args.albedo)):
+        if value:
+            in_path(value, option)
     info = video_info(args.target)  # fail early, before loading the model
     light = load_light(args.light) if args.light else None
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
-    res = avatar(args.target, args.out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
+    res = avatar(args.target, out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
@@ -50,7 +64,7 @@ def register(sub) -> None:
     p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
                    "target's frames")
     p.add_argument("--motion", default="walk",
-                   help="Anny preset (walk, turn, idle, arm_raise; as long as the video) or an SMPL-style motion "
+                   help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video) or an SMPL-style motion "
                    "file (.npz/.pkl) for --body smpl:PATH (default: walk)")
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")

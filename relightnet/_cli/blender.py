@@ -4,9 +4,17 @@ from __future__ import annotations
 
 import argparse
 import logging
-from pathlib import Path
 
-from .common import LIGHT_HELP, add_body_args, add_command, exposure_arg, nonneg_int, pos_int
+from .common import (
+    LIGHT_HELP,
+    add_body_args,
+    add_command,
+    exposure_arg,
+    nonneg_int,
+    out_dir,
+    out_file,
+    pos_int,
+)
 
 logger = logging.getLogger("relightnet.blender")
 
@@ -53,15 +61,10 @@ def _camera(spec: str, size: int):
 
 def run_export(args: argparse.Namespace) -> int:
     from ..blender import export_body_scene
-    from ..checks import InputError
     from ..pipeline.scene import avatar_albedo, load_body
     from .common import load_single_light
 
-    out = Path(args.out)
-    if out.suffix.lower() != ".blend":
-        raise InputError(f"--out {out}: expected a file ending in .blend")
-    if not out.parent.is_dir():
-        raise InputError(f"--out {out}: folder {out.parent} does not exist")
+    out = out_file(args.out, suffixes=(".blend",))
     load_single_light(args.light)  # fail fast on a bad light, before building the body
     body = load_body(args.body)
     params = _body_params(args, body)
@@ -77,8 +80,9 @@ def run_export(args: argparse.Namespace) -> int:
 def run_render(args: argparse.Namespace) -> int:
     from ..blender import render_blend
 
+    out = out_dir(args.out)
     n = 0
-    for fr in render_blend(args.blend, args.out, spp=args.spp, bounces=args.bounces, frames=args.frames,
+    for fr in render_blend(args.blend, out, spp=args.spp, bounces=args.bounces, frames=args.frames,
                            threads=args.threads, denoise=args.denoise, filter_width=args.filter_width, seed=args.seed,
                            exposure=args.exposure, progress=not args.quiet):
         n += 1

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from .common import add_command
+from .common import add_command, out_file
 
 logger = logging.getLogger("relightnet.checkpoint")
 
@@ -13,7 +13,7 @@ logger = logging.getLogger("relightnet.checkpoint")
 def run(args: argparse.Namespace) -> int:
     from ..model.checkpoint import convert_checkpoint
 
-    out = convert_checkpoint(args.input, args.output)
+    out = convert_checkpoint(args.input, out_file(args.output, "NEW"))
     logger.info("wrote %s", out)
     return 0
 

@@ -1,8 +1,14 @@
-"""Helpers shared by subcommands."""
+"""Helpers shared by subcommands: argument types, common options, and the output-path rule.
+
+Nothing here imports torch at import time (see :mod:`relightnet.cli`).
+"""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+
+from ..names import MASK_SOURCES, MOTION_KINDS, POSE_PRESETS, light_presets
 
 
 def add_command(sub, name: str, help: str, examples: str) -> argparse.ArgumentParser:
@@ -18,8 +24,100 @@ def add_command(sub, name: str, help: str, examples: str) -> argparse.ArgumentPa
 
 LIGHT_HELP = (
     "a light: .npz/.json (relightnet), .npy (Kanamori-Endo, BGR), .exr/.hdr environment map, "
-    "or a preset name (city, courtyard, forest, interior, night, studio, sunrise, sunset)"
+    f"or a preset name ({', '.join(light_presets())})"
 )
+
+
+#: Folders :func:`out_file` / :func:`out_dir` made in this process, so that a command that
+#: fails can remove the ones it left empty (:func:`remove_made_folders`).
+_MADE: list[Path] = []
+
+
+def _check_writable_parent(path: Path, option: str) -> None:
+    """Make the missing parent folders of ``path``; an InputError naming ``option`` if that fails."""
+    from ..checks import InputError
+
+    parent = path.parent
+    missing = []
+    q = parent
+    while not q.exists() and q != q.parent:
+        missing.append(q)
+        q = q.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"{option} {path}: cannot make its folder {parent} ({e.strerror or e})") from None
+    _MADE.extend(reversed(missing))
+
+
+def forget_made_folders() -> None:
+    """Start a command: folders made by an earlier command of this process are not its own."""
+    _MADE.clear()
+
+
+def remove_made_folders() -> None:
+    """Remove the folders the output rule made that are still empty (after a failed command)."""
+    while _MADE:
+        try:
+            _MADE.pop().rmdir()
+        except OSError:
+            pass
+
+
+def in_path(path: str | Path, option: str, expected: str = "an existing file or folder") -> Path:
+    """An input path that must exist, checked before any work.
+
+    Raises:
+        InputError: ``option PATH: not found (expected ...)``.
+    """
+    from ..checks import InputError
+
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{option} {p}: not found (expected {expected})")
+    return p
+
+
+def out_file(path: str | Path, option: str = "--out", suffixes: tuple[str, ...] | None = None) -> Path:
+    """The output-file rule of every command, applied before any work.
+
+    The file's type must be one of ``suffixes`` (case-insensitive; any if None), the path must
+    not be an existing folder, and its missing parent folders are made. The file itself is
+    written later, atomically, by the command.
+
+    Returns:
+        ``path`` as a Path.
+
+    Raises:
+        InputError: a wrong suffix, a folder at ``path``, or a parent folder that cannot be made.
+    """
+    from ..checks import InputError
+
+    p = Path(path)
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {p}: expected a file ending in {', '.join(suffixes)}")
+    if p.is_dir():
+        raise InputError(f"{option} {p}: is a folder; expected a file path")
+    _check_writable_parent(p, option)
+    return p
+
+
+def out_dir(path: str | Path, option: str = "--out") -> Path:
+    """The output-folder rule of every command, applied before any work.
+
+    The path must not be an existing file; its missing parent folders are made (the folder
+    itself is made by the command when it writes, so a run that fails early leaves none).
+
+    Raises:
+        InputError: a file at ``path``, or a parent folder that cannot be made.
+    """
+    from ..checks import InputError
+
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InputError(f"{option} {p}: is a file; expected a folder (made if needed)")
+    _check_writable_parent(p, option)
+    return p
 
 
 def exposure_arg(text: str):
@@ -117,8 +215,6 @@ MASK_SOURCE_HELP = ("where the person's mask comes from when none is given (and 
 
 def add_mask_source_arg(p: argparse.ArgumentParser) -> None:
     """--mask-source segment|head: what finds the person when the user gives no mask."""
-    from ..segment.sources import MASK_SOURCES
-
     p.add_argument("--mask-source", default="segment", choices=MASK_SOURCES, help=MASK_SOURCE_HELP)
 
 
@@ -177,8 +273,9 @@ phenotype_arg = key_value_arg(_phenotypes, float, "NAME", "a number")
 def add_body_args(p: argparse.ArgumentParser, fps_help: str = "video frame rate (default: 30)") -> None:
     """--body, --pose, --motion, --frames, --fps, --phenotype: the posed body of render-body and blender-export."""
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
-    p.add_argument("--pose", default="arms_down", help="pose preset of a still body (default: arms_down)")
-    p.add_argument("--motion", help="procedural motion for Anny (walk, turn, idle, arm_raise) or an SMPL-style "
+    p.add_argument("--pose", default="arms_down", choices=POSE_PRESETS, metavar="POSE",
+                   help=f"pose preset of a still Anny body: {', '.join(POSE_PRESETS)} (default: arms_down)")
+    p.add_argument("--motion", help=f"procedural motion for Anny ({', '.join(MOTION_KINDS)}) or an SMPL-style "
                    "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
     p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
     p.add_argument("--fps", type=float, default=30.0, help=fps_help)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..temporal.smoothers import SMOOTHING
-from .common import add_command, add_model_args, nonneg_int, pos_int, work_size
+from ..names import SMOOTHING
+from .common import add_command, add_model_args, in_path, nonneg_int, out_dir, pos_int, work_size
 
 logger = logging.getLogger("relightnet.compare")
 
@@ -14,7 +14,8 @@ logger = logging.getLogger("relightnet.compare")
 def run(args: argparse.Namespace) -> int:
     from ..pipeline.compare import compare
 
-    res = compare(args.data, args.out, checkpoint=args.checkpoint, split=args.split, clips=args.clips,
+    in_path(args.data, "--data", "a dataset folder of clips made by 'relightnet synth --sequence T'")
+    res = compare(args.data, out_dir(args.out), checkpoint=args.checkpoint, split=args.split, clips=args.clips,
                   n_dirs=args.n_dirs, smoothing=args.smoothing, device=args.device, progress=not args.quiet,
                   prt_seed=args.prt_seed, source=args.source_light, size=args.size, bounces=args.bounces,
                   backend=args.backend, cnn_albedo=args.cnn_albedo)

@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, image_size, nonneg_int
+from .common import LIGHT_HELP, add_command, exposure_arg, image_size, nonneg_int, out_file
 
 logger = logging.getLogger("relightnet.light")
 
@@ -23,21 +23,15 @@ def _envmap_of(light: str):
     return None
 
 
-def _mkparent(path: Path) -> None:
-    if not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-
-
 def run_show(args: argparse.Namespace) -> int:
     from ..io.image import write_image
     from ..sh.io import load_light
     from ..sh.visualize import light_preview
 
+    out = out_file(args.out)
     sh = load_light(args.light, lmax=args.lmax)
     env = _envmap_of(args.light) if sh.dim() == 2 else None
     img = light_preview(sh, size=args.size, env=env, exposure=args.exposure)
-    out = Path(args.out)
-    _mkparent(out)
     write_image(out, img)
     what = f"{tuple(sh.shape)} light" if sh.dim() == 2 else f"sequence of {sh.shape[0]} lights"
     logger.info("wrote %s (%dx%d) for %s %s", out, img.shape[1], img.shape[0], what, args.light)
@@ -45,14 +39,10 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-    from ..checks import InputError
     from ..sh.io import LIGHT_SUFFIXES, load_light, save_light
 
-    out = Path(args.output)
-    if out.suffix.lower() not in LIGHT_SUFFIXES:
-        raise InputError(f"{out}: unsupported output type; expected one of {', '.join(LIGHT_SUFFIXES)}")
+    out = out_file(args.output, "OUT", LIGHT_SUFFIXES)
     sh = load_light(args.input, lmax=args.lmax)
-    _mkparent(out)
     save_light(out, sh)
     logger.info("wrote %s: %s light from %s", out, tuple(sh.shape), args.input)
     return 0

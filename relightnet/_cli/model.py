@@ -7,7 +7,7 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command, add_mask_source_arg, read_photo, work_size
+from .common import add_checkpoint_args, add_command, add_mask_source_arg, out_dir, out_file, read_photo, work_size
 
 logger = logging.getLogger("relightnet.model")
 
@@ -18,7 +18,8 @@ def run_train(args: argparse.Namespace) -> int:
     cfg = load_train_config(args.config)
     if not Path(args.data, "manifest.json").is_file():
         raise ValueError(f"--data {args.data}: expected a dataset folder made by 'relightnet synth' (no manifest.json)")
-    last = train(cfg, args.data, args.out, resume=args.resume, device=args.device)
+    out = out_dir(args.out)
+    last = train(cfg, args.data, out, resume=args.resume, device=args.device)
     logger.info("training finished: %s", json.dumps({k: round(v, 5) for k, v in last.items()}) if last else "-")
     return 0
 
@@ -28,12 +29,15 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_model
     from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
+    out = out_dir(args.out)
+    if args.clips and not args.light:
+        raise ValueError("--clips: only with --light (the light report)")
+    unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline)) if given]
+    if args.light and unused:
+        raise ValueError(f"{', '.join(unused)}: not used with --light (the light report has no baseline or twin)")
     model = load_model(args.checkpoint, device=args.device)
-    out = Path(args.out)
     if args.light:
         return _evaluate_light(args, model, out)
-    if args.clips:
-        raise ValueError("--clips: only with --light (the light report)")
     twin = load_model(args.ablation, device=args.device) if args.ablation else None
     out.mkdir(parents=True, exist_ok=True)
     base = baseline_from_train(args.data) if not args.no_baseline else None
@@ -69,12 +73,14 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_model
     from ..model.inference import estimate_light
     from ..sh import save_light
+    from ..sh.io import LIGHT_SUFFIXES
 
+    out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
     image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
     model = load_model(args.checkpoint, device=args.device)
     light = estimate_light(model, image, mask, size=args.size)
-    save_light(args.out, light.cpu())
-    logger.info("wrote %s", args.out)
+    save_light(out, light.cpu())
+    logger.info("wrote %s", out)
     return 0
 
 
@@ -89,7 +95,8 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="run folder: checkpoints (last.pt), metrics.jsonl, loss.png")
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
     p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
-    p.set_defaults(func=run_train)
+    p.set_defaults(func=run_train, interrupt_hint=lambda a: f"run the same command with --resume to continue "
+                   f"from {a.out}/last.pt")
 
     p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines.",
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"

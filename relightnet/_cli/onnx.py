@@ -6,7 +6,8 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command, work_size
+from ..names import ONNX_SMOOTHERS
+from .common import add_checkpoint_args, add_command, in_path, out_dir, out_file, work_size
 
 logger = logging.getLogger("relightnet.onnx")
 
@@ -15,16 +16,17 @@ def run_export(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
     from ..model.onnx_export import export_onnx
 
-    ckpt = Path(args.checkpoint) if args.checkpoint else shipped_checkpoint()
+    out = out_file(args.out, suffixes=(".onnx",))
+    ckpt = Path(in_path(args.checkpoint, "--checkpoint")) if args.checkpoint else shipped_checkpoint()
     net = load_model(ckpt)
     smoothing = args.smoothing if args.smoothing != "auto" else ("pooled" if net.solves else "ema")
     opts = {"alpha": args.alpha} if smoothing == "ema" else {}
-    out = export_onnx(net, args.out, smoothing=smoothing,
+    out = export_onnx(net, out, smoothing=smoothing,
                       train_config=load_checkpoint(ckpt).get("train_config"), **opts)
     if args.int8:
         from ..model.onnx_serving import quantize_int8
 
-        q = quantize_int8(out, Path(args.out).with_name(Path(args.out).stem + "_int8.onnx"), mode=args.int8_mode,
+        q = quantize_int8(out, out.with_name(out.stem + "_int8.onnx"), mode=args.int8_mode,
                           reduce_range=args.int8_weight_bits == 7)
         logger.info("wrote %s (int8, %s quantisation)", q, args.int8_mode)
     return 0
@@ -33,21 +35,24 @@ def run_export(args: argparse.Namespace) -> int:
 def run_onnx(args: argparse.Namespace) -> int:
     from ..model.onnx_serving import run_video
 
-    res = run_video(args.model, args.video, args.masks, args.out_dir, size=args.size)
+    in_path(args.model, "MODEL")
+    in_path(args.video, "--video")
+    if args.masks:
+        in_path(args.masks, "--masks")
+    out = out_dir(args.out_dir, "--out-dir")
+    res = run_video(args.model, args.video, args.masks, out, size=args.size)
     logger.info("wrote %d frames of lights (raw and smoothed) and albedo.mp4 to %s", len(res["raw"]), args.out_dir)
     return 0
 
 
 def register(sub) -> None:
-    from ..model.onnx_export import SMOOTHERS
-
     p = add_command(sub, "export", "Export the CNN with a streaming light-smoothing layer to one ONNX file.",
                     "  relightnet export --out relightnet.onnx\n"
                     "  relightnet export --checkpoint runs/small/last.pt --out m.onnx --smoothing one-euro\n"
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
     add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
-    p.add_argument("--smoothing", choices=("auto", *SMOOTHERS), default="auto",
+    p.add_argument("--smoothing", choices=("auto", *ONNX_SMOOTHERS), default="auto",
                    help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
                         "since the last light switch — for a network that solves its light, else ema)")
     p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-from pathlib import Path
 
 from .common import (
     LIGHT_HELP,
@@ -12,7 +11,10 @@ from .common import (
     add_command,
     add_mask_source_arg,
     add_model_args,
+    in_path,
     load_single_light,
+    out_dir,
+    out_file,
     read_photo,
 )
 
@@ -20,7 +22,9 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    # first: a bad photo fails before the heavy imports (and the person is found in it)
+    out = out_file(args.out)
+    maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
+    # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
     import numpy as np
     import torch
@@ -35,9 +39,9 @@ def run(args: argparse.Namespace) -> int:
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
-    write_image(args.out, res.image, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
-    if args.save_maps:
-        d = Path(args.save_maps)
+    write_image(out, res.image, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
+    if maps is not None:
+        d = maps
         d.mkdir(parents=True, exist_ok=True)
         p = res.prediction
         write_image(d / "albedo.png", res.albedo.permute(1, 2, 0))
@@ -48,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
             np.savez_compressed(f, transport=p.transport[0].numpy(), mask=p.mask[0, 0].numpy())
         save_light(d / "light_estimated.npz", p.light[0])
         save_light(d / "light_used.npz", res.light.to(torch.float32))
-    logger.info("wrote %s", args.out)
+    logger.info("wrote %s", out)
     return 0
 
 
@@ -56,9 +60,13 @@ def run_video(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..pipeline.relight_video import relight_video
 
+    out = out_file(args.out, suffixes=(".mp4", ".mkv"))
+    in_path(args.video, "VIDEO", "a video file")
+    if args.masks:
+        in_path(args.masks, "--masks", "a folder of mask images or a mask video")
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
-    relight_video(model, args.video, args.masks, light, args.out, turntable_deg_per_s=args.turntable,
+    relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
                   mask_source=args.mask_source)
     return 0

@@ -6,7 +6,17 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_body_args, add_command, exposure_arg, load_single_light, nonneg_int, pos_int
+from .common import (
+    LIGHT_HELP,
+    add_body_args,
+    add_command,
+    exposure_arg,
+    load_single_light,
+    nonneg_int,
+    out_dir,
+    out_file,
+    pos_int,
+)
 
 logger = logging.getLogger("relightnet.render")
 
@@ -21,37 +31,40 @@ def _exposed(img, alpha, exposure):
     return img * scale, scale
 
 
-def _save_maps(out_dir: Path, r, transport_v=None, stem: str = "") -> None:
+def _save_maps(folder: Path, r, transport_v=None, stem: str = "") -> None:
     """Write the maps a person (and the data generator's tests) can inspect."""
     import numpy as np
 
     from ..io import atomic_write, write_image
 
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with atomic_write(out_dir / f"{stem}maps.npz") as f:
+    folder.mkdir(parents=True, exist_ok=True)
+    with atomic_write(folder / f"{stem}maps.npz") as f:
         np.savez_compressed(
             f, transport=r.transport[0].numpy(), albedo=r.albedo[0].numpy(), shading=r.shading[0].numpy(),
             normals=r.normals[0].numpy(), depth=r.depth[0].numpy(), mask=r.alpha[0].numpy(),
             **({} if transport_v is None else {"vertex_transport": transport_v.numpy()}),
         )
-    write_image(out_dir / f"{stem}albedo.png", r.albedo[0])
-    write_image(out_dir / f"{stem}normals.png", (r.normals[0] * 0.5 + 0.5) * r.alpha[0][..., None], srgb=False)
+    write_image(folder / f"{stem}albedo.png", r.albedo[0])
+    write_image(folder / f"{stem}normals.png", (r.normals[0] * 0.5 + 0.5) * r.alpha[0][..., None], srgb=False)
     s = r.shading[0]
-    write_image(out_dir / f"{stem}shading.png", s / max(float(s.amax()), 1e-8))
-    write_image(out_dir / f"{stem}mask.png", r.alpha[0][..., None].expand(-1, -1, 3), srgb=False)
+    write_image(folder / f"{stem}shading.png", s / max(float(s.amax()), 1e-8))
+    write_image(folder / f"{stem}mask.png", r.alpha[0][..., None].expand(-1, -1, 3), srgb=False)
 
 
 def run_render(args: argparse.Namespace) -> int:
     from ..io import write_image
     from ..render.jobs import render_mesh_file
+
+    out = out_file(args.out)
+    maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     light = load_single_light(args.light, lmax=args.lmax)
     r = render_mesh_file(args.mesh, light, size=args.res, occlusion=args.occlusion, bounces=args.bounces,
                          n_dirs=args.n_dirs)
     img, scale = _exposed(r.image[0], r.alpha[0], args.exposure)
-    write_image(args.out, img)
-    if args.save_maps:
-        _save_maps(Path(args.save_maps), r)
-    logger.info("wrote %s (exposure x%.3g)", args.out, scale)
+    write_image(out, img)
+    if maps is not None:
+        _save_maps(maps, r)
+    logger.info("wrote %s (exposure x%.3g)", out, scale)
     return 0
 
 
@@ -83,45 +96,63 @@ def _albedo(body):
     return v, v
 
 
+def _body_outputs(args) -> tuple[Path, Path | None, Path | None]:
+    """(--out, --mask-out, --save-maps) by the output rule: videos for a motion (a mask video
+    beside the video), else an image (a mask image beside it)."""
+    out = out_file(args.out)
+    video = out.suffix.lower() in _VIDEO
+    if args.motion and not video:
+        from ..checks import InputError
+
+        raise InputError(f"--out {out}: a motion renders a video; expected a suffix in {', '.join(_VIDEO)}")
+    mask = out_file(args.mask_out, "--mask-out", _VIDEO if video else None) if args.mask_out else None
+    if mask is not None and not video and mask.suffix.lower() in _VIDEO:
+        from ..checks import InputError
+
+        raise InputError(f"--mask-out {mask}: a still image's mask is an image; expected e.g. mask.png")
+    return out, mask, out_dir(args.save_maps, "--save-maps") if args.save_maps else None
+
+
 def run_render_body(args: argparse.Namespace) -> int:
     from ..io import VideoWriter, write_image
     from ..render.jobs import render_body_frames
     from ..sh import load_light
 
-    out = Path(args.out)
+    out, mask_out, maps = _body_outputs(args)
     is_video = out.suffix.lower() in _VIDEO
-    if args.motion and not is_video:
-        raise ValueError(f"--out {out}: a motion renders a video; expected a suffix in {_VIDEO}")
     light = load_light(args.light, lmax=args.lmax)
     body, params = _body_and_params(args)
     albedo, vertex_albedo = _albedo(body)
     frames = render_body_frames(body, params, light, albedo, size=args.res, n_dirs=args.n_dirs,
                                 occlusion=args.occlusion, bounces=args.bounces, seed=args.seed,
-                                maps=bool(args.save_maps), vertex_albedo=vertex_albedo)
+                                maps=maps is not None, vertex_albedo=vertex_albedo)
     from tqdm import tqdm
 
     scale = None
-    writer = VideoWriter(out, fps=args.fps) if is_video else None
+    writers = [VideoWriter(p, fps=args.fps, srgb=s) for p, s in ((out, True), (mask_out, False))
+               if is_video and p is not None]
     try:
         for fr in tqdm(frames, desc="render-body", unit="frame", disable=not is_video or args.quiet):
             r = fr.render
             if scale is None:  # one exposure for the whole clip: no flicker
                 _, scale = _exposed(r.image[0], r.alpha[0], args.exposure)
-            if writer is not None:
-                writer.write(r.image[0] * scale)
+            pictures = (r.image[0] * scale, r.alpha[0][..., None].expand(-1, -1, 3))
+            if writers:
+                for w, pic in zip(writers, pictures, strict=False):
+                    w.write(pic)
             else:
-                write_image(out, r.image[0] * scale)
-                if args.mask_out:
-                    write_image(args.mask_out, r.alpha[0][..., None].expand(-1, -1, 3), srgb=False)
-            if args.save_maps:
-                _save_maps(Path(args.save_maps), r, fr.transport, stem=f"{fr.index:05d}_" if is_video else "")
+                write_image(out, pictures[0])
+                if mask_out is not None:
+                    write_image(mask_out, pictures[1], srgb=False)
+            if maps is not None:
+                _save_maps(maps, r, fr.transport, stem=f"{fr.index:05d}_" if is_video else "")
     except BaseException:
-        if writer is not None:
-            writer.abort()
+        for w in writers:
+            w.abort()
         raise
-    if writer is not None:
-        writer.close()
-    logger.info("wrote %s (exposure x%.3g)", out, scale)
+    for w in writers:
+        w.close()
+    logger.info("wrote %s%s (exposure x%.3g)", out, f" and {mask_out}" if mask_out else "", scale)
     return 0
 
 
@@ -158,7 +189,8 @@ def register(sub) -> None:
                     "--light city --out c.mp4\n")
     add_body_args(p)
     p.add_argument("--out", required=True, help="output PNG, or .mp4/.mkv when --motion is given")
-    p.add_argument("--mask-out", help="also write the coverage mask as PNG (still images)")
+    p.add_argument("--mask-out", help="also write the coverage mask: a PNG for a still pose, a mask video "
+                   "(.mkv lossless, .mp4) with --motion")
     p.add_argument("--save-maps", metavar="DIR", help="also write transport/albedo/normal/depth maps here")
     _prt_options(p, 64)
     p.set_defaults(func=run_render_body)

@@ -9,7 +9,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from .common import add_command, nonneg_int
+from .common import add_command, in_path, nonneg_int, out_dir, out_file
 
 logger = logging.getLogger("relightnet.segment")
 
@@ -119,11 +119,10 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float):
 def run(args: argparse.Namespace) -> int:
     from ..segment import PersonModels
 
-    src, out = Path(args.input), Path(args.out)
-    if not src.exists():
-        raise FileNotFoundError(f"{src}: not found (expected a photo, a folder of photos or a video)")
-    if args.landmarks and Path(args.landmarks).suffix.lower() != ".npz":
-        raise ValueError(f"--landmarks {args.landmarks}: expected a .npz path")
+    src = in_path(args.input, "INPUT", "a photo, a folder of photos or a video")
+    out = out_file(args.out) if Path(args.out).suffix else out_dir(args.out)
+    if args.landmarks:
+        out_file(args.landmarks, "--landmarks", (".npz",))
     models = PersonModels(threads=args.threads)
     names = None
     if src.is_dir():

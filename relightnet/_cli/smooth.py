@@ -6,12 +6,13 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, nonneg_int, pos_float, pos_int
+from ..names import CAUSAL_METHODS, OFFLINE_METHODS
+from .common import add_command, nonneg_int, out_file, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
 
-OFFLINE = ("hermite", "poly", "savgol")
-CAUSAL = ("ema", "one-euro", "fir")
+OFFLINE = OFFLINE_METHODS
+CAUSAL = CAUSAL_METHODS
 
 
 def _smooth(args, sh):
@@ -51,7 +52,7 @@ def _smooth(args, sh):
 def run_smooth(args: argparse.Namespace) -> int:
     from ..checks import InputError, ShapeError
     from ..io.atomic import atomic_write
-    from ..sh.io import load_light, save_light
+    from ..sh.io import load_light, load_light_sequence, save_light, save_light_sequence
     from ..temporal import jitter, light_error, parse_eps
     from ..temporal.plot import light_curves_png
 
@@ -59,15 +60,14 @@ def run_smooth(args: argparse.Namespace) -> int:
     if args.method not in methods:
         raise InputError(f"--method: expected one of {', '.join(methods)}, got {args.method!r}")
     parse_eps(args.outlier_eps)
-    out = Path(args.output)
-    if out.suffix.lower() not in (".npz", ".json"):
-        raise InputError(f"{out}: a light sequence is written as .npz or .json")
-    plot = Path(args.plot) if args.plot else None
-    if plot is not None and plot.suffix.lower() != ".png":
-        raise InputError(f"{plot}: expected a .png plot file")
-    sh = load_light(args.input)
-    if sh.dim() != 3:
-        raise ShapeError(f"{args.input}: expected a light sequence (T, K, 3), got one light {tuple(sh.shape)}")
+    out = out_file(args.output, "OUT", (".npz", ".json"))
+    plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
+    sh, side = load_light_sequence(args.input, ("raw",))
+    if "raw" in side:  # a smoothed file (avatar's OUT.lights.npz, our own output): start again from its estimates
+        sh = load_light(side["raw"])
+        if sh.dim() != 3:
+            raise ShapeError(f"{args.input}: 'raw' must be (T, K, 3), got {tuple(sh.shape)}")
+        logger.info("%s: smoothing its raw estimates ('raw' array)", args.input)
     if sh.shape[0] < 2:
         raise ShapeError(f"{args.input}: expected at least 2 frames, got {sh.shape[0]}")
     truth = None
@@ -89,10 +89,10 @@ def run_smooth(args: argparse.Namespace) -> int:
     title = f"{Path(args.input).name}: {summary}"
     png = light_curves_png(sh, smoothed, truth, outliers, switches, title) if plot else None
 
-    for p in (out, plot):
-        if p is not None and not p.parent.exists():
-            p.parent.mkdir(parents=True, exist_ok=True)
-    save_light(out, smoothed)
+    if out.suffix.lower() == ".npz":
+        save_light_sequence(out, smoothed, raw=sh, outliers=outliers, switches=switches, smoothing=args.method)
+    else:
+        save_light(out, smoothed)
     if png is not None:
         with atomic_write(plot) as f:
             f.write(png)
@@ -111,8 +111,11 @@ def register(sub) -> None:
         "  relightnet smooth-light lights.npz smooth.npz --method savgol --window 11 --degree 2\n"
         "  relightnet smooth-light lights.npz live.npz --method one-euro --min-cutoff 0.5 --beta 1\n",
     )
-    p.add_argument("input", metavar="IN", help="light sequence .npz/.json with sh (T, K, 3)")
-    p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz or .json")
+    p.add_argument("input", metavar="IN", help="light sequence .npz/.json with sh (T, K, 3); when it also holds "
+                   "'raw' (the estimates a smoothed file was made from: avatar's OUT.lights.npz, this command's "
+                   ".npz output), those are smoothed")
+    p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz (sh = smoothed, with raw, outliers, "
+                   "switches) or .json (sh only)")
     p.add_argument("--method", default="hermite",
                    help=f"one of {', '.join(OFFLINE + CAUSAL)} (default: hermite)")
     p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: 8)")

@@ -6,9 +6,8 @@ import argparse
 import logging
 import math
 import sys
-from pathlib import Path
 
-from .common import add_command, key_value_arg, nonneg_int, pos_float
+from .common import add_command, key_value_arg, nonneg_int, out_dir, out_file, pos_float
 
 logger = logging.getLogger("relightnet.synth")
 
@@ -75,15 +74,36 @@ def _verify(root: str) -> int:
     return 0
 
 
+def _refuse_unused(args: argparse.Namespace) -> None:
+    """Options of one mode given in another are an error, not silently ignored."""
+    from ..checks import InputError
+
+    unused = {"--n": args.n is not None and not args.preview, "--split": args.split is not None and not args.preview,
+              "--cpus-per-task": args.cpus_per_task is not None and args.ray is None,
+              "--workers": args.workers is not None and args.ray is not None}
+    making = ("--count", "--split-count", "--splits", "--res", "--seed", "--n-dirs", "--shard-size", "--lmax",
+              "--sequence", "--config", "--workers", "--ray")
+    if args.verify or args.preview:
+        given = [o for o in making if getattr(args, o[2:].replace("-", "_")) is not None]
+        unused.update(dict.fromkeys(given, True))
+    bad = [o for o, u in unused.items() if u]
+    if bad:
+        mode = "--verify" if args.verify else "--preview" if args.preview else "--ray" if args.ray is not None \
+            else "making a dataset"
+        raise InputError(f"{', '.join(bad)}: not used with {mode}")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..checks import InputError
 
+    _refuse_unused(args)
     if args.verify:
         return _verify(args.verify)
     if args.preview:
         from ..data.preview import preview
 
-        path = preview(args.preview, args.out, n=args.n, split=args.split)
+        path = preview(args.preview, out_file(args.out) if args.out else None, n=8 if args.n is None else args.n,
+                       split=args.split)
         logger.info("wrote %s", path)
         return 0
     if not args.out:
@@ -92,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
     from ..data.synth import default_workers, run_synth
 
     cfg = build_config(args)
+    out = out_dir(args.out)
     workers = default_workers() if args.workers is None else args.workers
     if workers < 0:
         raise InputError(f"--workers: expected an integer >= 0, got {workers}")
@@ -99,14 +120,11 @@ def run(args: argparse.Namespace) -> int:
     if args.ray is not None:
         from ..distributed import RayOptions
 
-        ray = RayOptions(address=args.ray or None, cpus_per_task=args.cpus_per_task)
+        ray = RayOptions(address=args.ray or None,
+                         cpus_per_task=1.0 if args.cpus_per_task is None else args.cpus_per_task)
     splits = None if not args.splits else [s.strip() for s in args.splits.split(",") if s.strip()]
-    try:
-        m = run_synth(Path(args.out), cfg, workers=workers, splits=splits, progress=not args.quiet,
-                      compression=args.compression, ray=ray, max_retries=args.max_retries)
-    except KeyboardInterrupt:
-        sys.stderr.write(f"relightnet synth: interrupted; run the same command again to resume {args.out}\n")
-        return 130
+    m = run_synth(out, cfg, workers=workers, splits=splits, progress=not args.quiet,
+                  compression=args.compression, ray=ray, max_retries=args.max_retries)
     made = ", ".join(f"{s} {sum(e['count'] for e in v['shards'])}/{v['count']}"
                      for s, v in sorted(m["splits"].items(), key=lambda kv: SPLITS.index(kv[0])) if v["count"])
     logger.info("%s: %s (%s)", args.out, "complete" if m["complete"] else "partial", made)
@@ -148,13 +166,13 @@ def register(sub) -> None:
     p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
                    help="run one Ray task per shard: on the running cluster (RAY_ADDRESS or 'ray start' here), "
                    "else a new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")
-    p.add_argument("--cpus-per-task", type=pos_float, default=1.0,
+    p.add_argument("--cpus-per-task", type=pos_float, default=None,
                    help="--ray: CPUs reserved per shard task (default: 1)")
     p.add_argument("--max-retries", type=nonneg_int, default=2,
                    help="times a shard that raised or whose worker process (or Ray node) died is tried again "
                    "(default: 2)")
     p.add_argument("--compression", choices=("deflate", "store"), default="deflate",
                    help="shard compression (default: deflate)")
-    p.add_argument("--n", type=int, default=8, help="--preview: samples (rows) in the sheet (default: 8)")
+    p.add_argument("--n", type=int, default=None, help="--preview: samples (rows) in the sheet (default: 8)")
     p.add_argument("--split", help="--preview: split to show (default: the first with shards)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, interrupt_hint=lambda a: f"run the same command again to resume {a.out}")

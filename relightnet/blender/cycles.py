@@ -8,7 +8,7 @@ interreflection), caustics off, a transparent film (alpha = coverage, background
 relightnet's renders), the "Standard" view transform (plain sRGB display, no AgX tone map).
 
 Radiometric scale: a relightnet render is ``albedo ⊙ (T·L)`` with T carrying no 1/π
-(DESIGN.md), i.e. albedo × irradiance; Cycles' diffuse BSDF returns radiance,
+(docs/design.md, "Transport and shading"), i.e. albedo × irradiance; Cycles' diffuse BSDF returns radiance,
 albedo × irradiance / π. So for the same world, **relightnet = π × Cycles**, measured by the
 sphere test (a white-ish sphere under a constant world of radiance c renders as albedo·c in
 Cycles and albedo·π·c in relightnet).

@@ -1,6 +1,6 @@
 """relightnet's world frame (y up) ⇄ Blender's (z up): the one place where they meet.
 
-relightnet (DESIGN.md): right-handed, +y up, the person faces +z, the default camera looks
+relightnet (docs/design.md, "Frames"): right-handed, +y up, the person faces +z, the default camera looks
 along −z. Blender: right-handed, +z up, "front" is −y. The map is a +90° rotation about x,
 
     v_blender = (x, −z, y)        v_world = (x_b, z_b, −y_b),

@@ -15,7 +15,7 @@
   light is camera-relative and the camera is rotated, resampled bilinearly.
 
 Lights in relightnet's avatar pipeline are relative to the camera (``light_frame="camera"``,
-DESIGN.md); Blender's world is fixed, so they are turned into the world frame first, like
+docs/design.md, "Frames"); Blender's world is fixed, so they are turned into the world frame first, like
 :func:`relightnet.render.light_in_world` does for SH: the world radiance in direction d is
 the camera-frame radiance in direction ``R d`` (R = world→camera rotation).
 """

@@ -33,12 +33,12 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..names import MOTION_KINDS
 from .anny_model import pose_preset
 from .base import compose_rotvecs
 
 __all__ = ["make_motion", "MOTION_KINDS"]
 
-MOTION_KINDS = ("walk", "turn", "idle", "arm_raise")
 
 _X, _Y, _Z = np.eye(3)
 

@@ -20,7 +20,7 @@ from ..io import atomic_write, linear_to_srgb, write_image
 from .network import Prediction, RelightNet, photo_albedo, shading_map
 from .training import TrainData, batch_to_input
 
-__all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation"]
+__all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation", "write_report"]
 
 
 def _rmse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> float:

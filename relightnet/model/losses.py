@@ -33,6 +33,10 @@ __all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_loss
 
 @dataclass(frozen=True)
 class LossWeights:
+    """Weights of the loss terms of the module docstring, in its order (0 turns a term off): the direct
+    terms, the shading terms ``shading_t/_l/_tl``, the rendering terms ``render_al/_a/_tl``,
+    ``relit_novel``, ``tv``, ``mask``, ``light_head`` and ``light_si`` (the scale-invariant light shape)."""
+
     transport: float = 1.0
     albedo: float = 1.0
     light: float = 1.0

@@ -29,6 +29,7 @@ from torch import nn
 
 from ..checks import InputError
 from ..io import atomic_write
+from ..names import ONNX_SMOOTHERS
 from .network import RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
@@ -50,8 +51,8 @@ class PassThrough(nn.Module):
         return x, x[:, None]
 
 
-#: Streaming smoothers that can live inside the exported graph.
-SMOOTHERS = ("none", "ema", "one-euro", "fir", "gated-one-euro", "pooled")
+#: Streaming smoothers that can live inside the exported graph (listed in :mod:`relightnet.names`).
+SMOOTHERS = ONNX_SMOOTHERS
 
 
 def make_smoother(name: str, lmax: int = 2, **opts) -> nn.Module:

@@ -15,7 +15,9 @@ rendered with the same camera-relative light, so it is lit as if it stood in the
 scene seen by the target camera. The light's scale is the CNN's: the avatar gets the
 target video's exposure without any matching.
 
-Side outputs next to ``OUT.mp4``: ``OUT.lights.npz`` (raw and smoothed lights, outliers,
+Side outputs next to ``OUT.mp4``: ``OUT.lights.npz``, a light-sequence file
+(:func:`relightnet.sh.save_light_sequence`: ``sh`` the smoothed light of each frame, which
+``relightnet smooth-light`` and ``--light`` read; raw and smoothed lights, outliers,
 switches, and a fingerprint of the inputs — when it matches, a rerun reuses the raw
 estimates instead of running the CNN again) and ``OUT.lights.png`` (light curves).
 """
@@ -36,6 +38,7 @@ from ..io.image import linear_to_srgb
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
+from ..sh.io import save_light_sequence
 from ..temporal.smoothers import SMOOTHING
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, open_motion
@@ -355,8 +358,8 @@ def avatar(
         arrays.update(evidence_M=ev[0].numpy(), evidence_r=ev[1].numpy())
     if prior is not None:
         arrays.update(prior=prior.numpy())
-    with atomic_write(lights_file) as f:
-        np.savez_compressed(f, **arrays)
+    # the light-sequence format (sh = the light each frame is rendered with), readable by smooth-light
+    save_light_sequence(lights_file, smoothed, **arrays)
     png = light_curves_png(raw[:n] if raw is not None else None, smoothed,
                            outliers=outliers[:n] if outliers is not None else None,
                            switches=switches[:n] if switches is not None else None,

@@ -25,6 +25,7 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["BACKENDS", "TorchPredictor", "OnnxPredictor", "as_predictor", "make_predictor", "onnx_cache_dir"]
 
+#: Where the CNN runs: PyTorch or ONNX Runtime (``--backend``).
 BACKENDS = ("torch", "onnx")
 
 

@@ -1,6 +1,6 @@
 """Per-vertex precomputed radiance transfer (PRT) in the SH basis.
 
-``T_k(p) = ∫ V(p, ω) · max(n·ω, 0) · Y_k(ω) dω`` (no 1/π; DESIGN.md), with ω in
+``T_k(p) = ∫ V(p, ω) · max(n·ω, 0) · Y_k(ω) dω`` (no 1/π; docs/design.md, "Transport and shading"), with ω in
 the light frame. All vertices share one direction set (a spherical Fibonacci
 lattice, randomly rotated for a given seed), so the projection is one matmul:
 ``T = (V ⊙ max(n·ω, 0)) @ (Y(ω) ⊙ w)``. Without occlusion this converges to the

@@ -49,6 +49,7 @@ __all__ = [
     "vertex_visibility",
 ]
 
+#: Ray engines by name, in the order ``engine="auto"`` tries them.
 ENGINES = ("embree", "open3d", "mitsuba")
 _AUTO_ORDER = ("embree", "open3d")
 

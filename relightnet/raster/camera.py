@@ -2,7 +2,7 @@
 
 Convention (OpenGL, the only one used anywhere in relightnet):
 
-- **World**: right-handed, +y up (DESIGN.md).
+- **World**: right-handed, +y up (docs/design.md, "Frames").
 - **View** (camera) space: the camera sits at the origin and looks along **−z**;
   +x is image right, +y is image up. ``v_view = R v_world + t`` with ``R`` (3, 3)
   the world→camera rotation (rows: the camera's right, up and backward axes in world

@@ -5,7 +5,7 @@ interpolated (3 channels instead of K); albedo is applied per pixel (texture loo
 interpolated vertex colour). This equals interpolating T and shading per pixel exactly.
 The K-channel transport map is interpolated only when ``maps=True`` asks for it.
 
-Lights estimated from an image are relative to that image's camera (DESIGN.md). With
+Lights estimated from an image are relative to that image's camera (docs/design.md, "Frames"). With
 ``light_frame="camera"`` (the default) the light is rotated into the world's light frame
 by the camera rotation; for the default camera (R = I) this is the identity.
 """
@@ -110,7 +110,7 @@ def render_mesh(
         light: (K, 3) or (B, K, 3) SH light.
         camera: B cameras (``camera.size`` is the image size).
         normals: (V, 3) / (B, V, 3) world normals, needed only for the ``normals`` map.
-        light_frame: ``"camera"`` (light relative to the camera, DESIGN.md) or ``"world"``.
+        light_frame: ``"camera"`` (light relative to the camera, docs/design.md) or ``"world"``.
         maps: also return the transport, albedo, normals, depth and shading maps.
         frags: the :class:`Fragments` of ``rasterize(camera.transform(verts), faces, camera.size)``
             when already computed (e.g. to find the visible vertices first); None rasterizes.

@@ -1,6 +1,6 @@
 """Shading and compositing: the ``shade`` primitive of the 3D (and 2D) path.
 
-pixel = albedo ⊙ S with S = Σ_k T_k L_k per RGB channel (DESIGN.md), all linear.
+pixel = albedo ⊙ S with S = Σ_k T_k L_k per RGB channel (docs/design.md, "Transport and shading"), all linear.
 Rasterizer outputs are channels-last, so these functions take (..., C) tensors.
 """
 

@@ -23,8 +23,12 @@ from ..checks import check_shape
 
 __all__ = ["WEIGHTS_DIR", "SELFIE_FILE", "POSE_FILE", "INPUT_SIZE", "LANDMARK_NAMES", "PoseOutput", "PersonModels"]
 
+#: The shipped weights (``relightnet/weights``): the selfie segmentation model (whole-frame person box)
+#: and the full-body pose model (mask and 33 landmarks of a square crop), both ONNX.
 WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"
+#: The selfie segmentation model (finds the person in the whole frame).
 SELFIE_FILE = WEIGHTS_DIR / "person_selfie.onnx"
+#: The full-body pose model (mask and landmarks of the crop around the person).
 POSE_FILE = WEIGHTS_DIR / "person_pose.onnx"
 #: Both models read 256 × 256 RGB.
 INPUT_SIZE = 256

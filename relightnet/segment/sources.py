@@ -13,6 +13,7 @@ import logging
 import torch
 
 from ..checks import InputError
+from ..names import MASK_SOURCES
 from .models import PersonModels
 from .person import segment_person
 from .video import track_person
@@ -21,11 +22,10 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["MASK_SOURCES", "check_mask_source", "person_mask", "video_masks"]
 
-#: ``segment``: the shipped segmentation models; ``head``: the CNN's mask head.
-MASK_SOURCES = ("segment", "head")
 
 
 def check_mask_source(source: str) -> str:
+    """``source`` if it is one of :data:`MASK_SOURCES`, else an InputError listing them."""
     if source not in MASK_SOURCES:
         raise InputError(f"mask source: expected one of {', '.join(MASK_SOURCES)}, got {source!r}")
     return source

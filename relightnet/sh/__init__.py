@@ -1,6 +1,6 @@
 """Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O.
 
-Conventions are those of DESIGN.md: real orthonormal SH without the
+Conventions are those of docs/design.md ("Conventions"): real orthonormal SH without the
 Condon–Shortley phase, k = l(l+1)+m, directions in the light frame.
 """
 
@@ -19,7 +19,7 @@ from .frames import (
     rotation_world_to_light,
     world_to_light,
 )
-from .io import LIGHT_SUFFIXES, load_light, resize_sh, save_light
+from .io import LIGHT_SUFFIXES, load_light, load_light_sequence, resize_sh, save_light, save_light_sequence
 from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
 from .metrics import (
     chromaticity_error,
@@ -50,7 +50,7 @@ __all__ = [
     "project", "project_envmap", "radiance", "sh_to_envmap",
     "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",
     "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
-    "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light",
+    "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light", "load_light_sequence", "save_light_sequence",
     "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",
     "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
 ]

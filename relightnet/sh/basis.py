@@ -1,6 +1,6 @@
 """Real orthonormal spherical harmonics of any order.
 
-Convention (DESIGN.md): real, orthonormal, no Condon–Shortley phase, flat index
+Convention (docs/design.md, "Spherical harmonics"): real, orthonormal, no Condon–Shortley phase, flat index
 ``k = l(l+1) + m``. Directions are unit vectors in the *light frame*
 (x toward the camera, y image right, z up). For order 2:
 

@@ -1,10 +1,16 @@
-"""Light files: save and load SH lights (DESIGN.md "Contracts").
+"""Light files: save and load SH lights (docs/design.md, "File contracts").
 
 Formats, chosen by the file extension:
 
 - ``.npz`` (ours): ``sh`` (K, 3) float32, or a sequence (T, K, 3); ``lmax`` (int);
   ``frame = "light"``; ``units = "linear radiance"``. Columns are linear RGB.
 - ``.json`` (ours): ``{"sh": [[r, g, b], ...] (or T such lists), "lmax", "frame", "units"}``.
+- a light *sequence* file (every command that writes lights over time, read by every command
+  that takes a light): our ``.npz`` with ``sh`` (T, K, 3), the light of each frame, plus named
+  side arrays about the same frames — ``raw`` (T, K, 3) estimates before smoothing, ``outliers``
+  and ``switches`` (T,) bool, ``evidence_M`` (T, 3, K, K), ... — or single values
+  (``smoothing``). :func:`save_light_sequence` / :func:`load_light_sequence`; :func:`load_light`
+  reads such a file as its (T, K, 3) ``sh``.
 - ``.npy``: a Kanamori–Endo (2018) light, exactly (9, 3) with **BGR** columns;
   converted to/from RGB here. Only single order-2 lights fit this format.
 - ``.exr`` / ``.hdr`` (load only): a lat-long environment map, projected to SH.
@@ -28,7 +34,7 @@ from ..checks import InputError, ShapeError, sh_order_from_count
 from .basis import sh_count
 from .presets import preset_light, preset_names
 
-__all__ = ["LIGHT_SUFFIXES", "save_light", "load_light", "resize_sh"]
+__all__ = ["LIGHT_SUFFIXES", "save_light", "load_light", "resize_sh", "save_light_sequence", "load_light_sequence"]
 
 logger = logging.getLogger(__name__)
 
@@ -36,6 +42,8 @@ logger = logging.getLogger(__name__)
 LIGHT_SUFFIXES = (".npz", ".json", ".npy")
 _ENVMAP_SUFFIXES = (".exr", ".hdr")
 _FRAME, _UNITS = "light", "linear radiance"
+#: The arrays of a light .npz itself; a sequence file's side arrays take other names.
+_OWN = ("sh", "lmax", "frame", "units")
 
 
 def resize_sh(sh: torch.Tensor, lmax: int) -> torch.Tensor:
@@ -232,3 +240,78 @@ def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
     sh = readers[suffix](path)
     logger.debug("loaded light %s: %s", path, tuple(sh.shape))
     return sh if lmax is None else resize_sh(sh, lmax)
+
+
+def _side_array(name: str, value, t: int, where: str) -> np.ndarray:
+    """A side array of a light sequence: T rows (or one value), numbers, booleans or text."""
+    if isinstance(value, torch.Tensor):
+        value = value.detach().cpu().numpy()
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "biufU":
+        raise InputError(f"{where}: side array {name!r} has dtype {arr.dtype}; expected numbers, booleans or text")
+    if arr.ndim and arr.shape[0] != t:
+        raise ShapeError(f"{where}: side array {name!r} has {arr.shape[0]} rows; expected one per frame ({t}) "
+                         "or a single value")
+    return arr
+
+
+def save_light_sequence(path: str | os.PathLike, sh, **side) -> Path:
+    """Write a light sequence with side arrays about its frames, atomically, as our ``.npz``.
+
+    Args:
+        path: the ``.npz`` to write.
+        sh: (T, K, 3) linear RGB, the light of each frame (what a renderer uses).
+        **side: named arrays about the same frames: (T, ...) each (``raw`` (T, K, 3),
+            ``outliers`` (T,) bool, ...) or a single value (``smoothing="hermite"``).
+            Tensors are copied to numpy. Not the names ``sh``, ``lmax``, ``frame``, ``units``.
+
+    Returns:
+        The path written; :func:`load_light` reads it as the (T, K, 3) sequence.
+
+    Raises:
+        ShapeError: ``sh`` not (T, K, 3), or a side array without T rows.
+        InputError: not ``.npz``, a reserved name, NaN/Inf in ``sh``, a non-numeric side array.
+    """
+    from ..io.atomic import atomic_write
+
+    path = Path(path)
+    if path.suffix.lower() != ".npz":
+        raise InputError(f"{path}: a light sequence with side arrays is written as .npz")
+    sh = _validate(sh, "sh")
+    if sh.dim() != 3:
+        raise ShapeError(f"{path}: expected a light sequence (T, K, 3), got {tuple(sh.shape)}")
+    clash = sorted(set(side) & set(_OWN))
+    if clash:
+        raise InputError(f"{path}: side array names {clash} are the light's own; choose other names")
+    arrays = {k: _side_array(k, v, sh.shape[0], str(path)) for k, v in side.items()}
+    with atomic_write(path) as f:
+        np.savez_compressed(f, sh=sh.numpy(), lmax=np.int64(sh_order_from_count(sh.shape[-2])),
+                            frame=np.str_(_FRAME), units=np.str_(_UNITS), **arrays)
+    return path
+
+
+def load_light_sequence(path: str | os.PathLike, names=None) -> tuple[torch.Tensor, dict[str, np.ndarray]]:
+    """Read a light sequence and its side arrays (see :func:`save_light_sequence`).
+
+    Args:
+        path: a light sequence ``.npz`` (ours; side arrays optional) or ``.json`` (no side arrays).
+        names: the side arrays wanted (those the file has are returned); None: all of them.
+
+    Returns:
+        (sh (T, K, 3) float32, {name: array with T rows or one value}).
+
+    Raises:
+        InputError / ShapeError: not a light sequence, bad values, or a side array without T rows;
+            the message names the file.
+    """
+    path = Path(path)
+    sh = load_light(path)
+    if sh.dim() != 3:
+        raise ShapeError(f"{path}: expected a light sequence (T, K, 3), got one light {tuple(sh.shape)}")
+    if path.suffix.lower() != ".npz":
+        return sh, {}
+    from ..io.arrays import read_npz, read_npz_names
+
+    wanted = [n for n in (read_npz_names(path) if names is None else names) if n not in _OWN]
+    side = read_npz(path, "light sequence .npz", wanted) if wanted else {}
+    return sh, {k: _side_array(k, v, sh.shape[0], str(path)) for k, v in side.items()}

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import functools
 import math
-from importlib import resources
 from pathlib import Path
 
 import torch
 
 from ..checks import InputError, check_finite
+from ..names import envmap_dir, light_presets
 from .basis import sh_basis, sh_count, sh_degrees
 from .projection import project_envmap
 
@@ -35,12 +35,12 @@ __all__ = [
 
 
 def _envmap_dir() -> Path:
-    return Path(str(resources.files("relightnet").joinpath("data", "envmaps")))
+    return envmap_dir()
 
 
 def preset_names() -> list[str]:
     """Sorted names of the shipped environment-map presets (file stems of ``data/envmaps/*.exr``)."""
-    return sorted(p.stem for p in _envmap_dir().glob("*.exr"))
+    return light_presets()
 
 
 def preset_path(name: str) -> Path:

@@ -151,3 +151,23 @@ def test_bad_albedo_and_bounces():
         interreflect(torch.zeros(len(v), 9), op, check_albedo(0.5, len(v)), -1)
     with pytest.raises(ShapeError, match="T0"):
         interreflect(torch.zeros(len(v), 9, 3), op, check_albedo(0.5, len(v)), 1)
+
+
+def test_interreflect_on_device_matches_cpu(device, dtype):
+    # The ray casting runs on the CPU (Embree); the bounces are a sparse matmul that runs where the tensors are.
+    v, f, n = cavity()
+    dirs_l, w = transport_directions(64, seed=0)
+    rays = vertex_rays(v, n, light_to_world(dirs_l))
+    hits = make_engine(v, f).intersect(rays.origins, rays.dirs)
+    op = bounce_operator(rays, hits, f, w, v)
+    lit = np.zeros((len(v), 64), np.float32)
+    lit[rays.vertex, rays.direction] = np.where(hits.prim >= 0, 0, rays.cosine)
+    T0 = (torch.from_numpy(lit).double() @ (sh_basis(dirs_l.double(), 2) * w.double()[:, None])).to(dtype)
+    albedo = check_albedo(torch.tensor([0.8, 0.5, 0.3]).expand(len(v), 3), len(v)).to(dtype)
+    ref = interreflect(T0, BounceOperator(op.matrix.to(dtype), *(op.n_rays, op.n_blocked, op.n_front)), albedo, 2)
+    op_dev = BounceOperator(op.matrix.to(device=device, dtype=dtype), op.n_rays, op.n_blocked, op.n_front)
+    out = interreflect(T0.to(device), op_dev, albedo.to(device), 2)
+    assert out.device.type == device.type and out.dtype == dtype and out.shape == (len(v), 9, 3)
+    assert (out[:, 0] > T0.to(device)[:, 0, None] - 1e-6).all()  # bounces add light
+    tol = 1e-5 if dtype == torch.float32 else 1e-10
+    torch.testing.assert_close(out.cpu(), ref, atol=tol, rtol=tol)

@@ -242,3 +242,39 @@ def test_compiled_kernels_match_eager():
     assert torch.equal(compiled.face_id, eager.face_id)
     assert torch.equal(compiled.bary, eager.bary)
     assert torch.equal(compiled.depth, eager.depth)
+
+
+def test_rasterize_and_interpolate_on_device_match_cpu(device, dtype):
+    from relightnet.raster import interpolate
+
+    g = torch.Generator().manual_seed(21)
+    verts = (torch.rand(40, 3, generator=g, dtype=torch.float64) - 0.5) * 3
+    faces = torch.randint(0, 40, (24, 3), generator=g)
+    cam = perspective_camera(look_at(torch.tensor([0.0, 0.0, 3.0], dtype=torch.float64),
+                                     torch.tensor([0.0, 0.0, 0.0], dtype=torch.float64), dtype=torch.float64),
+                             (H, W), fov_deg=50.0)
+    vc = cam.transform(verts).to(dtype)
+    attr = torch.rand(40, 4, generator=g, dtype=torch.float64).to(dtype)
+    ref = rasterize(vc, faces, (H, W))
+    frags = rasterize(vc.to(device), faces.to(device), (H, W))
+    assert frags.face_id.device.type == device.type and frags.bary.dtype == dtype
+    assert torch.equal(frags.face_id.cpu(), ref.face_id) and (ref.face_id >= 0).sum() > 100
+    tol = 1e-5 if dtype == torch.float32 else 1e-12
+    torch.testing.assert_close(frags.bary.cpu(), ref.bary, atol=tol, rtol=0)
+    out = interpolate(attr.to(device), frags, faces.to(device))
+    torch.testing.assert_close(out.cpu(), interpolate(attr, ref, faces), atol=tol, rtol=0)
+
+
+def test_interpolate_gradcheck(device):
+    from relightnet.raster import interpolate
+
+    g = torch.Generator().manual_seed(22)
+    verts = (torch.rand(12, 3, generator=g, dtype=torch.float64) - 0.5) * 3
+    faces = torch.randint(0, 12, (6, 3), generator=g).to(device)
+    cam = perspective_camera(look_at(torch.tensor([0.0, 0.0, 3.0], dtype=torch.float64),
+                                     torch.tensor([0.0, 0.0, 0.0], dtype=torch.float64), dtype=torch.float64),
+                             (8, 8), fov_deg=50.0)
+    frags = rasterize(cam.transform(verts).to(device), faces, (8, 8))
+    assert (frags.face_id >= 0).any()
+    attr = torch.rand(12, 2, generator=g, dtype=torch.float64).to(device).requires_grad_(True)
+    assert torch.autograd.gradcheck(lambda a: interpolate(a, frags, faces), (attr,))

@@ -12,7 +12,7 @@ def _normals(n, seed=0):
 
 
 def test_unoccluded_closed_form_shading_equals_irradiance():
-    # T_k = A_l Y_k(n) makes T.L the irradiance (DESIGN.md closed form).
+    # T_k = A_l Y_k(n) makes T.L the irradiance (the closed form of docs/design.md).
     n = _normals(37)
     a = torch.tensor([3.141592653589793] + [2.0943951023931953] * 3 + [0.7853981633974483] * 5, dtype=n.dtype)
     T = sh_basis(n, 2) * a
@@ -66,3 +66,31 @@ def test_bad_inputs():
         shade(torch.rand(4, 3), torch.randn(4, 9), torch.full((9, 3), float("nan")))
     with pytest.raises(ShapeError, match="alpha"):
         composite(torch.ones(1, 2, 2, 3), torch.ones(1, 3, 2), torch.zeros(2, 2, 3))
+
+
+def test_shade_and_composite_on_device_match_float64_cpu(device, dtype):
+    g = torch.Generator().manual_seed(5)
+    alb, T = torch.rand(2, 6, 5, 3, generator=g, dtype=torch.float64), torch.randn(2, 6, 5, 9, generator=g,
+                                                                                  dtype=torch.float64)
+    L, bg = torch.randn(9, 3, generator=g, dtype=torch.float64), torch.rand(6, 5, 3, generator=g, dtype=torch.float64)
+    alpha = torch.rand(2, 6, 5, generator=g, dtype=torch.float64)
+    ref = composite(shade(alb, T, L), alpha, bg)
+    on = [x.to(device, dtype) for x in (alb, T, L, alpha, bg)]
+    out = composite(shade(*on[:3]), on[3], on[4])
+    assert out.device.type == device.type and out.dtype == dtype and out.shape == (2, 6, 5, 3)
+    tol = 1e-5 if dtype == torch.float32 else 1e-12
+    torch.testing.assert_close(out.cpu().double(), ref, atol=tol, rtol=tol)
+
+
+def test_shade_and_composite_gradcheck(device):
+    g = torch.Generator().manual_seed(6)
+    args = [torch.rand(1, 3, 2, 3, generator=g, dtype=torch.float64), torch.randn(1, 3, 2, 9, generator=g,
+                                                                               dtype=torch.float64),
+            torch.randn(9, 3, generator=g, dtype=torch.float64), torch.rand(1, 3, 2, generator=g, dtype=torch.float64),
+            torch.rand(3, 2, 3, generator=g, dtype=torch.float64)]
+    args = [a.to(device).requires_grad_(True) for a in args]
+    assert torch.autograd.gradcheck(lambda a, t, light, al, bg: composite(shade(a, t, light), al, bg), args)
+    # the per-channel transport of coloured interreflection (..., K, 3), and a batched light
+    t3 = torch.randn(2, 4, 9, 3, generator=g, dtype=torch.float64).to(device).requires_grad_(True)
+    lb = torch.randn(2, 9, 3, generator=g, dtype=torch.float64).to(device).requires_grad_(True)
+    assert torch.autograd.gradcheck(lambda t, light: shading(t, light), (t3, lb))

@@ -192,3 +192,47 @@ def test_save_errors_leave_nothing(tmp_path):
     with pytest.raises(ShapeError):
         save_light(tmp_path / "x.npz", _light(9, 2))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_light_sequence_round_trip_with_side_arrays(tmp_path):
+    from relightnet.sh import load_light_sequence, save_light_sequence
+
+    g = torch.Generator().manual_seed(3)
+    sh, raw = torch.randn(5, 9, 3, generator=g), torch.randn(5, 9, 3, generator=g)
+    flags = torch.tensor([False, True, False, False, True])
+    path = save_light_sequence(tmp_path / "seq.npz", sh, raw=raw, outliers=flags, smoothing="hermite",
+                               evidence_M=np.zeros((5, 3, 9, 9), np.float32))
+    assert torch.equal(load_light(path), sh)  # every light reader sees the sequence
+    got, side = load_light_sequence(path)
+    assert torch.equal(got, sh) and set(side) == {"raw", "outliers", "smoothing", "evidence_M"}
+    assert np.array_equal(side["raw"], raw.numpy()) and side["outliers"].tolist() == flags.tolist()
+    assert str(side["smoothing"]) == "hermite" and side["evidence_M"].shape == (5, 3, 9, 9)
+    _, only = load_light_sequence(path, ("raw", "absent"))
+    assert set(only) == {"raw"}
+    save_light(tmp_path / "plain.json", sh)  # a sequence without side arrays, in any of our formats
+    got, side = load_light_sequence(tmp_path / "plain.json")
+    assert torch.allclose(got, sh) and side == {}
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_light_sequence_errors_name_the_file(tmp_path):
+    from relightnet.sh import load_light_sequence, save_light_sequence
+
+    sh = torch.zeros(4, 9, 3)
+    with pytest.raises(ShapeError, match=r"seq.npz: side array 'raw' has 3 rows; expected one per frame \(4\)"):
+        save_light_sequence(tmp_path / "seq.npz", sh, raw=torch.zeros(3, 9, 3))
+    with pytest.raises(InputError, match="names \\['lmax'\\] are the light's own"):
+        save_light_sequence(tmp_path / "seq.npz", sh, lmax=2)
+    with pytest.raises(InputError, match="written as .npz"):
+        save_light_sequence(tmp_path / "seq.json", sh)
+    with pytest.raises(ShapeError, match=r"expected a light sequence \(T, K, 3\)"):
+        save_light_sequence(tmp_path / "seq.npz", sh[0])
+    with pytest.raises(InputError, match="dtype object"):
+        save_light_sequence(tmp_path / "seq.npz", sh, notes=np.array([{"a": 1}] * 4, dtype=object))
+    assert list(tmp_path.iterdir()) == []
+    save_light(tmp_path / "one.npz", sh[0])
+    with pytest.raises(ShapeError, match=r"one.npz: expected a light sequence \(T, K, 3\), got one light"):
+        load_light_sequence(tmp_path / "one.npz")
+    np.savez(tmp_path / "bad.npz", sh=np.zeros((4, 9, 3), np.float32), raw=np.zeros((2, 9, 3), np.float32))
+    with pytest.raises(ShapeError, match="bad.npz: side array 'raw' has 2 rows"):
+        load_light_sequence(tmp_path / "bad.npz")

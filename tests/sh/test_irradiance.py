@@ -84,3 +84,21 @@ def test_bad_inputs():
         irradiance(torch.full((9, 3), float("nan")), _dirs(2))
     with pytest.raises(ShapeError, match=r"sh: expected \(\.\.\., K, 3\)"):
         irradiance(torch.zeros(9, 4), _dirs(2))
+
+
+def test_irradiance_on_device_matches_float64_cpu(device, dtype):
+    n = _dirs(200)
+    L = torch.randn(2, 9, 3, generator=torch.Generator().manual_seed(1), dtype=torch.float64)
+    ref = irradiance(L, n.expand(2, -1, -1))
+    out = irradiance(L.to(device, dtype), n.expand(2, -1, -1).to(device, dtype))
+    assert out.device.type == device.type and out.dtype == dtype and out.shape == (2, 200, 3)
+    tol = 1e-5 if dtype == torch.float32 else 1e-12
+    torch.testing.assert_close(out.cpu().double(), ref, atol=tol, rtol=tol)
+
+
+def test_irradiance_gradcheck(device):
+    n = _dirs(6).to(device).requires_grad_(True)
+    L = torch.randn(9, 3, generator=torch.Generator().manual_seed(2), dtype=torch.float64).to(device)
+    L.requires_grad_(True)
+    f = lambda light, normals: irradiance(light, torch.nn.functional.normalize(normals, dim=-1))  # noqa: E731
+    assert torch.autograd.gradcheck(f, (L, n))

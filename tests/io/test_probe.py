@@ -1,0 +1,33 @@
+"""relightnet.io.probe: image sizes from the headers of real files of every known format, None otherwise."""
+
+import numpy as np
+import pytest
+import torch
+from PIL import Image
+
+from relightnet.io import write_envmap
+from relightnet.io.probe import header_size
+
+
+@pytest.mark.parametrize("fmt, suffix", [("PNG", ".png"), ("JPEG", ".jpg"), ("GIF", ".gif"), ("BMP", ".bmp"),
+                                         ("WEBP", ".webp"), ("TIFF", ".tif"), ("PPM", ".ppm")])
+def test_still_image_formats(tmp_path, fmt, suffix):
+    path = tmp_path / f"img{suffix}"
+    Image.fromarray(np.zeros((37, 53, 3), np.uint8)).save(path, format=fmt)
+    assert header_size(path) == (53, 37)  # (width, height)
+
+
+@pytest.mark.parametrize("suffix", [".exr", ".hdr"])
+def test_hdr_formats(tmp_path, suffix):
+    path = write_envmap(tmp_path / f"env{suffix}", torch.rand(16, 32, 3))
+    assert header_size(path) == (32, 16)
+
+
+def test_unknown_or_damaged_headers_give_none(tmp_path):
+    (tmp_path / "a.txt").write_text("hello")
+    assert header_size(tmp_path / "a.txt") is None
+    Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(tmp_path / "b.jpg")
+    (tmp_path / "cut.jpg").write_bytes((tmp_path / "b.jpg").read_bytes()[:20])  # markers cut before the frame
+    assert header_size(tmp_path / "cut.jpg") is None
+    (tmp_path / "empty.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    assert header_size(tmp_path / "empty.png") is None

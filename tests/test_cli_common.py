@@ -1,0 +1,100 @@
+"""relightnet._cli.common: the output-path rule, input checks and argument types shared by every command."""
+
+import argparse
+
+import pytest
+import torch
+
+from relightnet._cli import common
+from relightnet.checks import InputError
+from relightnet.sh import save_light
+
+
+def test_out_file_makes_missing_parents_and_checks_the_type(tmp_path):
+    common.forget_made_folders()
+    p = common.out_file(tmp_path / "a" / "b" / "x.mp4", suffixes=(".mp4", ".mkv"))
+    assert p == tmp_path / "a" / "b" / "x.mp4" and p.parent.is_dir() and not p.exists()
+    assert common.out_file(str(tmp_path / "y.PNG"), suffixes=(".png",)).name == "y.PNG"  # any case
+    with pytest.raises(InputError, match=r"--mask-out .*m.png: expected a file ending in .mp4, .mkv"):
+        common.out_file(tmp_path / "m.png", "--mask-out", (".mp4", ".mkv"))
+    with pytest.raises(InputError, match="is a folder; expected a file path"):
+        common.out_file(tmp_path / "a")
+    (tmp_path / "f").write_text("")
+    with pytest.raises(InputError, match="cannot make its folder"):
+        common.out_file(tmp_path / "f" / "x.png")
+
+
+def test_out_dir_and_the_removal_of_folders_a_failed_command_made(tmp_path):
+    common.forget_made_folders()
+    d = common.out_dir(tmp_path / "n1" / "n2" / "run", "--out-dir")
+    assert d.parent.is_dir() and not d.exists()  # the folder itself is the command's to make
+    (tmp_path / "kept").mkdir()
+    common.out_file(tmp_path / "kept" / "n3" / "x.png")
+    (tmp_path / "kept" / "n3" / "partial.txt").write_text("")  # something the command wrote: kept
+    common.remove_made_folders()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept"] and (tmp_path / "kept" / "n3").is_dir()
+    (tmp_path / "file").write_text("")
+    with pytest.raises(InputError, match="--out-dir .*file: is a file; expected a folder"):
+        common.out_dir(tmp_path / "file", "--out-dir")
+    common.out_dir(tmp_path / "n4" / "d")
+    common.forget_made_folders()  # a command that succeeded: its folders are not removed by the next one
+    common.remove_made_folders()
+    assert (tmp_path / "n4").is_dir()
+
+
+def test_in_path_names_the_option(tmp_path):
+    assert common.in_path(tmp_path, "--masks") == tmp_path
+    with pytest.raises(InputError, match=r"--target-masks .*nope: not found \(expected a mask video\)"):
+        common.in_path(tmp_path / "nope", "--target-masks", "a mask video")
+
+
+@pytest.mark.parametrize("parse, good, bad", [
+    (common.nonneg_int, {"0": 0, "7": 7}, ["-1", "x", "1.5"]),
+    (common.pos_int, {"1": 1}, ["0", "-2"]),
+    (common.pos_float, {"0.5": 0.5, "3": 3.0}, ["0", "-1", "inf", "nan", "x"]),
+    (common.work_size, {"16": 16, "2048": 2048}, ["0", "24", "2064", "x"]),
+    (common.image_size, {"1": 1, "4096": 4096}, ["0", "4097"]),
+    (common.exposure_arg, {"auto": "auto", "2": 2.0}, ["0", "-1", "bright"]),
+])
+def test_argument_types(parse, good, bad):
+    for text, value in good.items():
+        assert parse(text) == value
+    for text in bad:
+        with pytest.raises(argparse.ArgumentTypeError, match="expected"):
+            parse(text)
+
+
+def test_key_value_arg_takes_its_keys_late():
+    calls = []
+
+    def keys():
+        calls.append(1)
+        return ("gender", "age")
+
+    parse = common.key_value_arg(keys, float, "NAME")
+    assert calls == [] and parse("age=0.5") == ("age", 0.5) and calls == [1]
+    with pytest.raises(argparse.ArgumentTypeError, match="NAME=VALUE with NAME in gender, age, got 'size=1'"):
+        parse("size=1")
+    with pytest.raises(argparse.ArgumentTypeError, match="expected a number after 'age='"):
+        parse("age=old")
+
+
+def test_load_single_light_refuses_a_sequence(tmp_path):
+    assert common.load_single_light("studio").shape == (9, 3)
+    seq = save_light(tmp_path / "seq.npz", torch.zeros(3, 9, 3))
+    with pytest.raises(ValueError, match=r"expected one light \(K, 3\), got a sequence \(3, 9, 3\)"):
+        common.load_single_light(str(seq))
+
+
+def test_shared_options_list_their_choices():
+    p = argparse.ArgumentParser()
+    common.add_body_args(p)
+    common.add_mask_source_arg(p)
+    common.add_model_args(p)
+    a = p.parse_args(["--pose", "tpose", "--phenotype", "age=0.3", "--mask-source", "head", "--backend", "onnx"])
+    assert (a.pose, a.phenotype, a.mask_source, a.backend) == ("tpose", [("age", 0.3)], "head", "onnx")
+    with pytest.raises(SystemExit):
+        p.parse_args(["--pose", "sitting"])
+    text = " ".join(p.format_help().split())
+    assert "rest, tpose, apose, arms_down, arms_crossed" in text and "walk, turn, idle, arm_raise" in text
+    assert all(name in common.LIGHT_HELP for name in ("city", "studio", "sunset"))

@@ -1,0 +1,38 @@
+"""`relightnet relight-image` / `relight-video` at the command line: the output rule and input checks
+before any work (runs: tests/pipeline/test_relight_image.py, test_relight_video.py)."""
+
+from relightnet.cli import main
+
+
+def _one_line(capsys, rc):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1 and len(err) == 1, err
+    return err[0]
+
+
+def test_relight_video_checks_before_work(tmp_path, capsys):
+    line = _one_line(capsys, main(["relight-video", str(tmp_path / "clip.mp4"), "--light", "studio", "--out",
+                                   str(tmp_path / "r.png")]))
+    assert "expected a file ending in .mp4, .mkv" in line
+    line = _one_line(capsys, main(["relight-video", str(tmp_path / "clip.mp4"), "--light", "studio", "--out",
+                                   str(tmp_path / "new" / "r.mp4")]))
+    assert "clip.mp4: not found" in line
+    (tmp_path / "clip.mp4").write_bytes(b"")
+    line = _one_line(capsys, main(["relight-video", str(tmp_path / "clip.mp4"), "--masks", str(tmp_path / "m"),
+                                   "--light", "studio", "--out", str(tmp_path / "new" / "r.mp4")]))
+    assert "--masks" in line and "m: not found" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.mp4"]
+
+
+def test_relight_image_checks_before_work(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    line = _one_line(capsys, main(["relight-image", str(tmp_path / "p.jpg"), "--light", "sunset", "--out",
+                                   str(tmp_path / "file" / "r.png")]))
+    assert "cannot make its folder" in line
+    line = _one_line(capsys, main(["relight-image", str(tmp_path / "p.jpg"), "--light", "sunset", "--out",
+                                   str(tmp_path / "r.png"), "--save-maps", str(tmp_path / "file")]))
+    assert "--save-maps" in line and "is a file; expected a folder" in line
+    line = _one_line(capsys, main(["relight-image", str(tmp_path / "p.jpg"), "--light", "sunset", "--out",
+                                   str(tmp_path / "out" / "r.png")]))
+    assert "p.jpg" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
