@@ -14,6 +14,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..color import luminance
 from ..io.image import to_uint8
 from ..prt import vertex_transport
 from ..raster import antialias, interpolate, perspective_camera, silhouette_pixels
@@ -22,7 +23,7 @@ from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
 from .config import SynthConfig
 from .framing import camera_intrinsics, crop_camera
-from .lights import LUMA, LightDraw, light_at, sample_light
+from .lights import LightDraw, light_at, sample_light
 from .poses import sample_phenotype, sample_pose, sample_yaw
 from .sample import GENERATOR_VERSION, Sample, SynthAssets, assets_for
 from .textures import paint_albedo, sample_outfit, vertex_albedo
@@ -144,7 +145,7 @@ def _background(rng, cfg, split, assets: SynthAssets, draw: LightDraw, angle, ti
         q = torch.diag(torch.tensor([1.0, -1.0 if r_mirror else 1.0, 1.0], dtype=torch.float64))
         q = q @ rotation_about_up(r_angle, dtype=torch.float64).T
         img = envmap_background(assets.envmap(name), intr, cfg.res, q, 1.0, blur)
-        mean = float((img @ torch.tensor(LUMA)).mean())
+        mean = float(luminance(img).mean())
         img = img * (factor * subject / max(mean, 1e-6))
         return img, {"kind": "envmap", "hdri": name, "matches_light": False, "rotation_deg": math.degrees(r_angle),
                      "mirror": r_mirror, "blur_px": blur, "level": factor * subject}
@@ -284,7 +285,7 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
         frs.append(fr)
 
     m0 = acc["mask"][0] > 0
-    lum0 = acc["image"][0] @ torch.tensor(LUMA)
+    lum0 = luminance(acc["image"][0])
     subject = float(lum0[m0].mean()) if bool(m0.any()) else 0.2
     i0, a0, _ = frames[0]
     bg, bg_desc = _background(r["background"], cfg, split, assets, draws[i0], a0, tilt, intr, subject)
