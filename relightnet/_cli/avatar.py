@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..temporal.smoothers import SMOOTHING
+from ..temporal.registry import VIDEO_SMOOTHING as SMOOTHING
 from .common import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args, nonneg_int, pos_int
 
 logger = logging.getLogger("relightnet.avatar")

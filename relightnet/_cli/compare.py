@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..temporal.smoothers import SMOOTHING
+from ..temporal.registry import VIDEO_SMOOTHING as SMOOTHING
 from .common import add_command, add_model_args, nonneg_int, pos_int, work_size
 
 logger = logging.getLogger("relightnet.compare")

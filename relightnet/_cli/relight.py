@@ -8,7 +8,6 @@ from pathlib import Path
 
 from .common import (
     LIGHT_HELP,
-    add_checkpoint_args,
     add_command,
     add_mask_source_arg,
     add_model_args,
@@ -26,12 +25,12 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from ..io import atomic_write, write_image
-    from ..model.checkpoint import load_model
+    from ..pipeline.backends import make_predictor
     from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
     light = load_single_light(args.light)
-    model = load_model(args.checkpoint, device=args.device)
+    model = make_predictor(args.backend, args.checkpoint, args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
@@ -82,7 +81,7 @@ def register(sub) -> None:
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo (at its working size) instead of the photo divided by the "
                         "predicted shading (the default, which keeps the photo's detail)")
-    add_checkpoint_args(p)
+    add_model_args(p)
     p.set_defaults(func=run)
 
     p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",

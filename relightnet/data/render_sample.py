@@ -21,7 +21,7 @@ from ..raster import antialias, interpolate, perspective_camera, silhouette_pixe
 from ..render.frame import TexturedAlbedo, render_mesh
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
-from .config import SynthConfig
+from .config import SynthConfig, sample_seed
 from .framing import camera_intrinsics, crop_camera
 from .lights import LightDraw, light_at, sample_light
 from .poses import sample_phenotype, sample_pose, sample_yaw
@@ -226,9 +226,7 @@ def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None
     Returns:
         :class:`ClipGeometry` with (T, V, 3) vertices and normals.
     """
-    from .generate import _check  # generate imports this module
-
-    ss = _check(cfg, split, index)
+    ss = sample_seed(cfg, split, index)
     if n_frames is not None:
         if isinstance(n_frames, bool) or not isinstance(n_frames, int | np.integer) or n_frames < 1:
             raise InputError(f"n_frames: expected None or an integer >= 1, got {n_frames!r}")

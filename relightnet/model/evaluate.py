@@ -17,7 +17,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb, write_image
-from .network import Prediction, RelightNet, photo_albedo, shading_map
+from .network import Prediction, RelightNet, photo_albedo, shade_map, shading_map
 from .training import TrainData, batch_to_input
 
 __all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation"]
@@ -102,7 +102,7 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
         dc = b["transport"][:, :1], b["transport_unoccluded"][:, :1]
         concave = M * ((dc[0] - dc[1]).abs() > concave_threshold * dc[1].abs().clamp_min(1e-6)).float()
         gt_s = shading_map(T_gt, b["light"])
-        gt_relit = b["albedo"] * shading_map(T_gt, novel)
+        gt_relit = shade_map(b["albedo"], T_gt, novel)
         pred = model(batch_to_input(b))
         cands = {"model": (pred.albedo, pred.transport, pred.light)}
         if baseline is not None:

@@ -13,7 +13,6 @@ frames keep their detail.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from pathlib import Path
@@ -22,13 +21,11 @@ import torch
 
 from ..checks import InputError
 from ..io import VideoWriter
-from ..io.image import linear_to_srgb, srgb_to_linear
-from ..model.network import photo_albedo, shading_map
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
 from ..temporal.pooling import PooledSolve
 from .backends import as_predictor
-from .relight_image import match_exposure, to_model_order
+from .relight_image import over_photo, relight_prediction, to_model_order
 
 logger = logging.getLogger(__name__)
 
@@ -91,16 +88,9 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             else:
                 src = est if src is None else smoothing * est + (1 - smoothing) * src
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
-            # Exposure reference: the smoothed source light, not this frame's raw estimate.
-            ref = dataclasses.replace(pred, light=src[None])
-            before = ref.shading()
-            new = match_exposure(new, ref, before)
-            albedo = pred.albedo
-            if detail:
-                albedo = photo_albedo(srgb_to_linear(img.to(albedo))[None], ref, shading=before)
-            relit = (albedo * shading_map(pred.transport, new))[0]
-            m = pred.mask[0]
-            writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
+            # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
+            relit = relight_prediction(pred, img[None], new, detail=detail, reference=src[None])
+            writer.write(over_photo(relit.linear, pred.mask, img[None])[0])
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
             raise InputError(f"{masks or video}: every mask is empty: no person to relight")

@@ -28,15 +28,11 @@ import torch
 from ..checks import InputError
 
 __all__ = [
-    "METHODS", "SMOOTHING", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
+    "METHODS", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
 ]
 
 #: Offline methods: keys of :func:`smoothing_matrix`.
 METHODS = ("hermite", "poly", "savgol")
-#: What the video jobs (avatar, compare) accept for their light smoothing: ``auto`` (``pooled`` when
-#: the network solves its light, else ``hermite``), ``pooled`` (one light solve per shot from the
-#: pooled evidence, :mod:`relightnet.temporal.pooling`), an offline method, or none.
-SMOOTHING = ("auto", "pooled", *METHODS, "none")
 
 _F64 = torch.float64
 
