@@ -60,7 +60,8 @@ def register(sub) -> None:
                    "(default: full body at the origin)")
     p.add_argument("--smoothing", default="auto", choices=SMOOTHING,
                    help="light over time: pooled (one light solve per shot, split at detected light switches), "
-                        "hermite/poly/savgol (robust smoothing of per-frame lights), none; default auto: pooled "
+                        "hermite/poly/savgol (robust smoothing of per-frame lights), ema/one-euro/fir/gated-one-euro "
+                        "(causal filters), none; default auto: pooled "
                         "when the model solves its light, else hermite")
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")

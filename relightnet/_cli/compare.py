@@ -49,7 +49,8 @@ def register(sub) -> None:
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces of the 3D path (default: 0)")
     p.add_argument("--smoothing", default="auto", choices=SMOOTHING,
                    help="light over time: pooled (one light solve per shot, split at detected light switches), "
-                        "hermite/poly/savgol (robust smoothing of per-frame lights), none; default auto: pooled "
+                        "hermite/poly/savgol (robust smoothing of per-frame lights), ema/one-euro/fir/gated-one-euro "
+                        "(causal filters), none; default auto: pooled "
                         "when the model solves its light, else hermite")
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")

@@ -14,10 +14,11 @@ logger = logging.getLogger("relightnet.onnx")
 def run_export(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
     from ..model.onnx_export import export_onnx
+    from ..temporal.registry import resolve_smoothing
 
     ckpt = Path(args.checkpoint) if args.checkpoint else shipped_checkpoint()
     net = load_model(ckpt)
-    smoothing = args.smoothing if args.smoothing != "auto" else ("pooled" if net.solves else "ema")
+    smoothing = resolve_smoothing(args.smoothing, net.solves, causal=True)
     opts = {"alpha": args.alpha} if smoothing == "ema" else {}
     out = export_onnx(net, args.out, smoothing=smoothing,
                       train_config=load_checkpoint(ckpt).get("train_config"), **opts)
@@ -38,7 +39,7 @@ def run_onnx(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    from ..model.onnx_export import SMOOTHERS
+    from ..temporal.registry import STREAMING_SMOOTHING
 
     p = add_command(sub, "export", "Export the CNN with a streaming light-smoothing layer to one ONNX file.",
                     "  relightnet export --out relightnet.onnx\n"
@@ -46,10 +47,10 @@ def register(sub) -> None:
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
     add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
-    p.add_argument("--smoothing", choices=("auto", *SMOOTHERS), default="auto",
+    p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
                    help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
                         "since the last light switch — for a network that solves its light, else ema)")
-    p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")
+    p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")
     p.add_argument("--int8-mode", choices=("static", "dynamic"), default="static",
                    help="static: QDQ int8 convolutions calibrated on 16 generated people (default); "

@@ -85,16 +85,18 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
     ``reg`` the network's λ) of the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS`
     (triangular weights, at the video's ``fps``) and between the same detected light switches is
     solved jointly; ``hermite``/``poly``/``savgol`` are robust regressions with 3-MAD outlier
-    correction and automatic switch detection; the causal filters run over the sequence with their
-    default options; ``auto`` is ``pooled`` when there is evidence, else ``hermite``; ``none``
-    returns the raw lights.
+    correction and automatic switch detection (fewer than 3 frames: the raw lights); the causal
+    filters run over the sequence with their default options; ``auto`` is ``pooled`` when there is
+    evidence, else ``hermite``; ``none`` returns the raw lights.
     """
     from ..temporal.registry import SMOOTHING_METHODS, resolve_smoothing, smooth_sequence
 
     check_smoothing(method, VIDEO_SMOOTHING)
     name = resolve_smoothing(method, evidence is not None)
     robust = not SMOOTHING_METHODS[name].causal
-    opts = {"outlier_eps": "3mad", "switches": "auto"} if robust else {}
+    if robust and raw.shape[0] < 3:  # too short to fit: the raw lights
+        name = "none"
+    opts = {"outlier_eps": "3mad", "switches": "auto"} if robust and name != "none" else {}
     res = smooth_sequence(raw, name, evidence, prior, reg, fps, **opts)
     return res.smoothed, res.outliers, res.switches
 

@@ -178,7 +178,7 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
 
     Returns:
         :class:`~relightnet.temporal.SmoothResult` ``(smoothed (T, K, 3), outliers (T,), distances
-        (T,), switches (T,))``. Fewer than 3 frames are returned unsmoothed by the regressions.
+        (T,), switches (T,))``.
     """
     name = resolve_smoothing(method, evidence is not None)
     _check_options(name, opts)
@@ -187,7 +187,7 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
         window = opts.pop("window", pool_window(fps))
         smoothed, _, switches = pool_shot_lights(evidence, prior, reg, window=window)
         return SmoothResult(smoothed, none, light_distance(lights, smoothed.to(lights)), switches)
-    if name == "none" or (not SMOOTHING_METHODS[name].causal and lights.shape[0] < 3):
+    if name == "none":
         return SmoothResult(lights.clone(), none, torch.zeros(lights.shape[0], dtype=lights.dtype), none)
     if not SMOOTHING_METHODS[name].causal:
         return smooth_lights(lights, name, **opts)
