@@ -176,6 +176,24 @@ def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, a
     return written
 
 
+def _motion_for(motion_frames, n: int) -> tuple[dict, int]:
+    """The motion's parameters for an n-frame target (a preset is made as long as the video, a
+    longer motion is cut, a shorter one shortens the output): (params, frames to write)."""
+    params, n_motion = motion_frames(n)
+    if n_motion < n:
+        logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
+    m = min(n, n_motion)
+    return frame_slice(params, 0, m, n_motion), m
+
+
+def _camera_for(camera: Camera | None, size) -> Camera:
+    """The avatar's camera: the default one at the video's size, or the given one if its size matches."""
+    camera = default_camera(size) if camera is None else camera
+    if tuple(camera.size) != tuple(size):
+        raise InputError(f"camera: its image size {tuple(camera.size)} differs from the target video's {tuple(size)}")
+    return camera
+
+
 @torch.no_grad()
 def avatar(
     target,
@@ -244,21 +262,12 @@ def avatar(
     else:
         n = _count_frames(target)
         lit = _TargetLight(_given_light(light, n))
-    params, n_motion = motion_frames(n)  # a preset is made as long as the video
-    if n_motion < n:
-        logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
-    n = min(n, n_motion)
+    params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
-    camera = default_camera(info.size) if camera is None else camera
-    if tuple(camera.size) != tuple(info.size):
-        raise InputError(f"camera: its image size {tuple(camera.size)} differs from the target video's "
-                         f"{tuple(info.size)}")
-
-    out.parent.mkdir(parents=True, exist_ok=True)
+    camera = _camera_for(camera, info.size)
     write_video_lights(lights_file, plot, smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,
                        lit.evidence, lit.prior, smoothing,
                        title=f"{Path(target).name}: light of the target, {smoothing}")
-    params = frame_slice(params, 0, n, n_motion)  # a motion longer than the video is cut
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
                                 occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True)
     written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,

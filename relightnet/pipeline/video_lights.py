@@ -150,11 +150,13 @@ def write_video_lights(lights_file: Path, plot: Path, smoothed: torch.Tensor, fi
                        title: str = "") -> None:
     """Write a video job's light side files atomically: ``lights_file`` (.npz: ``smoothed``
     (T, K, 3), ``fingerprint``, and with estimates ``raw``, ``outliers``, ``switches``,
-    ``smoothing``, ``evidence_M``/``evidence_r``, ``prior``) and ``plot`` (light curves, PNG)."""
+    ``smoothing``, ``evidence_M``/``evidence_r``, ``prior``) and ``plot`` (light curves, PNG); the
+    folder is made if needed."""
     from ..io import atomic_write
     from ..temporal.plot import light_curves_png
 
     n = smoothed.shape[0]
+    lights_file.parent.mkdir(parents=True, exist_ok=True)
     arrays = {"smoothed": smoothed.numpy(), "fingerprint": np.array(fingerprint)}
     if raw is not None:
         arrays.update(raw=raw.numpy(), outliers=outliers.numpy(), switches=switches.numpy(),

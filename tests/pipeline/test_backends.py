@@ -45,8 +45,7 @@ def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
     from relightnet.model.onnx_export import export_onnx
     from relightnet.pipeline.backends import OnnxPredictor
 
-    net = RelightNet(NetConfig(width=8, levels=2)).eval()
-    net.input_size = 32
+    net = RelightNet(NetConfig(width=8, levels=2, input_size=32)).eval()  # the working size is the config's
     export_onnx(net, tmp_path / "t.onnx", smoothing="none", example_size=32)
     onnx = OnnxPredictor(tmp_path / "t.onnx")
     assert onnx.size == 32 and onnx.lmax == 2 and not onnx.has_mask_head
