@@ -206,6 +206,38 @@ def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result,
         run_pool(tasks, workers, on_result, on_tick, max_retries=max_retries, fault=fault)
 
 
+def _make_shards(out_dir: Path, cfg: SynthConfig, manifest: dict, todo: list, total: int, workers: int, ray, body,
+                 max_retries: int, compression: str, progress: bool) -> None:
+    """Dispatch the shards still to make (:func:`_dispatch`), listing each in the manifest as it
+    comes in; raises :class:`ShardsFailed` naming those that still failed after their retries."""
+    from tqdm import tqdm
+
+    remaining = sum(t[3] for t in todo)
+    bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
+               smoothing=0.1, dynamic_ncols=True)
+    failures = []
+
+    def finished(r: dict) -> None:
+        if "error" in r:
+            failures.append((shard_name(r["split"], r["index"]), r["error"]))
+            return
+        _add_entry(manifest, r)
+        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
+            _write_manifest(out_dir, manifest)
+            written[0] = time.monotonic()
+
+    written = [time.monotonic()]
+    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
+    try:
+        _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
+    finally:
+        bar.close()
+        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
+        _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
+    if failures:
+        raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
+
+
 def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress: bool = True,
               compression: str = "deflate", body=None, ray=None, max_retries: int = 2) -> dict:
     """Make every missing shard of a dataset folder, and its manifest.
@@ -269,31 +301,7 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
     if not todo:
         return manifest
 
-    from tqdm import tqdm
-
-    bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
-               smoothing=0.1, dynamic_ncols=True)
-    failures = []
-
-    def finished(r: dict) -> None:
-        if "error" in r:
-            failures.append((shard_name(r["split"], r["index"]), r["error"]))
-            return
-        _add_entry(manifest, r)
-        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
-            _write_manifest(out_dir, manifest)
-            written[0] = time.monotonic()
-
-    written = [time.monotonic()]
-    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
-    try:
-        _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
-    finally:
-        bar.close()
-        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
-        _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
-    if failures:
-        raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
+    _make_shards(out_dir, cfg, manifest, todo, total, workers, ray, body, max_retries, compression, progress)
     logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
     return manifest
 
