@@ -72,8 +72,8 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     """Median ms per frame of each stage of the avatar job."""
     from relightnet.body import AnnyBody, make_motion
     from relightnet.io import VideoWriter, read_masks, read_video
-    from relightnet.io.image import linear_to_srgb
     from relightnet.pipeline import avatar_albedo, make_predictor, smooth_video_lights
+    from relightnet.pipeline.avatar import _composite_covered
     from relightnet.prt import vertex_transport
     from relightnet.raster import default_camera, rasterize
     from relightnet.render import render_mesh
@@ -97,22 +97,16 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     rows.append([f"PRT transport ({n_dirs} dirs, occlusion)", median_ms(
         lambda: vertex_transport(v, f, n, n_dirs=n_dirs), repeat=5)])
     cam = default_camera((h, w))
-    seen = torch.unique(f[torch.unique(rasterize(cam.transform(v), f, cam.size).pix_face)])
+    seen = rasterize(cam.transform(v), f, cam.size).seen_vertices(f, len(v))
     rows.append([f"PRT transport, visible vertices only ({len(seen)} of {len(v)}; the job's)", median_ms(
-        lambda: vertex_transport(v, f, n, n_dirs=n_dirs, vertices=seen), repeat=5)])
+        lambda: vertex_transport(v, f, n, n_dirs=n_dirs, vertices=seen, manifold="ignore"), repeat=5)])
     T = vertex_transport(v, f, n, n_dirs=n_dirs)
     tex, light = avatar_albedo(body), torch.rand(9, 3) * 0.2
     rows.append(["rasterize + shade (the job rasterizes once, before PRT)",
                  median_ms(lambda: render_mesh(v, f, T, tex, light, cam, normals=n), repeat=5)])
     r = render_mesh(v, f, T, tex, light, cam, normals=n)
-    bg = torch.from_numpy(frames[0]).float() / 255
-
-    def comp():
-        a = r.alpha[0][..., None]
-        return linear_to_srgb(r.image[0].clamp(0, 1)) * a + bg * (1 - a)
-
-    rows.append(["composite", median_ms(comp, repeat=7)])
-    x = comp()
+    rows.append(["composite (8-bit, covered pixels)", median_ms(lambda: _composite_covered(r, frames[0]), repeat=7)])
+    x = _composite_covered(r, frames[0])
     with tempfile.TemporaryDirectory() as d:
         with VideoWriter(Path(d) / "e.mp4", fps=30, srgb=False) as wr:
             rows.append(["encode (mp4, x264)", median_ms(lambda: wr.write(x), repeat=10)])

@@ -26,6 +26,7 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
@@ -121,6 +122,18 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
     return light.float()
 
 
+def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
+    """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
+    uint8 elsewhere (:func:`relightnet.render.composite_covered`). Only the covered pixels are
+    converted; the same bytes as compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
+    from ..color import linear_to_srgb
+    from ..render.shading import composite_covered
+
+    fg = r.image.reshape(-1, 3).index_select(0, r.frags.pix)
+    fg = (linear_to_srgb(fg.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
+    return composite_covered(fg, r.frags.pix, torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))).numpy()
+
+
 def _count_frames(video) -> int:
     """Frames of a video: from the container, else by decoding it (streaming)."""
     return count_frames(video)
@@ -144,18 +157,20 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
 
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
-    """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background
-    (:func:`relightnet.render.composite`), the silhouette antialiased when asked → (H, W, 3) in [0, 1]."""
+    """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
+    (H, W, 3) uint8 (:func:`_composite_covered`), or with the silhouette antialiased
+    (:func:`relightnet.render.composite` of the whole frame, then analytic edge antialiasing) →
+    (H, W, 3) in [0, 1]."""
     from ..color import linear_to_srgb
     from ..render.shading import composite
 
+    if not antialias:
+        return _composite_covered(r, bg)
     a = r.alpha[0]
     bgf = torch.from_numpy(bg).float() / 255
     comp = composite(linear_to_srgb(r.image.clamp(0, 1)), r.alpha, bgf)[0]
-    if antialias:
-        smooth = aa(comp[None], r.frags, camera.transform(verts), faces)[0]
-        comp = torch.where(silhouette_pixels(a > 0)[..., None], smooth, comp)
-    return comp
+    smooth = aa(comp[None], r.frags, camera.transform(verts), faces)[0]
+    return torch.where(silhouette_pixels(a > 0)[..., None], smooth, comp)
 
 
 def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, antialias: bool, camera: Camera,

@@ -66,6 +66,7 @@ def vertex_transport(
     offset: float = 1e-4,
     threads: int | None = None,
     vertices: torch.Tensor | None = None,
+    manifold: str = "warn",
 ) -> torch.Tensor:
     """Per-vertex SH transport vectors of a mesh, with shadows and interreflections.
 
@@ -88,6 +89,8 @@ def vertex_transport(
             the faces a camera sees); the others get 0. Rays still hit the whole mesh, so the
             wanted rows equal those of the full computation. Not with ``bounces``, which
             needs every vertex; ignored without ``occlusion`` (every row is cheap then).
+        manifold: what to do with non-manifold edges (:func:`~relightnet.prt.check_mesh`); a
+            caller that renders one topology in many poses checks it once and passes ``"ignore"``.
 
     Returns:
         (V, K) float32 transport, or (V, K, 3) when ``bounces ≥ 1`` and the
@@ -98,7 +101,7 @@ def vertex_transport(
         raise InputError(f"bounces: expected an integer >= 0, got {bounces!r}")
     if bounces and not occlusion:
         raise InputError("bounces >= 1 needs occlusion=True: light only bounces off surfaces that block it")
-    verts, faces = check_mesh(verts, faces)
+    verts, faces = check_mesh(verts, faces, manifold=manifold)
     normals = check_normals(normals, verts.shape[0])
     rho = check_albedo(0.5 if albedo is None else albedo, verts.shape[0]) if bounces else None
     dirs_light, weights = transport_directions(n_dirs, seed)

@@ -23,12 +23,12 @@ from .camera import (
 from .fragments import Fragments
 from .interpolate import Interpolate, interpolate, interpolate_pixels, to_channels_first, to_channels_last
 from .rasterize import rasterize
-from .texture import texture
+from .texture import texture, texture_pixels
 
 __all__ = [
     "Camera", "default_camera", "fov_projection", "look_at", "ndc_to_pixel", "orthographic_camera",
     "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
     "Fragments", "rasterize",
     "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
-    "texture", "antialias", "silhouette_pixels",
+    "texture", "texture_pixels", "antialias", "silhouette_pixels",
 ]

@@ -87,6 +87,23 @@ class Fragments:
         out = torch.full((n, *values.shape[1:]), fill, dtype=values.dtype, device=values.device)
         return out.index_copy_(0, self.pix, values).view(*self.shape, *values.shape[1:])
 
+    def seen_vertices(self, faces: torch.Tensor, n_verts: int) -> torch.Tensor:
+        """Vertices of the faces that are nearest at some covered pixel (what the camera sees).
+
+        Args:
+            faces: (F, 3) int64 the faces that were rasterized.
+            n_verts: V, the number of vertices.
+
+        Returns:
+            (M,) int64 sorted vertex indices, each once (a boolean scatter: no sort of the N pixels).
+        """
+        check_shape(faces, ["F", 3], name="faces")
+        dev = self.pix.device
+        hit = torch.zeros(faces.shape[0], dtype=torch.bool, device=dev).index_fill_(0, self.pix_face, True)
+        used = faces.to(device=dev, dtype=torch.long)[hit].reshape(-1)
+        seen = torch.zeros(int(n_verts), dtype=torch.bool, device=dev).index_fill_(0, used, True)
+        return torch.nonzero(seen).squeeze(1)
+
     @cached_property
     def face_id(self) -> torch.Tensor:
         """(B, H, W) int64 nearest triangle per pixel, −1 on background."""

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import torch
 
 from ..checks import InputError, check_sh_count, check_shape
-from ..raster import Camera, Fragments, interpolate, interpolate_pixels, rasterize, texture
+from ..raster import Camera, Fragments, interpolate, interpolate_pixels, rasterize, texture_pixels
 from ..sh import rotate_sh, rotation_world_to_light
 from .shading import shading
 
@@ -142,15 +142,15 @@ def render_mesh(
     S_v = torch.stack([shading(Tb[b], L[b]) for b in range(B)])
     S = interpolate_pixels(S_v, frags, faces)  # (N, 3)
 
-    if isinstance(albedo, TexturedAlbedo):
-        uv = interpolate(albedo.uv.to(S), frags, albedo.uv_faces)
+    if isinstance(albedo, TexturedAlbedo):  # sampled at the covered pixels only
+        uv = interpolate_pixels(albedo.uv.to(S), frags, albedo.uv_faces)
         tex = albedo.tex if albedo.tex.dim() == 4 else albedo.tex[None]
-        A_img = texture(tex.permute(0, 3, 1, 2).to(S), uv, mask=frags.mask)
-        A = A_img.reshape(-1, 3).index_select(0, frags.pix)
+        if tex.shape[0] not in (1, B):
+            raise InputError(f"albedo.tex: batch {tex.shape[0]} must be 1 or match the cameras' {B}")
+        A = texture_pixels(tex.permute(0, 3, 1, 2).to(S), uv, frags.pix_batch if tex.shape[0] > 1 else None)
     else:
         albedo = _batched(albedo, B, ["V", 3], "albedo", nv)
         A = interpolate_pixels(albedo.to(S), frags, faces)
-        A_img = None
 
     H, W = camera.size
     image = torch.zeros(B * H * W, 3, dtype=S.dtype, device=S.device)
@@ -159,9 +159,7 @@ def render_mesh(
     if maps:
         t_flat = Tb.reshape(B, Tb.shape[1], -1)
         out["transport"] = interpolate(t_flat, frags, faces).view(B, H, W, *Tb.shape[2:])
-        if A_img is None:
-            A_img = torch.zeros_like(image).index_copy_(0, frags.pix, A).view(B, H, W, 3)
-        out["albedo"] = A_img
+        out["albedo"] = torch.zeros_like(image).index_copy_(0, frags.pix, A).view(B, H, W, 3)
         out["shading"] = torch.zeros_like(image).index_copy_(0, frags.pix, S).view(B, H, W, 3)
         out["depth"] = camera.depth_to_view(frags.depth)
         if normals is not None:

@@ -16,7 +16,7 @@ import torch
 
 from ..body.base import vertex_normals
 from ..checks import InputError, sh_order_from_count
-from ..prt import vertex_transport
+from ..prt import check_mesh, vertex_transport
 from ..raster import Camera, default_camera, look_at, perspective_camera, rasterize
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
 
@@ -184,6 +184,8 @@ def render_body_frames(
     t = 0
     n = n_frames
     for out in posed():
+        if t == 0:  # the topology is the body's, the same in every pose: checked once (it may warn)
+            check_mesh(out.verts[0], out.faces)
         n = out.batch_size if n is None else n
         if light.dim() == 3 and light.shape[0] not in (1, n):
             raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
@@ -192,9 +194,9 @@ def render_body_frames(
             frags, seen = None, None
             if visible_only and not bounces:
                 frags = rasterize(camera.transform(v), out.faces, camera.size)
-                seen = torch.unique(out.faces[torch.unique(frags.pix_face)])
+                seen = frags.seen_vertices(out.faces, v.shape[0])
             T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
-                                 albedo=bounce_albedo, seed=seed, vertices=seen)
+                                 albedo=bounce_albedo, seed=seed, vertices=seen, manifold="ignore")
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
             r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags)
             yield BodyFrame(t, r, T, v)

@@ -16,7 +16,7 @@ from torch import nn
 
 from ..checks import check_finite, check_sh_count, check_shape
 
-__all__ = ["shading", "shade", "composite", "Shade", "to_channels_last", "to_channels_first"]
+__all__ = ["shading", "shade", "composite", "composite_covered", "Shade", "to_channels_last", "to_channels_first"]
 
 #: Rows grouped per GEMM row in :func:`_project_rows` (see there).
 _GROUP = 4
@@ -141,6 +141,25 @@ def composite(fg: torch.Tensor, alpha: torch.Tensor, bg: torch.Tensor) -> torch.
     check_shape(bg, ["...", fg.shape[1], fg.shape[2], fg.shape[3]], name="bg")
     alpha = alpha.to(fg.dtype)
     return torch.lerp(bg.to(fg.dtype).expand_as(fg), fg, alpha)
+
+
+def composite_covered(fg: torch.Tensor, pix: torch.Tensor, bg: torch.Tensor) -> torch.Tensor:
+    """:func:`composite` for a binary coverage given as the covered pixels: they take ``fg``, every
+    other pixel keeps ``bg`` (which is not modified), without touching the uncovered pixels.
+
+    Args:
+        fg: (N, C) the covered pixels' values (any dtype, e.g. 8-bit).
+        pix: (N,) int64 flat indices into H·W (a rasterizer's ``Fragments.pix`` for one image).
+        bg: (H, W, C).
+
+    Returns:
+        (H, W, C) of ``bg``'s dtype.
+    """
+    check_shape(bg, ["H", "W", "C"], name="bg")
+    check_shape(fg, [pix.shape[0], bg.shape[-1]], name="fg")
+    out = bg.clone()
+    out.view(-1, bg.shape[-1]).index_copy_(0, pix, fg.to(out.dtype))
+    return out
 
 
 class Shade(nn.Module):

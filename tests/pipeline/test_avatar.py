@@ -246,3 +246,24 @@ def test_killed_avatar_leaves_no_temp_file_after_a_rerun(target, tmp_path, kill_
     assert left and not out.exists()
     assert main(["-q", *argv]) == 0
     assert temp_files(tmp_path) == [] and len(list(read_video(out))) == N
+
+
+def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
+    """The job converts only the covered pixels; the bytes equal compositing the whole float frame."""
+    from relightnet.body import make_motion
+    from relightnet.io.image import linear_to_srgb, to_uint8
+    from relightnet.pipeline.avatar import _composite_covered
+    from relightnet.pipeline.scene import avatar_albedo
+    from relightnet.sh import preset_light
+
+    light = preset_light("studio") * 3  # bright: some pixels above 1 (clamped)
+    fr = next(render_body_frames(anny_body, make_motion("walk", 1), light, avatar_albedo(anny_body), size=(40, 32),
+                                 n_dirs=8, n_frames=1, visible_only=True))
+    r = fr.render
+    assert (r.image > 1).any() and 0 < r.alpha.mean() < 1
+    bg = np.random.default_rng(0).integers(0, 256, (40, 32, 3), dtype=np.uint8)
+    a = r.alpha[0][..., None]
+    want = to_uint8(linear_to_srgb(r.image[0].clamp(0, 1)) * a + torch.from_numpy(bg) / 255 * (1 - a), srgb=False)
+    got = _composite_covered(r, bg)
+    assert got.dtype == np.uint8 and np.array_equal(got, want.numpy())
+    assert np.array_equal(bg, np.random.default_rng(0).integers(0, 256, (40, 32, 3), dtype=np.uint8))  # untouched

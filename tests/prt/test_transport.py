@@ -141,3 +141,21 @@ def test_vertex_subset_gives_the_same_rows_and_zero_elsewhere():
         vertex_transport(v, f, n, n_dirs=16, bounces=1, vertices=idx)
     with pytest.raises(InputError, match="indices"):
         vertex_transport(v, f, n, n_dirs=16, vertices=torch.tensor([len(v)]))
+
+
+def test_manifold_option_passes_to_the_mesh_check():
+    """A caller that renders one topology in many poses checks it once and then passes "ignore"."""
+    import warnings
+
+    from relightnet.prt import MeshWarning
+
+    v, f, n = sphere(1)
+    f3 = torch.cat([f, f[:1]])  # a duplicated face: three faces on its edges
+    with pytest.warns(MeshWarning, match="non-manifold"):
+        warned = vertex_transport(v, f3, n, n_dirs=32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quiet = vertex_transport(v, f3, n, n_dirs=32, manifold="ignore")
+    torch.testing.assert_close(quiet, warned, rtol=0, atol=0)
+    with pytest.raises(InputError, match="non-manifold"):
+        vertex_transport(v, f3, n, n_dirs=32, manifold="error")

@@ -28,3 +28,21 @@ def test_shape_checks():
     with pytest.raises(ShapeError):
         Fragments(torch.zeros(0, dtype=torch.long), torch.zeros(0, dtype=torch.long), torch.zeros(0, 3),
                   torch.zeros(0), (2, 2))
+
+
+def test_seen_vertices_are_the_vertices_of_the_nearest_faces():
+    from relightnet.raster import default_camera, rasterize
+
+    # Two overlapping quads: the nearer one (faces 2, 3) hides the other wholly; vertex 8 is unused.
+    far = [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1]]
+    near = [[-0.5, -0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, 0.5]]
+    verts = torch.tensor(far + near + [[5.0, 5, 5]]) * 0.2 + torch.tensor([0.0, 0.85, 0])
+    faces = torch.tensor([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]])
+    cam = default_camera(64)
+    frags = rasterize(cam.transform(verts), faces, cam.size)
+    seen = frags.seen_vertices(faces, 9)
+    assert seen.tolist() == torch.unique(faces[torch.unique(frags.pix_face)]).tolist()
+    assert seen.tolist() == list(range(8))  # the far quad shows around the near one
+    empty = Fragments(torch.zeros(0, dtype=torch.long), torch.zeros(0, dtype=torch.long), torch.zeros(0, 3),
+                      torch.zeros(0), (1, 2, 2))
+    assert empty.seen_vertices(faces, 9).numel() == 0

@@ -2,7 +2,7 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.raster import texture
+from relightnet.raster import texture, texture_pixels
 
 # 2×2 texture, channel 0; row 0 is the TOP of the image (v = 1), row 1 the bottom (v = 0)
 TEX = torch.tensor([[[[1.0, 2.0], [3.0, 4.0]]]])
@@ -60,3 +60,24 @@ def test_errors():
         texture(TEX, _uv([[0.5, 0.5]]), wrap="mirror")
     with pytest.raises(InputError):
         texture(torch.rand(3, 1, 2, 2), torch.rand(2, 1, 1, 2))
+
+
+def test_texture_pixels_is_texture_at_the_covered_pixels():
+    tex = torch.rand(2, 3, 4, 5)
+    uv = torch.rand(2, 6, 7, 2) * 1.4 - 0.2  # some outside [0, 1]: the wrap modes matter
+    mask = torch.rand(2, 6, 7) > 0.5
+    pix = torch.nonzero(mask.reshape(-1)).squeeze(1)
+    batch = pix // (6 * 7)
+    for filt in ("bilinear", "nearest"):
+        for wrap in ("clamp", "repeat"):
+            dense = texture(tex, uv, filter=filt, wrap=wrap, mask=mask)
+            got = texture_pixels(tex, uv.reshape(-1, 2)[pix], batch, filter=filt, wrap=wrap)
+            assert torch.equal(got, dense.reshape(-1, 3)[pix])
+    shared = texture_pixels(tex[:1], uv.reshape(-1, 2)[pix])
+    assert torch.equal(shared, texture(tex[:1], uv).reshape(-1, 3)[pix])
+    with pytest.raises(InputError, match="batch"):
+        texture_pixels(tex, uv.reshape(-1, 2)[pix])  # two textures: which one?
+    with pytest.raises(InputError, match="batch"):
+        texture_pixels(tex, uv.reshape(-1, 2)[pix], batch + 1)
+    with pytest.raises(InputError):
+        texture_pixels(tex, uv.reshape(-1, 2)[pix], batch, filter="cubic")
