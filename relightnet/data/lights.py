@@ -71,14 +71,12 @@ LIGHT_SOURCES = ("hdri", "sky_sun", "lobes", "fills", *FAMILIES)
 LEVEL_RANGE = (0.8, 2.0)
 
 
-_NORMALS = None
+#: The normals a light's level is taken over: a fixed 256-point lattice (a constant, made on import).
+LEVEL_NORMALS = fibonacci_sphere(256, dtype=torch.float64)[0]
 
 
 def _normals() -> torch.Tensor:
-    global _NORMALS
-    if _NORMALS is None:  # a fixed 256-point lattice (a constant, built on first use)
-        _NORMALS = fibonacci_sphere(256, dtype=torch.float64)[0]
-    return _NORMALS
+    return LEVEL_NORMALS
 
 
 def light_level(sh: torch.Tensor) -> float:
