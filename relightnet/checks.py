@@ -71,40 +71,54 @@ def check_shape(
     """
     shape = tuple(x.shape)
     bound: dict[str, int] = dict(dims or {})
-    spec = [str(s) for s in spec]
-    expected = _fmt(
-        [f"{s}={bound[s]}" if s in bound and not s.isdigit() else s for s in spec]
-    )
-    err = ShapeError(f"{name}: expected {expected}, got {_fmt(shape)}")
+    spec = [s if isinstance(s, str) else str(s) for s in spec]
     if spec.count("...") > 1:
         raise ValueError("check_shape: at most one '...' in a spec")
     if "..." in spec:
         i = spec.index("...")
         head, tail = spec[:i], spec[i + 1 :]
         if len(shape) < len(head) + len(tail):
-            raise err
+            raise _shape_error(name, spec, dims, shape)
         pairs = list(zip(head, shape[: len(head)], strict=True)) + list(
             zip(tail, shape[len(shape) - len(tail) :], strict=True)
         )
     else:
         if len(shape) != len(spec):
-            raise err
+            raise _shape_error(name, spec, dims, shape)
         pairs = list(zip(spec, shape, strict=True))
     for s, n in pairs:
         if s.isdigit():
             if int(s) != n:
-                raise err
+                raise _shape_error(name, spec, dims, shape)
         elif s in bound:
             if bound[s] != n:
-                raise err
+                raise _shape_error(name, spec, dims, shape)
         else:
             bound[s] = n
     return bound
 
 
+def _shape_error(name: str, spec: list, dims: Mapping[str, int] | None, shape: tuple) -> ShapeError:
+    """The error of :func:`check_shape`, built only when a check fails (names pinned by ``dims``
+    show their size, ``K=9``)."""
+    dims = dims or {}
+    expected = _fmt([f"{s}={dims[s]}" if s in dims and not s.isdigit() else s for s in spec])
+    return ShapeError(f"{name}: expected {expected}, got {_fmt(shape)}")
+
+
 def check_finite(x: torch.Tensor, name: str = "tensor") -> None:
-    """Raise :class:`InputError` if ``x`` holds NaN or Inf."""
-    if not bool(torch.isfinite(torch.as_tensor(x)).all()):
+    """Raise :class:`InputError` if ``x`` holds NaN or Inf.
+
+    Integer and boolean tensors are finite by type (no work). The check reads one value back
+    (``.item()``); while a graph is traced or compiled (ONNX export, ``torch.compile``) there
+    is no value to read and nothing is checked.
+    """
+    x = torch.as_tensor(x)
+    if not (x.is_floating_point() or x.is_complex()) or x.numel() == 0:
+        return
+    if torch.jit.is_tracing() or torch.compiler.is_compiling():
+        return
+    if not torch.isfinite(x).all().item():
         raise InputError(f"{name}: contains NaN or Inf values")
 
 

@@ -17,7 +17,9 @@ __all__ = [
     "OFFLINE_METHODS",
     "ONNX_SMOOTHERS",
     "POSE_PRESETS",
-    "SMOOTHING",
+    "SEQUENCE_SMOOTHING",
+    "STREAMING_SMOOTHING",
+    "VIDEO_SMOOTHING",
     "envmap_dir",
     "light_presets",
 ]
@@ -26,12 +28,18 @@ __all__ = [
 OFFLINE_METHODS = ("hermite", "poly", "savgol")
 #: Causal (streaming) light filters (:mod:`relightnet.temporal.causal`).
 CAUSAL_METHODS = ("ema", "one-euro", "fir")
-#: Light smoothing of the video jobs (avatar, compare): ``auto`` (``pooled`` when the network
-#: solves its light, else ``hermite``), ``pooled`` (one light solve per shot from the pooled
-#: evidence), an offline method, or ``none``.
-SMOOTHING = ("auto", "pooled", *OFFLINE_METHODS, "none")
-#: Streaming smoothers that can live inside an exported ONNX graph.
-ONNX_SMOOTHERS = ("none", "ema", "one-euro", "fir", "gated-one-euro", "pooled")
+#: Light smoothing of the offline video jobs (avatar, compare, evaluate --light): ``auto``
+#: (``pooled`` when the network solves its light, else ``hermite``), ``pooled`` (one light
+#: solve per shot from the pooled evidence), an offline or a causal method, or ``none``
+#: (:mod:`relightnet.temporal.registry` holds what each name is).
+VIDEO_SMOOTHING = ("auto", "pooled", *OFFLINE_METHODS, *CAUSAL_METHODS, "gated-one-euro", "none")
+#: Streaming smoothers that can live inside an exported ONNX graph (``onnx-run``'s state).
+ONNX_SMOOTHERS = ("none", *CAUSAL_METHODS, "gated-one-euro", "pooled")
+#: Light smoothing of the streaming jobs (relight-video, export): ``auto`` (``pooled`` with the
+#: light solve's evidence, else ``ema``) or an ONNX smoother.
+STREAMING_SMOOTHING = ("auto", *ONNX_SMOOTHERS)
+#: Light smoothing of a recorded light file (smooth-light): every method that needs no evidence.
+SEQUENCE_SMOOTHING = tuple(n for n in VIDEO_SMOOTHING if n not in ("auto", "pooled"))
 
 #: Where a person's mask comes from when none is given: the shipped segmentation or the CNN's mask head.
 MASK_SOURCES = ("segment", "head")

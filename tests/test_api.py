@@ -13,12 +13,6 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "relightnet"
 SUBPACKAGES = sorted(p.parent.name for p in ROOT.glob("*/__init__.py") if not p.parent.name.startswith("_"))
-#: Private names imported across subpackages that part A of issue 16 makes public (crop/paste in
-#: model.inference, the evidence stacking of pipeline.compare). Nothing may join this list.
-KNOWN_CROSS_PRIVATE = {
-    ("relightnet/pipeline/backends.py", "relightnet.model.inference", "_paste"),
-    ("relightnet/model/light_eval.py", "relightnet.pipeline.compare", "_stack_evidence"),
-}
 
 
 def _documented_constant(name: str, files) -> bool:
@@ -90,4 +84,4 @@ def test_no_private_or_unlisted_name_is_imported_across_subpackages():
                 continue  # a submodule
             if name.startswith("_") or (listed is not None and name not in listed):
                 found.add((str(f.relative_to(ROOT.parent)), module, name))
-    assert found <= KNOWN_CROSS_PRIVATE, sorted(found - KNOWN_CROSS_PRIVATE)
+    assert not found, sorted(found)  # a name another subpackage uses is public

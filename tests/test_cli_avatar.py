@@ -3,7 +3,7 @@
 import pytest
 
 from relightnet.cli import build_parser, main
-from relightnet.names import SMOOTHING
+from relightnet.names import VIDEO_SMOOTHING as SMOOTHING
 
 
 def _one_line(capsys, rc):

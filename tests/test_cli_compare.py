@@ -2,7 +2,7 @@
 tests/pipeline/test_compare.py)."""
 
 from relightnet.cli import build_parser, main
-from relightnet.names import SMOOTHING
+from relightnet.names import VIDEO_SMOOTHING as SMOOTHING
 
 
 def test_missing_data_and_a_file_for_the_report_folder(tmp_path, capsys):

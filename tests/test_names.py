@@ -30,13 +30,17 @@ def test_lists_agree_with_the_library():
     from relightnet.model.onnx_export import SMOOTHERS
     from relightnet.segment.sources import MASK_SOURCES, check_mask_source
     from relightnet.sh.presets import preset_names
-    from relightnet.temporal.smoothers import METHODS, SMOOTHING
+    from relightnet.temporal.registry import SMOOTHING_METHODS, smoothing_names
+    from relightnet.temporal.smoothers import METHODS
 
-    assert (SMOOTHERS, MASK_SOURCES, METHODS, SMOOTHING) == (
-        names.ONNX_SMOOTHERS, names.MASK_SOURCES, names.OFFLINE_METHODS, names.SMOOTHING)
+    assert (SMOOTHERS, MASK_SOURCES, METHODS) == (names.ONNX_SMOOTHERS, names.MASK_SOURCES, names.OFFLINE_METHODS)
     assert preset_names() == names.light_presets() == sorted(p.stem for p in names.envmap_dir().glob("*.exr"))
     assert [check_mask_source(s) for s in names.MASK_SOURCES] == list(names.MASK_SOURCES)
-    assert set(names.SMOOTHING) >= {"auto", "none", *names.OFFLINE_METHODS}
+    # the smoothing lists are the registry's methods, split by where they run
+    assert set(names.VIDEO_SMOOTHING) == {"auto", *SMOOTHING_METHODS}
+    assert set(names.STREAMING_SMOOTHING) == {"auto", *smoothing_names(causal=True)}
+    assert set(names.SEQUENCE_SMOOTHING) == set(smoothing_names(evidence=False))
+    assert set(names.OFFLINE_METHODS) == set(smoothing_names(causal=False))
 
 
 def test_importing_names_and_the_cli_parser_does_not_import_torch():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..names import MOTION_KINDS, SMOOTHING
+from ..names import MOTION_KINDS, VIDEO_SMOOTHING
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -72,9 +72,10 @@ def register(sub) -> None:
                    + "; or a light sequence file with one light per frame")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
                    "(default: full body at the origin)")
-    p.add_argument("--smoothing", default="auto", choices=SMOOTHING,
+    p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
                    help="light over time: pooled (one light solve per shot, split at detected light switches), "
-                        "hermite/poly/savgol (robust smoothing of per-frame lights), none; default auto: pooled "
+                        "hermite/poly/savgol (robust smoothing of per-frame lights), ema/one-euro/fir/gated-one-euro "
+                        "(causal filters), none; default auto: pooled "
                         "when the model solves its light, else hermite")
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")

@@ -11,7 +11,7 @@ logger = logging.getLogger("relightnet.checkpoint")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..model.checkpoint import convert_checkpoint
+    from ..model.convert import convert_checkpoint
 
     out = convert_checkpoint(args.input, out_file(args.output, "NEW"))
     logger.info("wrote %s", out)

@@ -7,7 +7,16 @@ import json
 import logging
 from pathlib import Path
 
-from .common import add_checkpoint_args, add_command, add_mask_source_arg, out_dir, out_file, read_photo, work_size
+from .common import (
+    add_checkpoint_args,
+    add_command,
+    add_mask_source_arg,
+    add_model_args,
+    out_dir,
+    out_file,
+    read_photo,
+    work_size,
+)
 
 logger = logging.getLogger("relightnet.model")
 
@@ -70,15 +79,14 @@ def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
 
 
 def run_estimate_light(args: argparse.Namespace) -> int:
-    from ..model.checkpoint import load_model
-    from ..model.inference import estimate_light
+    from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
 
     out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
     image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
-    model = load_model(args.checkpoint, device=args.device)
-    light = estimate_light(model, image, mask, size=args.size)
+    predict = make_predictor(args.backend, args.checkpoint, args.device, size=args.size)
+    light = predict.light(image, mask)
     save_light(out, light.cpu())
     logger.info("wrote %s", out)
     return 0
@@ -131,5 +139,5 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="light file: .npz/.json (ours) or .npy (Kanamori-Endo)")
     p.add_argument("--size", type=work_size, default=None,
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")
-    add_checkpoint_args(p)
+    add_model_args(p)
     p.set_defaults(func=run_estimate_light)

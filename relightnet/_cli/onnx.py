@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..names import ONNX_SMOOTHERS
+from ..names import STREAMING_SMOOTHING
 from .common import add_checkpoint_args, add_command, in_path, out_dir, out_file, work_size
 
 logger = logging.getLogger("relightnet.onnx")
@@ -15,11 +15,12 @@ logger = logging.getLogger("relightnet.onnx")
 def run_export(args: argparse.Namespace) -> int:
     from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
     from ..model.onnx_export import export_onnx
+    from ..temporal.registry import resolve_smoothing
 
     out = out_file(args.out, suffixes=(".onnx",))
     ckpt = Path(in_path(args.checkpoint, "--checkpoint")) if args.checkpoint else shipped_checkpoint()
     net = load_model(ckpt)
-    smoothing = args.smoothing if args.smoothing != "auto" else ("pooled" if net.solves else "ema")
+    smoothing = resolve_smoothing(args.smoothing, net.solves, causal=True)
     opts = {"alpha": args.alpha} if smoothing == "ema" else {}
     out = export_onnx(net, out, smoothing=smoothing,
                       train_config=load_checkpoint(ckpt).get("train_config"), **opts)
@@ -52,10 +53,10 @@ def register(sub) -> None:
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
     add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
-    p.add_argument("--smoothing", choices=("auto", *ONNX_SMOOTHERS), default="auto",
+    p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
                    help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
                         "since the last light switch — for a network that solves its light, else ema)")
-    p.add_argument("--alpha", type=float, default=0.3, help="EMA weight of the new frame (default: 0.3)")
+    p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")
     p.add_argument("--int8-mode", choices=("static", "dynamic"), default="static",
                    help="static: QDQ int8 convolutions calibrated on 16 generated people (default); "

@@ -7,7 +7,6 @@ import logging
 
 from .common import (
     LIGHT_HELP,
-    add_checkpoint_args,
     add_command,
     add_mask_source_arg,
     add_model_args,
@@ -15,6 +14,7 @@ from .common import (
     load_single_light,
     out_dir,
     out_file,
+    pos_float,
     read_photo,
 )
 
@@ -30,12 +30,12 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from ..io import atomic_write, write_image
-    from ..model.checkpoint import load_model
+    from ..pipeline.backends import make_predictor
     from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
     light = load_single_light(args.light)
-    model = load_model(args.checkpoint, device=args.device)
+    model = make_predictor(args.backend, args.checkpoint, args.device)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
@@ -66,10 +66,30 @@ def run_video(args: argparse.Namespace) -> int:
         in_path(args.masks, "--masks", "a folder of mask images or a mask video")
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
+    smoothing, alpha = args.smoothing, args.alpha
+    if isinstance(smoothing, float):  # the former spelling: the EMA weight
+        logger.warning("--smoothing %g: a number is deprecated; use --smoothing auto --alpha %g (or none for 1)",
+                       smoothing, smoothing)
+        smoothing, alpha = ("none" if smoothing == 1 else "auto"), smoothing
     relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
-                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
-                  mask_source=args.mask_source)
+                  smoothing=smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
+                  mask_source=args.mask_source, alpha=alpha)
     return 0
+
+
+def _streaming_smoothing(text: str):
+    """--smoothing of relight-video: a causal method name, or (deprecated) the EMA weight as a number."""
+    from ..names import STREAMING_SMOOTHING
+
+    if text in STREAMING_SMOOTHING:
+        return text
+    try:
+        w = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(STREAMING_SMOOTHING)}, got {text!r}") from None
+    if not 0 < w <= 1:
+        raise argparse.ArgumentTypeError(f"expected a method name, or a weight in (0, 1], got {text!r}")
+    return w
 
 
 def register(sub) -> None:
@@ -90,7 +110,7 @@ def register(sub) -> None:
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo (at its working size) instead of the photo divided by the "
                         "predicted shading (the default, which keeps the photo's detail)")
-    add_checkpoint_args(p)
+    add_model_args(p)
     p.set_defaults(func=run)
 
     p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",
@@ -104,8 +124,10 @@ def register(sub) -> None:
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="output video (.mp4 or .mkv)")
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
-    p.add_argument("--smoothing", type=float, default=0.3,
-                   help="EMA weight of the newest frame in the source-light estimate (1 = no smoothing)")
+    p.add_argument("--smoothing", type=_streaming_smoothing, default="auto",
+                   help="causal smoothing of the source-light estimate: auto, pooled, ema, one-euro, fir, "
+                        "gated-one-euro, none (default auto: pooled for a network that solves its light, else ema)")
+    p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo instead of each frame divided by the predicted shading")
     add_model_args(p)

@@ -6,59 +6,51 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..names import CAUSAL_METHODS, OFFLINE_METHODS
 from .common import add_command, nonneg_int, out_file, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
 
-OFFLINE = OFFLINE_METHODS
-CAUSAL = CAUSAL_METHODS
-
-
 def _smooth(args, sh):
-    """(smoothed, outliers (T,) bool, switches (T,) bool) for the chosen method."""
-    import torch
-
-    from ..checks import InputError, sh_order_from_count
-    from ..temporal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate, parse_eps, run_causal, smooth_lights
+    """(smoothed, outliers (T,) bool, switches (T,) bool) for the chosen method (the registry's
+    :func:`relightnet.temporal.smooth_sequence`; the command's defaults for each method's options)."""
+    from ..checks import InputError
+    from ..temporal import parse_eps
+    from ..temporal.registry import SMOOTHING_METHODS, smooth_sequence
 
     eps = parse_eps(args.outlier_eps)
     deg = 2 if args.degree is None else args.degree
-    if args.method in OFFLINE:
+    if not SMOOTHING_METHODS[args.method].causal:
         opts = {"hermite": {"knot_spacing": args.knots, "tangents": args.tangents},
                 "poly": {"degree": deg, "window": 15 if args.window is None else (args.window or None)},
                 "savgol": {"degree": deg, "window": 9 if args.window is None else args.window}}[args.method]
-        res = smooth_lights(sh, args.method, outlier_eps=args.outlier_eps, iterations=args.iterations,
-                            switches=None if args.switches == "none" else "auto", **opts)
+        res = smooth_sequence(sh, args.method, outlier_eps=args.outlier_eps, iterations=args.iterations,
+                              switches=None if args.switches == "none" else "auto", **opts)
         return res.smoothed, res.outliers, res.switches
     if eps is not None and eps[0] != "mad":
         raise InputError(
             f"--outlier-eps: causal methods take 'none' or '<c>mad' (c times the running innovation scale), "
             f"got {args.outlier_eps!r}"
         )
-    lmax = sh_order_from_count(sh.shape[-2])
-    filt = {"ema": lambda: EMAFilter(args.alpha),
-            "one-euro": lambda: OneEuroFilter(args.min_cutoff, args.beta, rate=args.rate, lmax=lmax),
-            "fir": lambda: FIRFilter(5 if args.window is None else args.window, args.degree or 0)}[args.method]()
-    if eps is None:
-        y = run_causal(filt, sh)
-        none = torch.zeros(sh.shape[0], dtype=torch.bool)
-        return y, none, none
-    y, states = run_causal(OutlierGate(filt, eps[1], args.persist, lmax=lmax), sh, return_states=True)
-    status = states[:, -1, 0, 0].round()
-    return y, status == 1, status == 2
+    opts = {"ema": {"alpha": args.alpha},
+            "one-euro": {"min_cutoff": args.min_cutoff, "beta": args.beta, "rate": args.rate},
+            "fir": {"window": 5 if args.window is None else args.window, "degree": args.degree or 0},
+            "gated-one-euro": {"persist": args.persist, **({"eps": eps[1]} if eps is not None else {})},
+            "none": {}}[args.method]
+    gate = None if eps is None or args.method in ("gated-one-euro", "none") else {"eps": eps[1],
+                                                                                  "persist": args.persist}
+    res = smooth_sequence(sh, args.method, gate=gate, **opts)
+    return res.smoothed, res.outliers, res.switches
 
 
 def run_smooth(args: argparse.Namespace) -> int:
-    from ..checks import InputError, ShapeError
+    from ..checks import ShapeError
     from ..io.atomic import atomic_write
     from ..sh.io import load_light, load_light_sequence, save_light, save_light_sequence
     from ..temporal import jitter, light_error, parse_eps
     from ..temporal.plot import light_curves_png
+    from ..temporal.registry import SEQUENCE_SMOOTHING, check_smoothing
 
-    methods = OFFLINE + CAUSAL
-    if args.method not in methods:
-        raise InputError(f"--method: expected one of {', '.join(methods)}, got {args.method!r}")
+    check_smoothing(args.method, SEQUENCE_SMOOTHING, "--smoothing")
     parse_eps(args.outlier_eps)
     out = out_file(args.output, "OUT", (".npz", ".json"))
     plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
@@ -106,18 +98,20 @@ def register(sub) -> None:
         "smooth-light",
         "Smooth a light sequence (T, K, 3) over time: offline regression (hermite spline, poly, savgol) with "
         "outlier correction and switch splitting, or a causal filter (ema, one-euro, fir) as used on live video.",
-        "  relightnet smooth-light lights.npz smooth.npz --method hermite --knots 8 --outlier-eps 3mad\n"
+        "  relightnet smooth-light lights.npz smooth.npz --smoothing hermite --knots 8 --outlier-eps 3mad\n"
         "  relightnet smooth-light lights.npz smooth.npz --truth true.npz --plot plot.png\n"
-        "  relightnet smooth-light lights.npz smooth.npz --method savgol --window 11 --degree 2\n"
-        "  relightnet smooth-light lights.npz live.npz --method one-euro --min-cutoff 0.5 --beta 1\n",
+        "  relightnet smooth-light lights.npz smooth.npz --smoothing savgol --window 11 --degree 2\n"
+        "  relightnet smooth-light lights.npz live.npz --smoothing one-euro --min-cutoff 0.5 --beta 1\n",
     )
     p.add_argument("input", metavar="IN", help="light sequence .npz/.json with sh (T, K, 3); when it also holds "
                    "'raw' (the estimates a smoothed file was made from: avatar's OUT.lights.npz, this command's "
                    ".npz output), those are smoothed")
     p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz (sh = smoothed, with raw, outliers, "
                    "switches) or .json (sh only)")
-    p.add_argument("--method", default="hermite",
-                   help=f"one of {', '.join(OFFLINE + CAUSAL)} (default: hermite)")
+    p.add_argument("--smoothing", "--method", dest="method", default="hermite",
+                   metavar="METHOD",
+                   help="hermite, poly, savgol (offline regressions), ema, one-euro, fir, gated-one-euro (causal "
+                        "filters, as on live video) or none (default: hermite; --method is the former spelling)")
     p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
     p.add_argument("--tangents", choices=("catmull-rom", "free"), default="catmull-rom",
                    help="hermite: knot tangents from finite differences or fitted (default: catmull-rom)")

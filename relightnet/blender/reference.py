@@ -122,6 +122,31 @@ def _cycles(blend, spp, b, threads, seed, repeat):
     return rgba, statistics.median(times)
 
 
+def _posed_body(body, params: Mapping):
+    """The one posed frame: (verts (V, 3), faces, normals, albedo for rendering, per-vertex albedo ρ
+    for interreflection) — Anny's default outfit, else grey 0.6."""
+    from ..body import AnnyBody, default_albedo
+
+    with torch.no_grad():
+        out = body(params)
+    if out.batch_size != 1:
+        raise InputError(f"params: expected one frame, got {out.batch_size}")
+    v, f, n = out.verts[0], out.faces, out.normals[0]
+    if isinstance(body, AnnyBody):
+        a = default_albedo(body)
+        return v, f, n, TexturedAlbedo(a.texture, body.uv, body.uv_faces), a.vertex
+    grey = torch.full((v.shape[0], 3), 0.6)
+    return v, f, n, grey, grey
+
+
+def _world_lights(light: str, camera: Camera):
+    """The environment map fixed to the world, and its band-limited SH version (lifted to be non-negative)."""
+    wl_env = world_light(light, camera, "world", band_limit=False)
+    if wl_env.kind != "envmap":
+        raise InputError(f"light {light}: expected an environment map (a preset or an .exr/.hdr file)")
+    return wl_env, world_light(light, camera, "world", band_limit=True, size=128, negative="lift")
+
+
 def reference_comparison(
     body,
     params: Mapping,
@@ -154,27 +179,13 @@ def reference_comparison(
     Returns:
         :class:`ReferenceResult`.
     """
-    from ..body import AnnyBody, default_albedo
     from ..prt import vertex_transport
 
     camera = default_camera(size) if camera is None else camera
     bounces = [int(b) for b in bounces]
     if not bounces or min(bounces) < 0:
         raise InputError(f"bounces: expected integers >= 0, got {bounces}")
-    with torch.no_grad():
-        out = body(params)
-    if out.batch_size != 1:
-        raise InputError(f"params: expected one frame, got {out.batch_size}")
-    v, f, n = out.verts[0], out.faces, out.normals[0]
-    if isinstance(body, AnnyBody):
-        a = default_albedo(body)
-        albedo, rho = TexturedAlbedo(a.texture, body.uv, body.uv_faces), a.vertex
-    else:
-        albedo = rho = torch.full((v.shape[0], 3), 0.6)
-    wl_env = world_light(light, camera, "world", band_limit=False)
-    if wl_env.kind != "envmap":
-        raise InputError(f"light {light}: expected an environment map (a preset or an .exr/.hdr file)")
-    wl_sh = world_light(light, camera, "world", band_limit=True, size=128, negative="lift")
+    (v, f, n, albedo, rho), (wl_env, wl_sh) = _posed_body(body, params), _world_lights(light, camera)
     L, L_lift = wl_env.sh, wl_sh.sh
 
     res = dict(ours={}, ours_lifted={}, cycles_sh={}, cycles_env={})

@@ -244,12 +244,10 @@ def export_scene(
     fps_int, fps_base = _fps(fps)
     blender_camera(camera)  # validate before touching Blender
     n_frames = v.shape[0]
-    verts_b = _np(world_to_blender(v.double()))
-    faces_np = _np(f, np.int64)
     uv_loops = None if uv is None else _np(torch.as_tensor(uv)[torch.as_tensor(uv_faces).long()].reshape(-1, 2))
-    normals_b = None
-    if normals is not None and n_frames == 1:
-        normals_b = _np(world_to_blender(torch.as_tensor(normals).double()))
+    mesh = {"verts_b": _np(world_to_blender(v.double())), "faces": _np(f, np.int64), "uv_loops": uv_loops,
+            "normals_b": (_np(world_to_blender(torch.as_tensor(normals).double()))
+                          if normals is not None and n_frames == 1 else None)}
     meta = {
         "frames": n_frames, "frame_start": 1, "fps": float(fps), "light_source": light.source,
         "light_kind": light.kind, "light_negative_fraction": light.negative,
@@ -257,8 +255,52 @@ def export_scene(
         "radiometry": "relightnet pixel = pi * Cycles pixel (diffuse BSDF, same world)",
     }
     meta.update(dict(metadata or {}))
-    json_meta = json.dumps(meta)
 
+    def build(bpy, tdir: Path) -> None:
+        scene = _build_scene(bpy, tdir, mesh, albedo, light, camera)
+        scene.render.fps, scene.render.fps_base = fps_int, fps_base
+        scene.frame_start, scene.frame_end = 1, n_frames
+        scene.frame_set(1)
+        configure_cycles(scene, spp=spp, bounces=bounces, denoise=False)
+        scene["relightnet"] = json.dumps(meta)
+
+    _save_blend(path, build)
+    logger.info("wrote %s (%d frame%s, %s world)", path, n_frames, "s" if n_frames > 1 else "", light.kind)
+    return path
+
+
+def _build_scene(bpy, tdir: Path, mesh: dict, albedo, light: WorldLight, camera: Camera):
+    """The mesh (animated when it has several frames), its material, the world and the camera in
+    Blender's current (empty) scene; texture and world images are written into ``tdir``."""
+    tex_path = None
+    if isinstance(albedo, TexturedAlbedo):
+        tex_path = tdir / "albedo.exr"
+        _write_exr(tex_path, torch.as_tensor(albedo.tex).clamp(0, 1))
+    env_path = tdir / "world.exr"
+    _write_exr(env_path, light.image)
+    scene = bpy.context.scene
+    scene.name = "relightnet"
+    verts_b = mesh["verts_b"]
+    ob = _mesh_object(bpy, "avatar", verts_b[0], mesh["faces"], mesh["normals_b"], mesh["uv_loops"])
+    if albedo is not None and not isinstance(albedo, TexturedAlbedo):
+        attr = ob.data.color_attributes.new("albedo", "FLOAT_COLOR", "POINT")
+        rgba = np.concatenate([_np(albedo), np.ones((verts_b.shape[1], 1), np.float32)], axis=1)
+        attr.data.foreach_set("color", rgba.ravel())
+    ob.data.materials.append(_material(bpy, albedo, tex_path))
+    if verts_b.shape[0] > 1:
+        _animate(bpy, ob, verts_b, 1)
+    scene.world = _world(bpy, env_path)
+    cam_ob, bc = _camera(bpy, camera)
+    scene.camera = cam_ob
+    scene.render.resolution_x, scene.render.resolution_y = bc.resolution
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    return scene
+
+
+def _save_blend(path: Path, build) -> None:
+    """Reset Blender, ``build(bpy, tmp folder)`` the scene, save it compressed to a temporary file beside
+    ``path`` and move it into place (nothing is left behind on failure)."""
     bpy = reset()
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.blend")
     os.close(fd)
@@ -266,33 +308,7 @@ def export_scene(
     bpy.context.preferences.filepaths.save_version = 0
     try:
         with tempfile.TemporaryDirectory() as tdir:
-            tex_path = None
-            if isinstance(albedo, TexturedAlbedo):
-                tex_path = Path(tdir) / "albedo.exr"
-                _write_exr(tex_path, torch.as_tensor(albedo.tex).clamp(0, 1))
-            env_path = Path(tdir) / "world.exr"
-            _write_exr(env_path, light.image)
-            scene = bpy.context.scene
-            scene.name = "relightnet"
-            ob = _mesh_object(bpy, "avatar", verts_b[0], faces_np, normals_b, uv_loops)
-            if albedo is not None and not isinstance(albedo, TexturedAlbedo):
-                attr = ob.data.color_attributes.new("albedo", "FLOAT_COLOR", "POINT")
-                rgba = np.concatenate([_np(albedo), np.ones((v.shape[1], 1), np.float32)], axis=1)
-                attr.data.foreach_set("color", rgba.ravel())
-            ob.data.materials.append(_material(bpy, albedo, tex_path))
-            if n_frames > 1:
-                _animate(bpy, ob, verts_b, 1)
-            scene.world = _world(bpy, env_path)
-            cam_ob, bc = _camera(bpy, camera)
-            scene.camera = cam_ob
-            scene.render.resolution_x, scene.render.resolution_y = bc.resolution
-            scene.render.resolution_percentage = 100
-            scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
-            scene.render.fps, scene.render.fps_base = fps_int, fps_base
-            scene.frame_start, scene.frame_end = 1, n_frames
-            scene.frame_set(1)
-            configure_cycles(scene, spp=spp, bounces=bounces, denoise=False)
-            scene["relightnet"] = json_meta
+            build(bpy, Path(tdir))
             with quiet((1,)):
                 bpy.ops.wm.save_as_mainfile(filepath=tmp, check_existing=False, compress=True, copy=True)
         os.chmod(tmp, 0o644)
@@ -301,8 +317,6 @@ def export_scene(
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
-    logger.info("wrote %s (%d frame%s, %s world)", path, n_frames, "s" if n_frames > 1 else "", light.kind)
-    return path
 
 
 def export_body_scene(

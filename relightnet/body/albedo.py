@@ -29,6 +29,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..color import srgb_to_linear_np
 
 __all__ = [
     "REGIONS",
@@ -69,16 +70,11 @@ _DEFAULT_COLORS = {
 }
 
 
-def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
 def skin_color(tone: float) -> torch.Tensor:
     """(3,) linear-RGB skin albedo; ``tone`` in [0, 1] from very light (0) to very dark (1)."""
     if not 0.0 <= float(tone) <= 1.0:
         raise InputError(f"skin_tone: expected a value in [0, 1], got {tone}")
-    lin = _srgb_to_linear(_SKIN_SRGB / 255.0)
+    lin = srgb_to_linear_np(_SKIN_SRGB / 255.0)
     x = float(tone) * (len(lin) - 1)
     i = min(int(x), len(lin) - 2)
     c = lin[i] * (1 - (x - i)) + lin[i + 1] * (x - i)

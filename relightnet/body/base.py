@@ -18,7 +18,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import roma
 import torch
 from torch import nn
 
@@ -105,12 +104,16 @@ def vertex_normals(verts: torch.Tensor, faces: torch.Tensor, eps: float = 1e-12)
 
 def rotvec_to_matrix(rotvec: torch.Tensor) -> torch.Tensor:
     """Rodrigues: (..., 3) axis-angle vectors (radians) → (..., 3, 3) rotation matrices."""
+    import roma  # imported on use: it loads torch._dynamo (about 2 s)
+
     check_shape(rotvec, ["...", 3], name="rotvec")
     return roma.rotvec_to_rotmat(rotvec)
 
 
 def matrix_to_rotvec(R: torch.Tensor) -> torch.Tensor:
     """(..., 3, 3) rotation matrices → (..., 3) axis-angle vectors, angle in [0, π]."""
+    import roma
+
     check_shape(R, ["...", 3, 3], name="R")
     return roma.rotmat_to_rotvec(R)
 

@@ -19,8 +19,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from ..color import luminance
 from ..sh import directions_to_latlong, light_to_world, world_to_light
-from .lights import LUMA
 
 __all__ = ["BACKGROUND_KINDS", "procedural_background", "envmap_background", "gaussian_blur"]
 
@@ -88,7 +88,7 @@ def procedural_background(rng: np.random.Generator, res: int, level: float) -> t
             w = torch.exp(-0.5 * d2 / rad**2)[..., None]
             img = img * (1 - 0.8 * w) + 0.8 * w * col
     img = gaussian_blur(img.clamp_min(0.0), blur)
-    mean = float((img @ torch.tensor(LUMA)).mean())
+    mean = float(luminance(img).mean())
     img = img * (level / max(mean, 1e-6))
     desc = {"kind": "procedural", "three_colors": three, "noise": use_noise, "blobs": use_blobs,
             "blur_px": blur, "level": level}

@@ -185,9 +185,17 @@ def load_config(path) -> SynthConfig:
 
 
 def sample_seed(cfg: SynthConfig, split: str, index: int) -> np.random.SeedSequence:
-    """The seed sequence of sample ``index`` of ``split``: independent of who makes it."""
+    """The seed sequence of sample ``index`` of ``split``: independent of who makes it.
+
+    Raises:
+        InputError: ``cfg`` not a :class:`SynthConfig`, an unknown split, ``index`` not an integer >= 0.
+    """
+    if not isinstance(cfg, SynthConfig):
+        raise InputError(f"cfg: expected a SynthConfig, got {type(cfg).__name__}")
     if split not in SPLITS:
         raise InputError(f"split: expected one of {SPLITS}, got {split!r}")
+    if isinstance(index, bool) or not isinstance(index, int | np.integer):
+        raise InputError(f"index: expected an integer, got {index!r}")
     if index < 0:
         raise InputError(f"index: expected >= 0, got {index}")
     return np.random.SeedSequence([cfg.seed, SPLITS.index(split), int(index)])

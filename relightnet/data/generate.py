@@ -52,22 +52,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import InputError
-from .config import SPLITS, SynthConfig, sample_seed
+from .config import SynthConfig, sample_seed
 from .render_sample import CLIP_KEY, render_clip
 from .sample import GENERATOR_VERSION, TEXTURE_SIZE, Sample, SynthAssets, assets_for, prepare_assets
 
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets",
            "generate_sample", "generate_sequence"]
-
-
-def _check(cfg, split: str, index) -> np.random.SeedSequence:
-    if not isinstance(cfg, SynthConfig):
-        raise InputError(f"cfg: expected a SynthConfig, got {type(cfg).__name__}")
-    if split not in SPLITS:
-        raise InputError(f"split: expected one of {SPLITS}, got {split!r}")
-    if isinstance(index, bool) or not isinstance(index, int | np.integer):
-        raise InputError(f"index: expected an integer, got {index!r}")
-    return sample_seed(cfg, split, int(index))
 
 
 def generate_sample(cfg: SynthConfig, split: str, index: int, body=None) -> Sample:
@@ -82,7 +72,7 @@ def generate_sample(cfg: SynthConfig, split: str, index: int, body=None) -> Samp
     Returns:
         :class:`Sample` with (H, W, ·) arrays and JSON-serialisable metadata.
     """
-    ss = _check(cfg, split, index)
+    ss = sample_seed(cfg, split, index)
     return render_clip(cfg, split, int(index), ss, assets_for(body), n_frames=None)
 
 
@@ -100,7 +90,7 @@ def generate_sequence(cfg: SynthConfig, split: str, index: int, n_frames: int, b
     Returns:
         :class:`Sample` whose arrays have a leading T axis (``light`` is (T, K, 3)).
     """
-    ss = _check(cfg, split, index)
+    ss = sample_seed(cfg, split, index)
     if isinstance(n_frames, bool) or not isinstance(n_frames, int | np.integer) or n_frames < 1:
         raise InputError(f"n_frames: expected an integer >= 1, got {n_frames!r}")
     child = np.random.SeedSequence(ss.entropy, spawn_key=(CLIP_KEY,))

@@ -51,14 +51,12 @@ _ZENITH = {
 }
 _XYZ_TO_RGB = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]])
 
-_DIRS: tuple[torch.Tensor, torch.Tensor] | None = None
+#: The shared direction set (D, 3) float64 and its quadrature weights (D,): a constant, made on import.
+_DIRS: tuple[torch.Tensor, torch.Tensor] = fibonacci_sphere(_N_DIRS, dtype=torch.float64)
 
 
 def _directions() -> tuple[torch.Tensor, torch.Tensor]:
-    """The shared direction set (D, 3) float64 and its quadrature weights (D,) (a constant)."""
-    global _DIRS
-    if _DIRS is None:
-        _DIRS = fibonacci_sphere(_N_DIRS, dtype=torch.float64)
+    """The shared direction set (D, 3) float64 and its quadrature weights (D,) (:data:`_DIRS`)."""
     return _DIRS
 
 

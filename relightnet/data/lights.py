@@ -38,6 +38,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..color import LUMA, luminance
 from ..sh import (
     ambient_light,
     directional_light,
@@ -69,23 +70,13 @@ LIGHT_SOURCES = ("hdri", "sky_sun", "lobes", "fills", *FAMILIES)
 #: Range of the light level (max luminance of the irradiance over all normals), log-uniform.
 LEVEL_RANGE = (0.8, 2.0)
 
-#: Rec. 709 luminance weights of linear RGB.
-LUMA = (0.2126, 0.7152, 0.0722)
 
-_NORMALS = None
+#: The normals a light's level is taken over: a fixed 256-point lattice (a constant, made on import).
+LEVEL_NORMALS = fibonacci_sphere(256, dtype=torch.float64)[0]
 
 
 def _normals() -> torch.Tensor:
-    global _NORMALS
-    if _NORMALS is None:  # a fixed 256-point lattice (a constant, built on first use)
-        _NORMALS = fibonacci_sphere(256, dtype=torch.float64)[0]
-    return _NORMALS
-
-
-def luminance(rgb) -> torch.Tensor:
-    """(..., 3) linear RGB → (...) Rec. 709 luminance."""
-    rgb = torch.as_tensor(rgb)
-    return rgb @ torch.tensor(LUMA, dtype=rgb.dtype)
+    return LEVEL_NORMALS
 
 
 def light_level(sh: torch.Tensor) -> float:

@@ -78,7 +78,7 @@ def shard_task(task: tuple, tick=None, fault: str | None = None) -> dict:
     Returns:
         ``{"split", "index", "start", "count", "sha256", "bytes", "fields"}``.
     """
-    from .synth import make_and_write_shard
+    from .making import make_and_write_shard
 
     cfg_dict, split, index, out_dir, compression = task
     return make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,

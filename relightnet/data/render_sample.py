@@ -14,15 +14,17 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..color import luminance
 from ..io.image import to_uint8
 from ..prt import vertex_transport
 from ..raster import antialias, interpolate, perspective_camera, silhouette_pixels
 from ..render.frame import TexturedAlbedo, render_mesh
+from ..render.shading import composite
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
-from .config import SynthConfig
+from .config import SynthConfig, sample_seed
 from .framing import camera_intrinsics, crop_camera
-from .lights import LUMA, LightDraw, light_at, sample_light
+from .lights import LightDraw, light_at, sample_light
 from .poses import sample_phenotype, sample_pose, sample_yaw
 from .sample import GENERATOR_VERSION, Sample, SynthAssets, assets_for
 from .textures import paint_albedo, sample_outfit, vertex_albedo
@@ -144,7 +146,7 @@ def _background(rng, cfg, split, assets: SynthAssets, draw: LightDraw, angle, ti
         q = torch.diag(torch.tensor([1.0, -1.0 if r_mirror else 1.0, 1.0], dtype=torch.float64))
         q = q @ rotation_about_up(r_angle, dtype=torch.float64).T
         img = envmap_background(assets.envmap(name), intr, cfg.res, q, 1.0, blur)
-        mean = float((img @ torch.tensor(LUMA)).mean())
+        mean = float(luminance(img).mean())
         img = img * (factor * subject / max(mean, 1e-6))
         return img, {"kind": "envmap", "hdri": name, "matches_light": False, "rotation_deg": math.degrees(r_angle),
                      "mirror": r_mirror, "blur_px": blur, "level": factor * subject}
@@ -225,9 +227,7 @@ def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None
     Returns:
         :class:`ClipGeometry` with (T, V, 3) vertices and normals.
     """
-    from .generate import _check  # generate imports this module
-
-    ss = _check(cfg, split, index)
+    ss = sample_seed(cfg, split, index)
     if n_frames is not None:
         if isinstance(n_frames, bool) or not isinstance(n_frames, int | np.integer) or n_frames < 1:
             raise InputError(f"n_frames: expected None or an integer >= 1, got {n_frames!r}")
@@ -235,72 +235,112 @@ def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None
     return _geometry(cfg, _streams(ss), assets_for(body), 1 if n_frames is None else int(n_frames))
 
 
+def _render_frames(cfg: SynthConfig, geo: ClipGeometry, assets: SynthAssets, draws, frames, tilt, dir_seed: int,
+                   bounce: bool):
+    """Stage render: PRT and the maps of every frame under its light → (per-field lists, fragments,
+    clip-space vertices) for the composite stage."""
+    faces, cam, talb = geo.faces, geo.camera, geo.albedo
+    grey = vertex_albedo(assets.atlas, talb.tex).mean(1) if bounce else None
+    field = torch.as_tensor(geo.regions)
+    kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=dir_seed, threads=torch.get_num_threads())
+    keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")
+    acc = {k: [] for k in keys}
+    clips, frs = [], []
+    for t in range(len(frames)):
+        i, angle, level = frames[t]
+        light = light_at(draws[i], angle, level, tilt)
+        v, n = geo.verts[t], geo.normals[t]
+        Tv = vertex_transport(v, faces, n, occlusion=True, bounces=int(bounce), albedo=grey, **kw)
+        Tu = vertex_transport(v, faces, n, occlusion=False, **kw)
+        rend = render_mesh(v, faces, Tv, talb, light, cam, normals=n, maps=True)
+        fr = rend.frags
+        reg = torch.einsum("nk,nkr->nr", fr.pix_bary.float(), field[faces[fr.pix_face]]).argmax(1)
+        parts = torch.zeros(cfg.res * cfg.res, dtype=torch.uint8)
+        parts.index_copy_(0, fr.pix, (reg + 1).to(torch.uint8))
+        for k, x in (("image", rend.image[0]), ("mask", rend.alpha[0]), ("albedo", rend.albedo[0]),
+                     ("transport", rend.transport[0]), ("transport_unoccluded", interpolate(Tu, fr, faces)[0]),
+                     ("light", light), ("normals", world_to_light(rend.normals[0])),
+                     ("depth", torch.nan_to_num(rend.depth[0], posinf=0.0)), ("parts", parts.view(cfg.res, cfg.res))):
+            acc[k].append(x)
+        clips.append(cam.transform(v))
+        frs.append(fr)
+    return acc, frs, clips
+
+
+def _composite_frames(cfg: SynthConfig, noise_rng, acc: dict, bg: torch.Tensor, frs, clips, faces):
+    """Stage composite: each frame over the background (:func:`relightnet.render.composite`), its
+    silhouette antialiased, sensor noise added → (8-bit person frames, 8-bit composites); the noise
+    goes into ``acc["image"]`` too."""
+    sigma = float(cfg.noise_std)
+    srgb, comp = [], []
+    for t in range(len(frs)):
+        mask = acc["mask"][t][..., None]
+        lin = composite(acc["image"][t][None], mask[None], bg)[0]
+        aa = antialias(lin[None], frs[t], clips[t], faces)[0]
+        lin = torch.where(silhouette_pixels(mask[..., 0] > 0)[..., None], aa, lin)
+        if sigma > 0:
+            noise = torch.from_numpy(noise_rng.normal(0.0, sigma, (cfg.res, cfg.res, 3)).astype(np.float32))
+            acc["image"][t] = acc["image"][t] + noise * mask
+            lin = lin + noise
+        srgb.append(to_uint8(acc["image"][t]))
+        comp.append(to_uint8(lin))
+    return srgb, comp
+
+
+def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draws, frames, switches, bg_desc,
+               bounce: bool, dir_seed: int, n_frames: int | None) -> dict:
+    """Stage write: the sample's JSON metadata (what was drawn)."""
+    outfit, view, box, pitch = geo.outfit, geo.view, geo.box, geo.pitch
+    intr = camera_intrinsics(geo.camera)
+    meta = {
+        "generator_version": GENERATOR_VERSION,
+        "kind": "still" if n_frames is None else "sequence",
+        "seed": {"seed": cfg.seed, "split": split, "index": index},
+        "phenotype": geo.phenotype,
+        "pose": {**geo.pose, "yaw_deg": math.degrees(geo.yaw)},
+        "outfit": {"skin_tone": outfit["skin_tone"], "hair": outfit["hair"] is not None, "sleeves": outfit["sleeves"],
+                   "legs": outfit["legs"], **{g: outfit[g]["pattern"] for g in ("top", "bottom", "shoes")}},
+        "camera": {"intrinsics": list(intr), "res": cfg.res, "view": torch.eye(4).tolist(),
+                   "world_to_camera": geo.world_to_camera.tolist(), "pitch_deg": math.degrees(pitch),
+                   "distance": view["distance"], "height": view["height"], "lateral": view["lateral"],
+                   "crop_box": box.as_list(), "crop_mode": box.mode, "base_intrinsics": [1000.0, 1000.0, 512.0, 512.0]},
+        "light": {**_light_meta(draws[0]), "tilt_deg": math.degrees(pitch)},
+        "background": bg_desc,
+        "flags": {"bounce": bounce, "noise_std": float(cfg.noise_std)},
+        "prt": {"lmax": cfg.lmax, "n_dirs": cfg.n_dirs, "direction_seed": dir_seed},
+    }
+    if n_frames is not None:
+        meta["lights"] = [_light_meta(d) for d in draws]
+        meta["frames"] = [{"light": i, "rotation_deg": math.degrees(a), "level": lv} for i, a, lv in frames]
+        meta["switch_frames"] = switches
+        meta["n_frames"] = n_frames
+        meta["fps"] = 30.0
+    return meta
+
+
 def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
                 n_frames: int | None) -> Sample:
-    """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames."""
+    """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames.
+
+    Stages: draw the geometry and lights (the random streams in a fixed order) → render every
+    frame's maps → composite over the drawn background → the arrays and metadata.
+    """
     T = 1 if n_frames is None else n_frames
     r = _streams(ss)
     geo = _geometry(cfg, r, assets, T)  # body, pose, view and albedo streams
     draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
     dir_seed = int(r["prt"].integers(2**31 - 1))
     bounce = bool(r["prt"].uniform() < cfg.bounce_prob)
-
-    v_cam, n_cam, R, pitch, w2c = geo.verts, geo.normals, geo.R, geo.pitch, geo.world_to_camera
-    cam, box, view, yaw = geo.camera, geo.box, geo.view, geo.yaw
-    phen, pose_desc, outfit = geo.phenotype, geo.pose, geo.outfit
-    intr = camera_intrinsics(cam)
-    talb = geo.albedo
-    tex = talb.tex
-    grey = vertex_albedo(assets.atlas, tex).mean(1) if bounce else None
-    tilt = rotation_world_to_light(R).float()
-    faces = geo.faces
-    field = torch.as_tensor(geo.regions)
-    threads = torch.get_num_threads()
-
-    keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")
-    acc = {k: [] for k in keys}
-    clips, frs = [], []
-    for t in range(T):
-        i, angle, level = frames[t]
-        light = light_at(draws[i], angle, level, tilt)
-        kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=dir_seed, threads=threads)
-        Tv = vertex_transport(v_cam[t], faces, n_cam[t], occlusion=True, bounces=int(bounce), albedo=grey, **kw)
-        Tu = vertex_transport(v_cam[t], faces, n_cam[t], occlusion=False, **kw)
-        rend = render_mesh(v_cam[t], faces, Tv, talb, light, cam, normals=n_cam[t], maps=True)
-        fr = rend.frags
-        reg = torch.einsum("nk,nkr->nr", fr.pix_bary.float(), field[faces[fr.pix_face]]).argmax(1)
-        parts = torch.zeros(cfg.res * cfg.res, dtype=torch.uint8)
-        parts.index_copy_(0, fr.pix, (reg + 1).to(torch.uint8))
-        acc["image"].append(rend.image[0])
-        acc["mask"].append(rend.alpha[0])
-        acc["albedo"].append(rend.albedo[0])
-        acc["transport"].append(rend.transport[0])
-        acc["transport_unoccluded"].append(interpolate(Tu, fr, faces)[0])
-        acc["light"].append(light)
-        acc["normals"].append(world_to_light(rend.normals[0]))
-        acc["depth"].append(torch.nan_to_num(rend.depth[0], posinf=0.0))
-        acc["parts"].append(parts.view(cfg.res, cfg.res))
-        clips.append(cam.transform(v_cam[t]))
-        frs.append(fr)
+    tilt = rotation_world_to_light(geo.R).float()
+    acc, frs, clips = _render_frames(cfg, geo, assets, draws, frames, tilt, dir_seed, bounce)
 
     m0 = acc["mask"][0] > 0
-    lum0 = acc["image"][0] @ torch.tensor(LUMA)
+    lum0 = luminance(acc["image"][0])
     subject = float(lum0[m0].mean()) if bool(m0.any()) else 0.2
     i0, a0, _ = frames[0]
-    bg, bg_desc = _background(r["background"], cfg, split, assets, draws[i0], a0, tilt, intr, subject)
-    sigma = float(cfg.noise_std)
-    srgb, comp = [], []
-    for t in range(T):
-        mask = acc["mask"][t][..., None]
-        lin = acc["image"][t] * mask + bg * (1 - mask)
-        aa = antialias(lin[None], frs[t], clips[t], faces)[0]
-        lin = torch.where(silhouette_pixels(mask[..., 0] > 0)[..., None], aa, lin)
-        if sigma > 0:
-            noise = torch.from_numpy(r["noise"].normal(0.0, sigma, (cfg.res, cfg.res, 3)).astype(np.float32))
-            acc["image"][t] = acc["image"][t] + noise * mask
-            lin = lin + noise
-        srgb.append(to_uint8(acc["image"][t]))
-        comp.append(to_uint8(lin))
+    bg, bg_desc = _background(r["background"], cfg, split, assets, draws[i0], a0, tilt,
+                              camera_intrinsics(geo.camera), subject)
+    srgb, comp = _composite_frames(cfg, r["noise"], acc, bg, frs, clips, geo.faces)
 
     arrays = {k: torch.stack(v) for k, v in acc.items()}
     arrays["image_srgb"] = torch.stack(srgb)
@@ -311,29 +351,5 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
         a = v.detach().cpu().numpy()
         a = a if a.dtype in (np.uint8,) else a.astype(np.float32)
         out_arrays[k] = np.ascontiguousarray(a[0] if n_frames is None else a)
-
-    meta = {
-        "generator_version": GENERATOR_VERSION,
-        "kind": "still" if n_frames is None else "sequence",
-        "seed": {"seed": cfg.seed, "split": split, "index": index},
-        "phenotype": phen,
-        "pose": {**pose_desc, "yaw_deg": math.degrees(yaw)},
-        "outfit": {"skin_tone": outfit["skin_tone"], "hair": outfit["hair"] is not None, "sleeves": outfit["sleeves"],
-                   "legs": outfit["legs"], **{g: outfit[g]["pattern"] for g in ("top", "bottom", "shoes")}},
-        "camera": {"intrinsics": list(intr), "res": cfg.res, "view": torch.eye(4).tolist(),
-                   "world_to_camera": w2c.tolist(), "pitch_deg": math.degrees(pitch), "distance": view["distance"],
-                   "height": view["height"], "lateral": view["lateral"], "crop_box": box.as_list(),
-                   "crop_mode": box.mode, "base_intrinsics": [1000.0, 1000.0, 512.0, 512.0]},
-        "light": {**_light_meta(draws[0]), "tilt_deg": math.degrees(pitch)},
-        "background": bg_desc,
-        "flags": {"bounce": bounce, "noise_std": sigma},
-        "prt": {"lmax": cfg.lmax, "n_dirs": cfg.n_dirs, "direction_seed": dir_seed},
-    }
-    if n_frames is not None:
-        meta["lights"] = [_light_meta(d) for d in draws]
-        meta["frames"] = [{"light": i, "rotation_deg": math.degrees(a), "level": lv} for i, a, lv in frames]
-        meta["switch_frames"] = switches
-        meta["n_frames"] = n_frames
-        meta["fps"] = 30.0
-    return Sample(out_arrays, meta)
-
+    return Sample(out_arrays, _clip_meta(cfg, split, index, geo, draws, frames, switches, bg_desc, bounce, dir_seed,
+                                         n_frames))

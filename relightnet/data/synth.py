@@ -31,11 +31,10 @@ import os
 import time
 from pathlib import Path
 
-import numpy as np
-
 from ..checks import InputError, RelightError
 from ..io import atomic_write
 from .config import SPLITS, SynthConfig
+from .making import fields_of, make_and_write_shard, make_items, make_shard
 from .shards import (
     FORMAT,
     MANIFEST_NAME,
@@ -45,8 +44,6 @@ from .shards import (
     read_shard,
     shard_name,
     shard_plan,
-    stack_samples,
-    write_shard,
 )
 
 __all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed", "default_workers"]
@@ -115,10 +112,6 @@ def _merge_existing(out_dir: Path, cfg: SynthConfig, version: str) -> dict:
     return new
 
 
-def _fields_of(arrays: dict) -> dict:
-    return {k: {"shape": list(a.shape[1:]), "dtype": str(a.dtype)} for k, a in sorted(arrays.items()) if k != "meta"}
-
-
 def _shard_ok(path: Path, cfg: SynthConfig, start: int, count: int) -> dict | None:
     """Load an unlisted shard file and return its fields if it is a complete, well-formed shard."""
     try:
@@ -133,7 +126,7 @@ def _shard_ok(path: Path, cfg: SynthConfig, start: int, count: int) -> dict | No
     if len(meta) != count or any(m.get("seed", {}).get("index", start + j) != start + j
                                  for j, m in enumerate(meta) if isinstance(m, dict)):
         return None
-    return _fields_of({k: v for k, v in arrays.items() if k != "meta"})
+    return fields_of({k: v for k, v in arrays.items() if k != "meta"})
 
 
 def _finished(out_dir: Path, manifest: dict, cfg: SynthConfig, split: str, index: int, start: int,
@@ -167,74 +160,6 @@ def _add_entry(manifest: dict, r: dict) -> None:
     entries.sort(key=lambda e: e["index"])
     manifest["fields"] = r["fields"]
     manifest["complete"] = all(len(v["shards"]) == v["n_shards"] for v in manifest["splits"].values())
-
-
-@contextlib.contextmanager
-def _one_thread():
-    """Run torch single-threaded (reductions then do not depend on the machine's core count)."""
-    import torch
-
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(n)
-
-
-def _generate(cfg: SynthConfig, split: str, index: int, body):
-    from .generate import generate_sample, generate_sequence
-
-    if cfg.sequence_frames:
-        return generate_sequence(cfg, split, index, cfg.sequence_frames, body=body)
-    return generate_sample(cfg, split, index, body=body)
-
-
-def make_items(cfg: SynthConfig, split: str, indices, body=None) -> list:
-    """Generate samples (or clips) in this process, single-threaded as the workers do.
-
-    ``body``: None, an AnnyBody or the generator's ``SynthAssets`` (reused across samples).
-    """
-    from .generate import prepare_assets
-
-    body = body if body is not None else prepare_assets()
-    with _one_thread():
-        return [_generate(cfg, split, int(i), body) for i in indices]
-
-
-def make_shard(cfg: SynthConfig, split: str, index: int, body=None) -> dict[str, np.ndarray]:
-    """The arrays of shard ``index`` of ``split`` (as written by :func:`run_synth`)."""
-    plan = shard_plan(cfg, split)
-    if not 0 <= index < len(plan):
-        raise InputError(f"shard index: {split} has {len(plan)} shards, got {index}")
-    _, start, count = plan[index]
-    return stack_samples(make_items(cfg, split, range(start, start + count), body))
-
-
-def make_and_write_shard(cfg: SynthConfig, split: str, index: int, out_dir, compression: str = "deflate",
-                         body=None, tick=None) -> dict:
-    """Generate shard ``index`` of ``split`` and write it to ``out_dir`` (atomically).
-
-    Args:
-        tick: optional callable, called after every sample (progress).
-
-    Returns:
-        ``{"split", "index", "start", "count", "sha256", "bytes", "fields"}``.
-    """
-    from .generate import prepare_assets
-
-    _, start, count = shard_plan(cfg, split)[index]
-    body = body if body is not None else prepare_assets()
-    samples = []
-    with _one_thread():
-        for j in range(count):
-            samples.append(_generate(cfg, split, start + j, body))
-            if tick is not None:
-                tick()
-    arrays = stack_samples(samples)
-    del samples
-    info = write_shard(Path(out_dir) / shard_name(split, index), arrays, compression=compression)
-    return {"split": split, "index": index, "start": start, "count": count, **info, "fields": _fields_of(arrays)}
 
 
 def _cleanup_temp(out_dir: Path) -> None:
@@ -279,6 +204,38 @@ def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result,
         _run_here(tasks, body, max_retries, on_result, on_tick)
     else:
         run_pool(tasks, workers, on_result, on_tick, max_retries=max_retries, fault=fault)
+
+
+def _make_shards(out_dir: Path, cfg: SynthConfig, manifest: dict, todo: list, total: int, workers: int, ray, body,
+                 max_retries: int, compression: str, progress: bool) -> None:
+    """Dispatch the shards still to make (:func:`_dispatch`), listing each in the manifest as it
+    comes in; raises :class:`ShardsFailed` naming those that still failed after their retries."""
+    from tqdm import tqdm
+
+    remaining = sum(t[3] for t in todo)
+    bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
+               smoothing=0.1, dynamic_ncols=True)
+    failures = []
+
+    def finished(r: dict) -> None:
+        if "error" in r:
+            failures.append((shard_name(r["split"], r["index"]), r["error"]))
+            return
+        _add_entry(manifest, r)
+        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
+            _write_manifest(out_dir, manifest)
+            written[0] = time.monotonic()
+
+    written = [time.monotonic()]
+    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
+    try:
+        _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
+    finally:
+        bar.close()
+        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
+        _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
+    if failures:
+        raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
 
 
 def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress: bool = True,
@@ -344,31 +301,7 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
     if not todo:
         return manifest
 
-    from tqdm import tqdm
-
-    bar = tqdm(total=total, initial=total - remaining, unit="sample", desc="synth", disable=not progress,
-               smoothing=0.1, dynamic_ncols=True)
-    failures = []
-
-    def finished(r: dict) -> None:
-        if "error" in r:
-            failures.append((shard_name(r["split"], r["index"]), r["error"]))
-            return
-        _add_entry(manifest, r)
-        if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
-            _write_manifest(out_dir, manifest)
-            written[0] = time.monotonic()
-
-    written = [time.monotonic()]
-    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
-    try:
-        _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
-    finally:
-        bar.close()
-        _write_manifest(out_dir, manifest)  # every shard written is listed, whatever happened
-        _cleanup_temp(out_dir)  # every writer has stopped: no temporary file outlives the run
-    if failures:
-        raise ShardsFailed(out_dir, sorted(failures), int(max_retries) + 1)
+    _make_shards(out_dir, cfg, manifest, todo, total, workers, ray, body, max_retries, compression, progress)
     logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
     return manifest
 

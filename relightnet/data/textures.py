@@ -38,6 +38,7 @@ import torch
 
 from ..body import ANNY_PARTS, REGIONS, anny_part_labels, skin_color
 from ..checks import InputError
+from ..color import srgb_to_linear_np
 from ..raster import rasterize
 
 __all__ = ["ALBEDO_MIN", "ALBEDO_MAX", "PATTERNS", "UVAtlas", "uv_atlas", "region_field", "texel_regions",
@@ -55,11 +56,6 @@ _GARMENT_FAMILIES = {  # sRGB anchors of common garment colours
     "olive": (0.38, 0.4, 0.25), "burgundy": (0.45, 0.12, 0.17), "brown": (0.4, 0.28, 0.2),
     "cream": (0.92, 0.88, 0.8), "charcoal": (0.2, 0.2, 0.22),
 }
-
-
-def _lin(srgb) -> np.ndarray:
-    c = np.clip(np.asarray(srgb, dtype=np.float64), 0, 1)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 @dataclass(frozen=True)
@@ -166,7 +162,7 @@ def _garment_color(rng: np.random.Generator, region: str) -> np.ndarray:
         c = np.asarray(fam) * np.exp(rng.normal(0.0, 0.12, 3))
     else:
         c = np.array(colorsys.hsv_to_rgb(rng.uniform(), rng.uniform(0.2, 0.9), rng.uniform(0.2, 0.95)))
-    return _lin(c)
+    return srgb_to_linear_np(c, clip=True)
 
 
 def sample_outfit(rng: np.random.Generator) -> dict:
@@ -181,9 +177,10 @@ def sample_outfit(rng: np.random.Generator) -> dict:
     """
     tone = float(rng.beta(1.1, 1.4))
     skin = skin_color(tone).double().numpy() * np.exp(rng.normal(0.0, 0.04, 3))
-    hair_c = _lin(_HAIR_SRGB[int(rng.choice(len(_HAIR_SRGB), p=_HAIR_P))]) * np.exp(rng.normal(0, 0.1, 3))
+    hair_srgb = _HAIR_SRGB[int(rng.choice(len(_HAIR_SRGB), p=_HAIR_P))]
+    hair_c = srgb_to_linear_np(hair_srgb, clip=True) * np.exp(rng.normal(0, 0.1, 3))
     bald = bool(rng.uniform() < 0.08)
-    iris = _lin(_IRIS_SRGB[int(rng.integers(len(_IRIS_SRGB)))])
+    iris = srgb_to_linear_np(_IRIS_SRGB[int(rng.integers(len(_IRIS_SRGB)))], clip=True)
     sleeves = ("none", "short", "elbow", "long")[int(rng.choice(4, p=[0.15, 0.35, 0.1, 0.4]))]
     legs = ("shorts", "knee", "long")[int(rng.choice(3, p=[0.15, 0.15, 0.7]))]
     out = {"skin_tone": tone, "skin": skin.tolist(), "hair": None if bald else hair_c.tolist(),

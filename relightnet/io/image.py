@@ -19,44 +19,13 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite
+from ..color import linear_to_srgb, srgb_to_linear
 from .atomic import atomic_write
 from .limits import check_pixels, max_pixels
 from .probe import header_size
 
 __all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_image_alpha",
            "read_alpha", "read_mask"]
-
-
-def linear_to_srgb(x: torch.Tensor) -> torch.Tensor:
-    """Exact piecewise sRGB encoding (IEC 61966-2-1) of linear values.
-
-    ``12.92 x`` for ``x ≤ 0.0031308``, else ``1.055 x^(1/2.4) − 0.055``.
-
-    Args:
-        x: (...) linear values (not clamped; values above 1 stay above 1).
-
-    Returns:
-        (...) encoded values, same dtype.
-    """
-    x = torch.as_tensor(x)
-    hi = 1.055 * x.clamp_min(0.0031308) ** (1 / 2.4) - 0.055
-    return torch.where(x <= 0.0031308, 12.92 * x, hi)
-
-
-def srgb_to_linear(x: torch.Tensor) -> torch.Tensor:
-    """Exact inverse of :func:`linear_to_srgb`.
-
-    ``c / 12.92`` for ``c ≤ 0.04045``, else ``((c + 0.055)/1.055)^2.4``.
-
-    Args:
-        x: (...) sRGB-encoded values in [0, 1].
-
-    Returns:
-        (...) linear values, same dtype.
-    """
-    x = torch.as_tensor(x)
-    hi = ((x.clamp_min(0.04045) + 0.055) / 1.055) ** 2.4
-    return torch.where(x <= 0.04045, x / 12.92, hi)
 
 
 def _as_hwc(img, name: str) -> torch.Tensor:

@@ -1,10 +1,20 @@
 """The 2D path's CNN: network, losses, checkpoints, training loop, inference on real images."""
 
 from .checkpoint import SHIPPED, load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
-from .inference import CropBox, estimate_light, estimate_light_evidence, mask_crop_box, predict_image
-from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
+from .inference import (
+    CropBox,
+    crop_to_box,
+    estimate_light,
+    estimate_light_evidence,
+    frame_person,
+    mask_crop_box,
+    paste_from_box,
+    predict_image,
+)
+from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve, stack_evidence
 from .losses import LossWeights, erode, masked_l1, relight_losses, total_variation
 from .network import (
+    DEFAULT_INPUT_SIZE,
     LIGHT_MODES,
     NetConfig,
     Prediction,
@@ -13,14 +23,16 @@ from .network import (
     pad_to_multiple,
     photo_albedo,
     relight,
+    shade_map,
     shading_map,
 )
 
 __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
-    "CropBox", "estimate_light", "estimate_light_evidence", "mask_crop_box", "predict_image",
-    "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve",
+    "CropBox", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person", "mask_crop_box",
+    "paste_from_box", "predict_image",
+    "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve", "stack_evidence",
     "LossWeights", "erode", "masked_l1", "relight_losses", "total_variation",
-    "LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "pad_to_multiple", "photo_albedo",
-    "relight", "shading_map",
+    "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "pad_to_multiple",
+    "photo_albedo", "relight", "shade_map", "shading_map",
 ]

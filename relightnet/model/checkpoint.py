@@ -3,12 +3,12 @@
 A checkpoint is a ``torch.save`` dict of tensors and plain Python values only (dicts, lists,
 tuples, strings, numbers, booleans, None; configs as dicts): ``format`` (a version tag),
 ``net_config``, ``model`` (state dict), ``step``, ``input_size`` (side of the training
-images), and for training runs ``optimizer``, ``scheduler``, ``train_config`` and ``rng``
-(torch's CPU RNG state). :func:`save_checkpoint` refuses anything else, and
+images, also ``net_config["input_size"]``), and for training runs ``optimizer``, ``scheduler``,
+``train_config`` and ``rng`` (torch's CPU RNG state). :func:`save_checkpoint` refuses anything else, and
 :func:`load_checkpoint` reads with ``torch.load(weights_only=True)``: a file that names any
 other Python object is refused by name and nothing in it runs. A checkpoint of your own
 that holds numpy values or config objects (older code) converts with
-:func:`convert_checkpoint` (``relightnet convert-checkpoint OLD NEW``).
+:func:`relightnet.model.convert.convert_checkpoint` (``relightnet convert-checkpoint OLD NEW``).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from ..io import atomic_write
 from .network import NetConfig, RelightNet
 
 __all__ = ["FORMAT", "SHIPPED", "save_checkpoint", "load_checkpoint", "load_model", "shipped_checkpoint",
-           "release_checkpoint", "convert_checkpoint"]
+           "release_checkpoint"]
 
 FORMAT = "relightnet-ckpt-2"
 #: Formats read: 1 had the same plain content (it loads with ``weights_only=True`` too).
@@ -40,7 +40,14 @@ _PLAIN = (str, int, float, bool, type(None), torch.Tensor)
 
 def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 0, optimizer=None, scheduler=None,
                     train_config: dict | None = None, **extra) -> Path:
-    """Write a checkpoint atomically (a crash never leaves a truncated file)."""
+    """Write a checkpoint atomically (a crash never leaves a truncated file).
+
+    The working size is stored twice, as ``net_config["input_size"]`` and as the top-level
+    ``input_size`` that older readers use; an ``input_size`` in ``extra`` sets both.
+    """
+    if "input_size" in extra:
+        net_config = dataclasses.replace(net_config, input_size=extra["input_size"])
+    extra["input_size"] = net_config.input_size
     state = {
         "format": FORMAT,
         "net_config": dataclasses.asdict(net_config),
@@ -188,12 +195,13 @@ def load_model(path=None, device="cpu") -> RelightNet:
     device = check_device(device, "device")
     path = shipped_checkpoint() if path is None else Path(path)
     state = load_checkpoint(path, map_location="cpu")
-    model = _network(_net_config(state, path), state["model"], path)
-    size = state.get("input_size", 256)
+    cfg = _net_config(state, path)
+    # The side of the square crops it was trained on (its working size): the top-level key that
+    # every checkpoint written by training has, else the configuration's (default) value.
+    size = state.get("input_size", cfg.input_size)
     if type(size) is not int or not 16 <= size <= _MAX_CONFIG_INT:
         raise InputError(f"{path}: 'input_size' {size!r} is not a size in pixels")
-    #: The side of the square crops it was trained on: the natural working size for inference.
-    model.input_size = size
+    model = _network(dataclasses.replace(cfg, input_size=size), state["model"], path)
     return model.to(device).eval()
 
 
@@ -203,64 +211,5 @@ def release_checkpoint(src, dst, **extra) -> Path:
     for key in ("optimizer", "scheduler", "rng"):
         state.pop(key, None)
     state.update(extra)
-    state["format"] = FORMAT
-    return _write(dst, state)
-
-
-def _numpy_globals() -> list:
-    import numpy as np
-
-    core = np._core if hasattr(np, "_core") else np.core
-    dtypes = [getattr(np.dtypes, n) for n in dir(np.dtypes) if n.endswith("DType")]
-    return [core.multiarray._reconstruct, core.multiarray.scalar, np.ndarray, np.dtype, *dtypes]
-
-
-def _to_plain(value, depth: int = 0):
-    """numpy arrays → tensors, numpy scalars → Python numbers, config dataclasses → dicts (recursively)."""
-    import numpy as np
-
-    if depth > 32:
-        raise InputError("checkpoint: nested deeper than 32 levels")
-    if isinstance(value, np.ndarray):
-        if value.dtype.hasobject:
-            raise InputError("checkpoint: holds a numpy object array")
-        return torch.from_numpy(value.astype(value.dtype.newbyteorder("="), copy=True))
-    if isinstance(value, np.generic):
-        return value.item()
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return _to_plain(dataclasses.asdict(value), depth + 1)
-    if isinstance(value, dict):
-        return {k: _to_plain(v, depth + 1) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return type(value)(_to_plain(v, depth + 1) for v in value)
-    return value
-
-
-def convert_checkpoint(src, dst) -> Path:
-    """Rewrite an older checkpoint of your own in the current safe form.
-
-    It is read with ``torch.load(weights_only=True)`` allowing, besides tensors and plain values,
-    numpy arrays, scalars and dtypes and relightnet's own ``NetConfig``/``TrainConfig`` (rebuilt
-    field by field, no code of the file runs); these become tensors, Python numbers and dicts.
-    Anything else is still refused by name. The weights are copied bit for bit.
-
-    Returns:
-        ``dst``, written atomically (it may be ``src``).
-    """
-    from .training import TrainConfig
-
-    src = Path(src)
-    if not src.is_file():
-        raise InputError(f"{src}: checkpoint not found")
-    try:
-        with torch.serialization.safe_globals([*_numpy_globals(), NetConfig, TrainConfig]):
-            state = torch.load(src, map_location="cpu", weights_only=True)
-    except pickle.UnpicklingError as e:
-        m = re.search(r"GLOBAL ([\w.]+)", str(e))
-        raise InputError(f"{src}: refused: it holds {m.group(1) if m else 'an object that is not allowed'}, which "
-                         "is not a tensor, plain value, numpy value or relightnet config; nothing was run") from None
-    except Exception as e:
-        raise InputError(f"{src}: unreadable checkpoint ({type(e).__name__})") from None
-    state = _validated(_to_plain(state), src)
     state["format"] = FORMAT
     return _write(dst, state)

@@ -17,7 +17,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb, write_image
-from .network import Prediction, RelightNet, photo_albedo, shading_map
+from .network import Prediction, RelightNet, photo_albedo, shade_map, shading_map
 from .training import TrainData, batch_to_input
 
 __all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation", "write_report"]
@@ -55,6 +55,32 @@ def baseline_from_train(data_dir, target: str = "transport") -> dict:
 
 
 @torch.no_grad()
+def _score(add, A: torch.Tensor, T: torch.Tensor, L: torch.Tensor, novel: torch.Tensor, truth: dict):
+    """Score one candidate's maps (A (B, 3, H, W), T (B, K, H, W), L (B, K, 3)) item by item against the
+    truth, relit under the ``novel`` lights: ``add(metric, value)`` per item; returns (relit, shading)."""
+    M, T_gt = truth["mask"], truth["transport"]
+    S_new, S_pred = shading_map(T, novel), shading_map(T, L)
+    relit = A * S_new
+    # As relight-image does by default: the photo (clipped as a camera would) divided by the
+    # predicted shading is relit.
+    relit_photo = photo_albedo(truth["image"].clamp(0, 1), Prediction(A, T, L, M), shading=S_pred) * S_new
+    gt_relit, concave = truth["relit"], truth["concave"]
+    for j in range(A.shape[0]):
+        sl = slice(j, j + 1)
+        add("transport_rmse", _rmse(T[sl], T_gt[sl], M[sl]))
+        add("albedo_rmse", _rmse(A[sl], truth["albedo"][sl], M[sl]))
+        add("light_rmse", float(((L[sl] - truth["light"][sl]) ** 2).mean()) ** 0.5)
+        add("shading_rmse", _rmse(S_pred[sl], truth["shading"][sl], M[sl]))
+        add("relit_rmse", _rmse(relit[sl], gt_relit[sl], M[sl]))
+        add("relit_rmse_photo_albedo", _rmse(relit_photo[sl], gt_relit[sl], M[sl]))
+        if concave[sl].sum() > 0:
+            add("relit_rmse_concave", _rmse(relit[sl], gt_relit[sl], concave[sl]))
+        psnr, ssim = _psnr_ssim(relit[j].cpu(), gt_relit[j].cpu(), M[j].cpu())
+        add("relit_psnr", psnr)
+        add("relit_ssim", ssim)
+    return relit, S_pred
+
+
 def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "transport", batch: int = 4,
              baseline: dict | None = None, sheet: str | Path | None = None, concave_threshold: float = 0.1,
              twin: RelightNet | None = None, floor: bool = False) -> dict:
@@ -102,7 +128,7 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
         dc = b["transport"][:, :1], b["transport_unoccluded"][:, :1]
         concave = M * ((dc[0] - dc[1]).abs() > concave_threshold * dc[1].abs().clamp_min(1e-6)).float()
         gt_s = shading_map(T_gt, b["light"])
-        gt_relit = b["albedo"] * shading_map(T_gt, novel)
+        gt_relit = shade_map(b["albedo"], T_gt, novel)
         pred = model(batch_to_input(b))
         cands = {"model": (pred.albedo, pred.transport, pred.light)}
         if baseline is not None:
@@ -115,25 +141,10 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             cands["ablation"] = (p.albedo, p.transport, p.light)
         if floor:
             cands["occlusion_floor"] = (b["albedo"], b["transport_unoccluded"], b["light"])
+        truth = {"albedo": b["albedo"], "transport": T_gt, "light": b["light"], "shading": gt_s, "relit": gt_relit,
+                 "image": b["image"], "mask": M, "concave": concave}
         for who, (A, T, L) in cands.items():
-            S_new, S_pred = shading_map(T, novel), shading_map(T, L)
-            relit = A * S_new
-            # As relight-image does by default: the photo (clipped as a camera would) divided by the
-            # predicted shading is relit.
-            relit_photo = photo_albedo(b["image"].clamp(0, 1), Prediction(A, T, L, M), shading=S_pred) * S_new
-            for j in range(len(chunk)):
-                sl = slice(j, j + 1)
-                add(who, "transport_rmse", _rmse(T[sl], T_gt[sl], M[sl]))
-                add(who, "albedo_rmse", _rmse(A[sl], b["albedo"][sl], M[sl]))
-                add(who, "light_rmse", float(((L[sl] - b["light"][sl]) ** 2).mean()) ** 0.5)
-                add(who, "shading_rmse", _rmse(S_pred[sl], gt_s[sl], M[sl]))
-                add(who, "relit_rmse", _rmse(relit[sl], gt_relit[sl], M[sl]))
-                add(who, "relit_rmse_photo_albedo", _rmse(relit_photo[sl], gt_relit[sl], M[sl]))
-                if concave[sl].sum() > 0:
-                    add(who, "relit_rmse_concave", _rmse(relit[sl], gt_relit[sl], concave[sl]))
-                psnr, ssim = _psnr_ssim(relit[j].cpu(), gt_relit[j].cpu(), M[j].cpu())
-                add(who, "relit_psnr", psnr)
-                add(who, "relit_ssim", ssim)
+            relit, S_pred = _score(lambda k, v, who=who: add(who, k, v), A, T, L, novel, truth)
             if who == "model" and sheet is not None and len(rows) < 6:
                 for j in range(min(len(chunk), 6 - len(rows))):
                     mj = M[j]

@@ -18,8 +18,8 @@ from .network import Prediction, RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CropBox", "mask_crop_box", "predict_image", "estimate_light", "estimate_light_evidence", "check_not_blank",
-           "check_predicted_person"]
+__all__ = ["CropBox", "mask_crop_box", "crop_to_box", "paste_from_box", "frame_person", "predict_image",
+           "estimate_light", "estimate_light_evidence", "check_not_blank", "check_predicted_person"]
 
 
 @dataclass(frozen=True)
@@ -48,8 +48,8 @@ def mask_crop_box(mask: torch.Tensor, pad: float = 0.05) -> CropBox:
     return CropBox(int(round(cy - size / 2)), int(round(cx - size / 2)), size)
 
 
-def _crop(x: torch.Tensor, box: CropBox) -> torch.Tensor:
-    """(B, C, H, W) → (B, C, size, size), zero outside the image."""
+def crop_to_box(x: torch.Tensor, box: CropBox) -> torch.Tensor:
+    """Cut a square box out of images: (B, C, H, W) → (B, C, size, size), zero outside the image."""
     h, w = x.shape[-2:]
     t, l, s = box.top, box.left, box.size
     out = x.new_zeros(*x.shape[:-2], s, s)
@@ -59,8 +59,9 @@ def _crop(x: torch.Tensor, box: CropBox) -> torch.Tensor:
     return out
 
 
-def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
-    """Inverse of :func:`_crop` after resizing back to ``box.size``: (B, C, s, s) → (B, C, H, W)."""
+def paste_from_box(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
+    """Inverse of :func:`crop_to_box` for maps at any working size: resized back to ``box.size``
+    (bilinear) and placed in an (H, W) frame, zero outside the box: (B, C, s, s) → (B, C, H, W)."""
     x = F.interpolate(x, size=(box.size, box.size), mode="bilinear", align_corners=False)
     out = x.new_zeros(*x.shape[:-2], h, w)
     t, l, s = box.top, box.left, box.size
@@ -70,13 +71,13 @@ def _paste(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
     return out
 
 
-def _crop_resize(image: torch.Tensor, mask: torch.Tensor, size: int, pad: float = 0.05):
+def frame_person(image: torch.Tensor, mask: torch.Tensor, size: int, pad: float = 0.05):
     """KE18 framing of a photo: (3, H, W) float image and (H, W) float mask cropped around the mask
     and resized to size² → (image (1, 3, s, s), binary mask (1, 1, s, s), :class:`CropBox`)."""
     box = mask_crop_box(mask, pad)
     s = (int(size), int(size))
-    x = F.interpolate(_crop(image[None], box), size=s, mode="bilinear", align_corners=False)
-    m = F.interpolate(_crop(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
+    x = F.interpolate(crop_to_box(image[None], box), size=s, mode="bilinear", align_corners=False)
+    m = F.interpolate(crop_to_box(mask[None, None], box), size=s, mode="bilinear", align_corners=False)
     return x, (m > 0.5).float(), box
 
 
@@ -141,7 +142,7 @@ def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
         image = image.float() / 255
     h, w = image.shape[-2:]
     m = model.config.multiple
-    size = int(getattr(model, "input_size", 256)) if size is None else int(size)
+    size = model.config.input_size if size is None else int(size)
     if size % m:
         raise InputError(f"size: expected a multiple of {m}, got {size}")
     dev = next(model.parameters()).device
@@ -151,14 +152,14 @@ def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
             raise InputError("mask: this model has no mask head; give a mask of the person")
         check_not_blank(image)
         full = CropBox((h - max(h, w)) // 2, (w - max(h, w)) // 2, max(h, w))
-        x = F.interpolate(_crop(image[None], full), size=(size, size), mode="bilinear", align_corners=False)
+        x = F.interpolate(crop_to_box(image[None], full), size=(size, size), mode="bilinear", align_corners=False)
         coarse = model(normalize_input(x, torch.ones_like(x[:, :1])))
-        mask = _paste(coarse.mask, full, h, w)[0, 0]
+        mask = paste_from_box(coarse.mask, full, h, w)[0, 0]
         check_predicted_person(mask)
         _check_predicted_mask(mask > 0.5)
     check_shape(mask, [h, w], name="mask")
     mask = mask.to(dev).float()
-    x, mk, box = _crop_resize(image, mask, size, pad)
+    x, mk, box = frame_person(image, mask, size, pad)
     return normalize_input(x, mk), box, mask
 
 
@@ -173,7 +174,7 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
         mask: (H, W) person mask in [0, 1]; None uses the model's mask head on the whole
             frame (padded to a square) and then crops around the predicted mask.
         size: working resolution (a multiple of the model's 2**levels); default: the size the
-            model was trained at (``model.input_size``, set by ``load_model``), else 256.
+            model was trained at (``model.config.input_size``, from its checkpoint).
         pad: crop padding (fraction of the mask box's larger side).
 
     Returns:
@@ -185,8 +186,8 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
     pred = model(x)
     inside = mask[None, None]
     return Prediction(
-        albedo=_paste(pred.albedo, box, h, w) * inside,
-        transport=_paste(pred.transport, box, h, w) * inside,
+        albedo=paste_from_box(pred.albedo, box, h, w) * inside,
+        transport=paste_from_box(pred.transport, box, h, w) * inside,
         light=pred.light,
         mask=mask[None, None],
         evidence=pred.evidence,

@@ -26,6 +26,7 @@ import torch
 from ..checks import InputError
 from ..data.lights import LIGHT_SOURCES
 from ..sh.metrics import chromaticity_error, direction_error, scale_invariant_light_error
+from .light_solve import stack_evidence
 
 __all__ = ["split_lights", "still_metrics", "clip_lights", "clip_metrics", "evaluate_light", "format_light_report"]
 
@@ -103,7 +104,7 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
         predictor: a model or predictor (:mod:`relightnet.pipeline.backends`).
         data_dir: a dataset of clips (``sequence_frames`` > 0).
         split: which split.
-        smoothing: as the video jobs (:data:`relightnet.temporal.smoothers.SMOOTHING`).
+        smoothing: as the video jobs (:data:`relightnet.temporal.registry.VIDEO_SMOOTHING`).
 
     Returns:
         One dict per clip: ``raw``, ``smoothed`` (T, K, 3), ``true`` (T, K, 3), ``switch`` (the
@@ -112,7 +113,6 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
     from ..data.dataset import SynthDataset
     from ..pipeline.avatar import smooth_video_lights
     from ..pipeline.backends import as_predictor
-    from ..pipeline.compare import _stack_evidence
 
     predict = as_predictor(predictor)
     ds = SynthDataset(data_dir, split, fields=("image_composite", "mask", "light"), cache_shards=1)
@@ -129,7 +129,7 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
             evs.append(ev)
             priors.append(prior)
         raw = torch.stack(lights)
-        ev, prior = _stack_evidence(evs, priors)
+        ev, prior = stack_evidence(evs, priors)
         smoothed = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, meta.get("fps", 30.0))[0]
         switches = meta.get("switch_frames") or []
         out.append({"raw": raw, "smoothed": smoothed, "true": it["light"].float(),

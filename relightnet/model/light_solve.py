@@ -24,7 +24,7 @@ import torch
 
 from ..checks import check_shape
 
-__all__ = ["Evidence", "light_evidence", "spd_solve", "solve_light", "pool_evidence"]
+__all__ = ["Evidence", "light_evidence", "spd_solve", "solve_light", "pool_evidence", "stack_evidence"]
 
 
 class Evidence(tuple):
@@ -148,3 +148,20 @@ def pool_evidence(evidence: Evidence, weights: torch.Tensor) -> Evidence:
     check_shape(weights, ["U", M.shape[0]], name="pooling weights")
     w = weights.to(M)
     return Evidence(torch.einsum("ut,tckl->uckl", w, M), torch.einsum("ut,tck->uck", w, r))
+
+
+def stack_evidence(evidence: list, priors: list) -> tuple[Evidence | None, torch.Tensor | None]:
+    """Per-frame solve outputs of a video → one sequence (float32, on the CPU).
+
+    Args:
+        evidence: T per-frame :class:`Evidence` (``M`` (1, 3, K, K), ``r`` (1, 3, K)) or None.
+        priors: T per-frame prior lights (K, 3) or None.
+
+    Returns:
+        ``(Evidence (M (T, 3, K, K), r (T, 3, K)) | None, priors (T, K, 3) | None)``: None when
+        any frame has none (a network that regresses its light; no prior for ``light_mode="solve"``).
+    """
+    if not evidence or any(e is None for e in evidence):
+        return None, None
+    ev = Evidence(torch.cat([e[0] for e in evidence]).float().cpu(), torch.cat([e[1] for e in evidence]).float().cpu())
+    return ev, (None if any(p is None for p in priors) else torch.stack(priors).float().cpu())

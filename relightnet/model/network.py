@@ -28,21 +28,29 @@ from torch import nn
 from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError, check_shape
-from ..io import srgb_to_linear
+from ..color import srgb_to_linear
+from ..render.shading import shade, shading, to_channels_first, to_channels_last
 from .light_solve import Evidence, light_evidence, solve_light
 
-__all__ = ["LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight", "photo_albedo",
-           "pad_to_multiple", "shading_map"]
+__all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
+           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map"]
 
 
 #: How the network gets its light (see the module docstring).
 LIGHT_MODES = ("head", "solve", "hybrid")
+#: Working size of a network whose checkpoint does not say what it was trained at.
+DEFAULT_INPUT_SIZE = 256
 
 
 @dataclass(frozen=True)
 class NetConfig:
     """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``;
-    ``light_mode`` ``head``, ``solve`` or ``hybrid`` (module docstring), ``solve_reg`` the solve's λ."""
+    ``light_mode`` ``head``, ``solve`` or ``hybrid`` (module docstring), ``solve_reg`` the solve's λ.
+
+    ``input_size`` is not part of the architecture (any H, W that are multiples of 16 run): it is
+    the side of the square crops the network was trained on, its working size at inference
+    (training sets it from the data; a checkpoint stores it). Predictors read it from here.
+    """
 
     lmax: int = 2
     width: int = 32
@@ -52,12 +60,15 @@ class NetConfig:
     light_hidden: int = 256
     light_mode: str = "head"
     solve_reg: float = 1e-2
+    input_size: int = DEFAULT_INPUT_SIZE
 
     def __post_init__(self) -> None:
         if self.light_mode not in LIGHT_MODES:
             raise InputError(f"net config light_mode: expected one of {LIGHT_MODES}, got {self.light_mode!r}")
         if not self.solve_reg > 0:
             raise InputError(f"net config solve_reg: expected > 0, got {self.solve_reg!r}")
+        if isinstance(self.input_size, bool) or not isinstance(self.input_size, int) or self.input_size < 1:
+            raise InputError(f"net config input_size: expected a size in pixels, got {self.input_size!r}")
 
     @property
     def n_coeffs(self) -> int:
@@ -97,7 +108,7 @@ class Prediction:
 
 
 def shading_map(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
-    """S = Σ_k T_k L_k in the CNN layout.
+    """S = Σ_k T_k L_k in the CNN layout (:func:`relightnet.render.shading` on channels-last views).
 
     Args:
         transport: (B, K, H, W).
@@ -107,15 +118,28 @@ def shading_map(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
         (B, 3, H, W).
     """
     dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
-    if light.dim() == 2:
-        check_shape(light, [dims["K"], 3], name="light")
-        return torch.einsum("bkhw,kc->bchw", transport, light.to(transport))
-    check_shape(light, [dims["B"], dims["K"], 3], name="light")
-    return torch.einsum("bkhw,bkc->bchw", transport, light.to(transport))
+    check_shape(light, [dims["K"], 3] if light.dim() == 2 else [dims["B"], dims["K"], 3], name="light")
+    return to_channels_first(shading(to_channels_last(transport), light))
+
+
+def shade_map(albedo: torch.Tensor, transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
+    """A ⊙ (T · L) in the CNN layout (:func:`relightnet.render.shade` on channels-last views).
+
+    Args:
+        albedo: (B, 3, H, W) linear.
+        transport: (B, K, H, W).
+        light: (K, 3) or (B, K, 3).
+
+    Returns:
+        (B, 3, H, W) linear RGB.
+    """
+    dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
+    check_shape(albedo, [dims["B"], 3, dims["H"], dims["W"]], name="albedo")
+    return to_channels_first(shade(to_channels_last(albedo), to_channels_last(transport), light, check=False))
 
 
 def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
-    """Relit image A ⊙ (T · L′) (linear RGB).
+    """Relit image A ⊙ (T · L′) (linear RGB, :func:`shade_map`).
 
     Args:
         pred: a :class:`Prediction`.
@@ -124,7 +148,7 @@ def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
     Returns:
         (B, 3, H, W).
     """
-    return pred.albedo * shading_map(pred.transport, new_light)
+    return shade_map(pred.albedo, pred.transport, new_light)
 
 
 def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
@@ -235,6 +259,11 @@ class RelightNet(nn.Module):
             self.light_head = nn.Sequential(
                 nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
             )
+
+    @property
+    def input_size(self) -> int:
+        """The working size, ``config.input_size`` (kept for code that read the attribute)."""
+        return self.config.input_size
 
     def forward(self, x: torch.Tensor) -> Prediction:
         """Args: x (B, 4, H, W) from :func:`normalize_input`, H and W multiples of 2**levels.

@@ -30,6 +30,7 @@ from torch import nn
 from ..checks import InputError
 from ..io import atomic_write
 from ..names import ONNX_SMOOTHERS
+from ..temporal.registry import PassThrough, make_smoother
 from .network import RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
@@ -42,43 +43,10 @@ OUTPUTS = ("albedo", "transport", "light_raw", "light_smoothed", "light_state_ou
 EVIDENCE_OUTPUTS = ("evidence_M", "evidence_r", "light_prior")
 
 
-class PassThrough(nn.Module):
-    """No smoothing: y = x (state kept as the last raw light)."""
-
-    state_size = 1
-
-    def forward(self, x: torch.Tensor, state: torch.Tensor, is_first: torch.Tensor):
-        return x, x[:, None]
-
-
-#: Streaming smoothers that can live inside the exported graph (listed in :mod:`relightnet.names`).
+#: Streaming smoothers that can live inside the exported graph (the causal methods of
+#: :mod:`relightnet.temporal.registry`, which also builds them: :func:`make_smoother`; the names
+#: are listed in :mod:`relightnet.names`).
 SMOOTHERS = ONNX_SMOOTHERS
-
-
-def make_smoother(name: str, lmax: int = 2, **opts) -> nn.Module:
-    """A streaming smoother module by name (see :mod:`relightnet.temporal.causal`).
-
-    ``gated-one-euro`` puts an outlier gate in front of the one-euro filter: a frame far from
-    the running output is dropped, a jump that persists is taken as a light switch. ``pooled``
-    pools the light solve's evidence since the last switch (solve/hybrid networks only).
-    """
-    from ..temporal.causal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate
-
-    if name == "none":
-        return PassThrough()
-    if name == "ema":
-        return EMAFilter(**opts)
-    if name == "fir":
-        return FIRFilter(**opts)
-    if name == "one-euro":
-        return OneEuroFilter(lmax=lmax, **opts)
-    if name == "gated-one-euro":
-        return OutlierGate(OneEuroFilter(lmax=lmax), lmax=lmax, **opts)
-    if name == "pooled":
-        from ..temporal.pooling import PooledSolve
-
-        return PooledSolve(lmax=lmax, **opts)
-    raise InputError(f"smoothing: expected one of {SMOOTHERS}, got {name!r}")
 
 
 class StreamingRelighter(nn.Module):
@@ -113,7 +81,7 @@ def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: di
         "relightnet.light_mode": net.config.light_mode,
         "relightnet.solve_reg": repr(net.config.solve_reg),
         "relightnet.state_size": str(state_size),
-        "relightnet.input_size": str(getattr(net, "input_size", 128)),
+        "relightnet.input_size": str(net.config.input_size),
         "relightnet.train_config_sha256": hashlib.sha256(cfg_text.encode()).hexdigest(),
     }
 
@@ -125,7 +93,7 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     Args:
         net: the trained network (eval mode).
         out: output path (written atomically).
-        smoothing: ``none``, ``ema`` or ``one-euro``.
+        smoothing: one of :data:`SMOOTHERS` (the causal methods of :mod:`relightnet.temporal.registry`).
         train_config: stored as a hash in the model metadata.
         example_size: H = W of the example used for tracing (any multiple of 16).
 

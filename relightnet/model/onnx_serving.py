@@ -60,6 +60,17 @@ class OnnxRelighter:
         self.evidence_outputs = tuple(n for n in EVIDENCE_OUTPUTS if n in outputs)
         self._state: np.ndarray | None = None
 
+    @property
+    def input_size(self) -> int:
+        """The model's working size: the training size stored by the export (metadata
+        ``relightnet.input_size``; :data:`~relightnet.model.network.DEFAULT_INPUT_SIZE` when absent)."""
+        from .network import DEFAULT_INPUT_SIZE
+
+        try:
+            return int(self.metadata.get("relightnet.input_size", DEFAULT_INPUT_SIZE))
+        except ValueError:
+            raise InputError(f"{self.path}: metadata relightnet.input_size is not an integer") from None
+
     def reset(self) -> None:
         """Forget the smoothing state: the next frame starts a new sequence."""
         self._state = None
@@ -131,12 +142,12 @@ class OnnxRelighter:
             (the :meth:`step` outputs at ``size``, the :class:`~relightnet.model.inference.CropBox`
             to paste them back with).
         """
-        from .inference import _crop_resize
+        from .inference import frame_person
 
         check_shape(image, [3, "H", "W"], name="image")
         check_shape(mask, image.shape[1:], name="mask")
         image = image.float() / 255 if image.dtype == torch.uint8 else image.float()
-        x, m, box = _crop_resize(image, mask.float(), size)
+        x, m, box = frame_person(image, mask.float(), size)
         return self.step(x.contiguous().numpy(), m.numpy()), box
 
 
@@ -208,7 +219,7 @@ def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range
             q.quantize_dynamic(str(src), str(tmp), weight_type=q.QuantType.QInt8)
         else:
             if calibration is None:
-                calibration = calibration_set(size=int(r.metadata.get("relightnet.input_size", 128)))
+                calibration = calibration_set(size=r.input_size)
             # Pre-processing (shape inference, graph clean-up) makes graphs from the dynamo exporter
             # quantisable: without it the QDQ pass duplicates a value name.
             quant_pre_process(str(src), str(pre), skip_symbolic_shape=True)
@@ -239,10 +250,10 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
     from ..io import VideoWriter
     from ..segment.sources import video_masks
     from ..sh import save_light
-    from .inference import _paste
+    from .inference import paste_from_box
 
     r = OnnxRelighter(model_path, threads=threads)
-    size = int(r.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
+    size = r.input_size if size is None else int(size)
     if size % 16:
         raise InputError(f"size: expected a multiple of 16, got {size}")
     info, _, pairs = video_masks(video, masks, "segment")
@@ -258,7 +269,7 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
                 res, box = r.step_photo(img, mask, size)
                 raw.append(res["light_raw"][0])
                 smooth.append(res["light_smoothed"][0])
-                albedo = _paste(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask
+                albedo = paste_from_box(torch.from_numpy(res["albedo"]), box, *img.shape[1:])[0] * mask
                 writer.write(albedo.permute(1, 2, 0))
         result = {"raw": np.stack(raw), "smoothed": np.stack(smooth)}
         save_light(out / "lights_raw.npz", torch.from_numpy(result["raw"]))

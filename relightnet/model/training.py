@@ -27,7 +27,7 @@ from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
-from .network import NetConfig, RelightNet, normalize_input, shading_map
+from .network import NetConfig, RelightNet, normalize_input, shade_map
 
 logger = logging.getLogger(__name__)
 
@@ -204,6 +204,34 @@ def _dist_env() -> tuple[int, int]:
     return int(os.environ.get("RANK", 0)), int(os.environ.get("WORLD_SIZE", 1))
 
 
+def _new_model(cfg: TrainConfig, data: TrainData, device: str, resume: bool) -> tuple[RelightNet, NetConfig]:
+    """The network to train (seeded), its working size the data's; weights from ``cfg.init`` for a new run."""
+    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1, "input_size": data.size})
+    torch.manual_seed(cfg.seed)
+    model = RelightNet(net_cfg).to(device)
+    if cfg.channels_last:
+        model = model.to(memory_format=torch.channels_last)
+    if cfg.init and not resume:
+        init = load_checkpoint(cfg.init, map_location=device)
+        init_cfg = NetConfig(**{**init["net_config"], "input_size": net_cfg.input_size})  # sizes may differ
+        if init_cfg != net_cfg:
+            raise InputError(f"{cfg.init}: its network configuration differs from the training config's")
+        model.load_state_dict(init["model"])
+    return model, net_cfg
+
+
+def _resume(ckpt: Path, cfg: TrainConfig, model, opt, sched, device: str) -> int:
+    """Restore model, optimiser and schedule from ``ckpt`` (made with the same config): its step."""
+    state = load_checkpoint(ckpt, map_location=device)
+    # Keys added to TrainConfig later take their defaults in older checkpoints.
+    if {**TrainConfig().to_dict(), **state["train_config"]} != cfg.to_dict():
+        raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
+    model.load_state_dict(state["model"])
+    opt.load_state_dict(state["optimizer"])
+    sched.load_state_dict(state["scheduler"])
+    return state["step"]
+
+
 def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str = "cpu",
           stop_after: int | None = None) -> dict:
     """Train (or continue training) a :class:`RelightNet`.
@@ -230,29 +258,11 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items)
-    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1})
-    torch.manual_seed(cfg.seed)
-    model = RelightNet(net_cfg).to(device)
-    if cfg.channels_last:
-        model = model.to(memory_format=torch.channels_last)
-    if cfg.init and not resume:
-        init = load_checkpoint(cfg.init, map_location=device)
-        if NetConfig(**init["net_config"]) != net_cfg:
-            raise InputError(f"{cfg.init}: its network configuration differs from the training config's")
-        model.load_state_dict(init["model"])
+    model, net_cfg = _new_model(cfg, data, device, resume)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(cfg))
-    step = 0
     ckpt = out / "last.pt"
-    if resume:
-        state = load_checkpoint(ckpt, map_location=device)
-        # Keys added to TrainConfig later take their defaults in older checkpoints.
-        if {**TrainConfig().to_dict(), **state["train_config"]} != cfg.to_dict():
-            raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        sched.load_state_dict(state["scheduler"])
-        step = state["step"]
+    step = _resume(ckpt, cfg, model, opt, sched, device) if resume else 0
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
     aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
     weights = LossWeights(**cfg.loss)
@@ -264,7 +274,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         gens = [torch.Generator().manual_seed(cfg.seed * 7919 + epoch * 104729 + int(i)) for i in idx]
         batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
         if cfg.render_target == "model":
-            batch["render"] = batch["albedo"] * shading_map(batch["transport"], batch["light"])
+            batch["render"] = shade_map(batch["albedo"], batch["transport"], batch["light"])
         x = batch_to_input(batch)
         if cfg.channels_last:
             x = x.contiguous(memory_format=torch.channels_last)
@@ -288,7 +298,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         if rank == 0 and (step % cfg.checkpoint_every == 0 or step == cfg.steps
                           or (stop_after is not None and done_here == stop_after)):
             save_checkpoint(ckpt, model, net_cfg, step=step, optimizer=opt, scheduler=sched,
-                            train_config=cfg.to_dict(), data=str(data_dir), input_size=data.size)
+                            train_config=cfg.to_dict(), data=str(data_dir))
     if rank == 0 and step >= cfg.steps:
         plot_losses(log_path, out / "loss.png")
     if world > 1:

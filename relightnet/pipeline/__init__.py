@@ -2,17 +2,19 @@
 compare the 2D and 3D paths against ground truth, the demo."""
 
 from .avatar import SMOOTHING, AvatarResult, avatar, estimate_video_lights, smooth_video_lights
-from .backends import BACKENDS, OnnxPredictor, TorchPredictor, as_predictor, make_predictor
+from .backends import BACKENDS, OnnxPredictor, Predictor, TorchPredictor, as_predictor, make_predictor
 from .compare import ClipOutputs, CompareResult, clip_metrics, compare, compare_clip, source_light
 from .demo import run_demo
-from .relight_image import RelitImage, match_exposure, relight_image
+from .relight_image import Relit, RelitImage, match_exposure, over_photo, relight_image, relight_prediction
 from .relight_video import relight_video
 from .scene import avatar_albedo, load_body, load_camera, motion_params, open_motion
+from .video_lights import estimate_video_evidence
 
 __all__ = [
-    "SMOOTHING", "AvatarResult", "avatar", "estimate_video_lights", "smooth_video_lights",
-    "BACKENDS", "OnnxPredictor", "TorchPredictor", "as_predictor", "make_predictor",
+    "SMOOTHING", "AvatarResult", "avatar", "estimate_video_evidence", "estimate_video_lights", "smooth_video_lights",
+    "BACKENDS", "OnnxPredictor", "Predictor", "TorchPredictor", "as_predictor", "make_predictor",
     "ClipOutputs", "CompareResult", "clip_metrics", "compare", "compare_clip", "source_light",
-    "run_demo", "RelitImage", "match_exposure", "relight_image", "relight_video",
+    "run_demo", "Relit", "RelitImage", "match_exposure", "over_photo", "relight_image", "relight_prediction",
+    "relight_video",
     "avatar_albedo", "load_body", "load_camera", "motion_params", "open_motion",
 ]

@@ -24,7 +24,6 @@ estimates instead of running the CNN again) and ``OUT.lights.png`` (light curves
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,17 +32,26 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import VideoWriter, atomic_write, count_frames, read_video, video_info
-from ..io.image import linear_to_srgb
+from ..io import VideoWriter, count_frames, read_video, video_info
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
-from ..sh.io import save_light_sequence
-from ..temporal.smoothers import SMOOTHING
+from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing, resolve_smoothing
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, open_motion
+from .video_lights import (
+    estimate_video_evidence,
+    estimate_video_lights,
+    lights_fingerprint,
+    read_light_estimates,
+    smooth_video_lights,
+    write_video_lights,
+)
 
 logger = logging.getLogger(__name__)
+
+#: The smoothing methods of the video jobs (:data:`relightnet.temporal.registry.VIDEO_SMOOTHING`).
+SMOOTHING = VIDEO_SMOOTHING
 
 __all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "estimate_video_evidence", "smooth_video_lights",
            "avatar"]
@@ -65,108 +73,19 @@ class AvatarResult:
     switches: torch.Tensor | None = None
 
 
-@torch.no_grad()
-def estimate_video_lights(model, video, masks=None, progress: bool = True, mask_source: str = "segment"
-                          ) -> torch.Tensor:
-    """Per-frame light estimates of a video (the first pass of :func:`avatar`).
+@dataclass(frozen=True, eq=False)
+class _TargetLight:
+    """The estimate and smooth stages' result: lights (T, K, 3) for the target's frames."""
 
-    Args:
-        model: a :class:`~relightnet.model.RelightNet` or a predictor (:mod:`.backends`).
-        video: the target video file.
-        masks: folder of mask images or a mask video (one per frame), or None: ``mask_source``
-            (``segment``: the person segmentation; ``head``: the model's mask head).
-
-    Returns:
-        (T, K, 3) raw lights, camera-relative light frame, linear RGB.
-    """
-    return estimate_video_evidence(model, video, masks, progress, mask_source)[0]
-
-
-@torch.no_grad()
-def estimate_video_evidence(model, video, masks=None, progress: bool = True, mask_source: str = "segment"):
-    """Per-frame lights of a video with the light solve's evidence (for pooling over shots).
-
-    Same arguments as :func:`estimate_video_lights`.
-
-    Returns:
-        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.model.light_solve.Evidence`
-        (``M`` (T, 3, K, K), ``r`` (T, 3, K)) and priors (T, K, 3) — None for a network that
-        regresses its light (and the prior None for ``light_mode="solve"``).
-    """
-    from tqdm import tqdm
-
-    from ..model.light_solve import Evidence
-    from ..segment.sources import video_masks
-
-    predict = as_predictor(model)
-    if masks is None and mask_source == "head" and not predict.has_mask_head:
-        raise InputError("--mask-source head: this model has no mask head; give --target-masks or use 'segment'")
-    info, _, frames = video_masks(video, masks, mask_source)
-    lights, Ms, rs, priors = [], [], [], []
-    for _, img, mask in tqdm(frames, total=info.n_frames or None, desc="estimate light",
-                             unit="frame", disable=not progress):
-        light, ev, prior = predict.light_evidence(img, mask)
-        lights.append(light.float().cpu())
-        if ev is not None:
-            Ms.append(ev[0][0].float().cpu())
-            rs.append(ev[1][0].float().cpu())
-        if prior is not None:
-            priors.append(prior.float().cpu())
-    if not lights:
-        raise InputError(f"{video}: the video has no frames")
-    ev = Evidence(torch.stack(Ms), torch.stack(rs)) if Ms else None
-    return torch.stack(lights), ev, (torch.stack(priors) if priors else None)
-
-
-def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
-                        fps: float = 30.0):
-    """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
-
-    ``pooled`` shares the light across frames: the per-frame evidence of the light solve
-    (``evidence``, ``prior`` from :func:`estimate_video_evidence`, ``reg`` the network's λ) of the
-    frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular weights, at the
-    video's ``fps``) and between the same detected light switches is solved jointly
-    (:func:`relightnet.temporal.pool_shot_lights`); ``hermite``/``poly``/``savgol`` use
-    :func:`relightnet.temporal.smooth_lights` with 3-MAD outlier correction and automatic switch
-    detection; ``auto`` is ``pooled`` when there is evidence, else ``hermite``; ``none`` returns
-    the raw lights.
-    """
-    from ..temporal import pool_shot_lights, pool_window, smooth_lights
-
-    method = resolve_smoothing(method, evidence is not None)
-    none = torch.zeros(raw.shape[0], dtype=torch.bool)
-    if method == "pooled":
-        if evidence is None:
-            raise InputError("smoothing pooled: the model regresses its light (no solve to pool); "
-                             "use hermite, poly, savgol or none")
-        pooled, _, switches = pool_shot_lights(evidence, prior, reg, window=pool_window(fps))
-        return pooled, none, switches
-    if method == "none" or raw.shape[0] < 3:
-        return raw.clone(), none, none
-    res = smooth_lights(raw, method, outlier_eps="3mad", switches="auto")
-    return res.smoothed, res.outliers, res.switches
-
-
-def resolve_smoothing(method: str, has_evidence: bool) -> str:
-    """The smoothing ``method`` actually used: ``auto`` is ``pooled`` for a model that solves its
-    light (``has_evidence``), else ``hermite``; other names are checked and returned."""
-    if method not in SMOOTHING:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {method!r}")
-    if method == "auto":
-        return "pooled" if has_evidence else "hermite"
-    return method
-
-
-def _fingerprint(video, masks, predictor_name: str, mask_source: str = "segment") -> str:
-    def stat(p):
-        p = Path(p)
-        if p.is_dir():
-            return sorted((f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in p.iterdir())
-        st = p.stat()
-        return [p.name, st.st_size, st.st_mtime_ns]
-
-    return json.dumps({"video": stat(video), "masks": mask_source if masks is None else stat(masks),
-                       "model": predictor_name}, sort_keys=True)
+    smoothed: torch.Tensor
+    raw: torch.Tensor | None = None
+    outliers: torch.Tensor | None = None
+    switches: torch.Tensor | None = None
+    evidence: object = None
+    prior: torch.Tensor | None = None
+    fingerprint: str = ""
+    reused: bool = False
+    method: str = ""  # the smoothing used (``auto`` resolved)
 
 
 def _plate_frames(plate, target, size):
@@ -190,36 +109,6 @@ def _plate_frames(plate, target, size):
     return read_video(p)
 
 
-def _reuse(path: Path, fingerprint: str):
-    """``(raw, evidence, prior)`` saved by an earlier run with the same inputs, or None."""
-    from ..model.light_solve import Evidence
-
-    if not path.is_file():
-        return None
-    from ..io.arrays import read_npz
-
-    try:  # a damaged or foreign file is not reused (it is rewritten)
-        z = read_npz(path, "light estimates", ("fingerprint", "raw", "evidence_M", "evidence_r", "prior"))
-    except InputError:
-        return None
-    if not ("raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint
-            and z["raw"].dtype.kind == "f" and z["raw"].ndim == 3):
-        return None
-    raw = torch.from_numpy(z["raw"])
-    t, k = raw.shape[:2]
-    ev = prior = None
-    if "evidence_M" in z and "evidence_r" in z:
-        M, r = z["evidence_M"], z["evidence_r"]
-        if M.shape != (t, 3, k, k) or r.shape != (t, 3, k) or M.dtype.kind != "f" or r.dtype.kind != "f":
-            return None
-        ev = Evidence(torch.from_numpy(M), torch.from_numpy(r))
-    if "prior" in z:
-        if z["prior"].shape != raw.shape or z["prior"].dtype.kind != "f":
-            return None
-        prior = torch.from_numpy(z["prior"])
-    return raw, ev, prior
-
-
 def _side_paths(out: Path) -> tuple[Path, Path]:
     return out.with_name(out.stem + ".lights.npz"), out.with_name(out.stem + ".lights.png")
 
@@ -238,19 +127,90 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
 
 def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
-    uint8 elsewhere. Only the covered pixels are converted; the same bytes as compositing the
-    whole float frame (fg·α + bg·(1−α)) and quantising it."""
-    pix = r.frags.pix
-    fg = r.image.reshape(-1, 3).index_select(0, pix)
+    uint8 elsewhere (:func:`relightnet.render.composite_covered`). Only the covered pixels are
+    converted; the same bytes as compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
+    from ..color import linear_to_srgb
+    from ..render.shading import composite_covered
+
+    fg = r.image.reshape(-1, 3).index_select(0, r.frags.pix)
     fg = (linear_to_srgb(fg.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
-    out = torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))
-    out.view(-1, 3).index_copy_(0, pix, fg)
-    return out.numpy()
+    return composite_covered(fg, r.frags.pix, torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))).numpy()
 
 
 def _count_frames(video) -> int:
     """Frames of a video: from the container, else by decoding it (streaming)."""
     return count_frames(video)
+
+
+def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
+                  fps: float, progress: bool) -> _TargetLight:
+    """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
+    ``lights_file`` when its fingerprint matches), smoothed over time."""
+    if model is None:
+        raise InputError("model: give a model (or predictor) to estimate the light, or a light")
+    predict = as_predictor(model)
+    fp = lights_fingerprint(target, target_masks, model_name, mask_source)
+    cached = read_light_estimates(lights_file, fp)
+    if cached is not None:
+        logger.info("reusing the light estimates in %s", lights_file)
+    raw, ev, prior = cached if cached is not None else estimate_video_evidence(predict, target, target_masks,
+                                                                               progress, mask_source)
+    smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, fps)
+    return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None,
+                        resolve_smoothing(smoothing, ev is not None))
+
+
+def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
+    """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
+    (H, W, 3) uint8 (:func:`_composite_covered`), or with the silhouette antialiased
+    (:func:`relightnet.render.composite` of the whole frame, then analytic edge antialiasing) →
+    (H, W, 3) in [0, 1]."""
+    from ..color import linear_to_srgb
+    from ..render.shading import composite
+
+    if not antialias:
+        return _composite_covered(r, bg)
+    a = r.alpha[0]
+    bgf = torch.from_numpy(bg).float() / 255
+    comp = composite(linear_to_srgb(r.image.clamp(0, 1)), r.alpha, bgf)[0]
+    smooth = aa(comp[None], r.frags, camera.transform(verts), faces)[0]
+    return torch.where(silhouette_pixels(a > 0)[..., None], smooth, comp)
+
+
+def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, antialias: bool, camera: Camera,
+                   faces: torch.Tensor, progress: bool, source) -> int:
+    """Stages 3–5, render → composite → write, streaming: returns the frames written."""
+    from tqdm import tqdm
+
+    written = 0
+    with VideoWriter(out, fps=fps, srgb=False, audio_from=target) as writer:
+        pairs = zip(backgrounds, frames, strict=False)
+        for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
+            if written == n:
+                break
+            writer.write(_composite_frame(fr.render, bg, antialias, camera, fr.verts, faces))
+            written += 1
+        if written < n:
+            raise InputError(f"{source}: only {written} frames decoded, {n} expected")
+    return written
+
+
+def _motion_for(motion_frames, n: int) -> tuple[dict, int]:
+    """The motion's parameters for an n-frame target (a preset is made as long as the video, a
+    longer motion is cut, a shorter one shortens the output): (params, frames to write)."""
+    params, n_motion = motion_frames(n)
+    if n_motion < n:
+        logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
+    m = min(n, n_motion)
+    return frame_slice(params, 0, m, n_motion), m
+
+
+def _camera_for(camera: Camera | None, size) -> Camera:
+    """The avatar's camera: the default one at the video's size, or the given one if its size matches."""
+    camera = default_camera(size) if camera is None else camera
+    if tuple(camera.size) != tuple(size):
+        raise InputError(f"camera: its image size {tuple(camera.size)} differs from the target video's {tuple(size)}")
+    return camera
 
 
 @torch.no_grad()
@@ -303,91 +263,33 @@ def avatar(
     Returns:
         :class:`AvatarResult`.
     """
-    from tqdm import tqdm
-
-    from ..temporal.plot import light_curves_png
-
     out = Path(out)
     if out.suffix.lower() not in (".mp4", ".mkv"):
         raise InputError(f"{out}: expected an .mp4 or .mkv output path")
-    if smoothing not in SMOOTHING:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {smoothing!r}")
+    check_smoothing(smoothing, SMOOTHING)
     info = video_info(target)
-    h, w = info.size
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, body_model, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
-    reused = False
-    raw = outliers = switches = ev = prior = None
     if light is None:
-        if model is None:
-            raise InputError("model: give a model (or predictor) to estimate the light, or a light")
-        predict = as_predictor(model)
-        fp = _fingerprint(target, target_masks, model_name, mask_source)
-        cached = _reuse(lights_file, fp)
-        reused = cached is not None
-        if reused:
-            logger.info("reusing the light estimates in %s", lights_file)
-        raw, ev, prior = cached if reused else estimate_video_evidence(predict, target, target_masks, progress,
-                                                                       mask_source)
-        n = raw.shape[0]
-        smoothing = resolve_smoothing(smoothing, ev is not None)  # the file and plot name what was used
-        smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, info.fps)
+        lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
+                            progress)
+        n = lit.raw.shape[0]
     else:
-        fp = ""
         n = _count_frames(target)
-        smoothed = _given_light(light, n)
-    params, n_motion = motion_frames(n)  # a preset is made as long as the video
-    if n_motion < n:
-        logger.warning("the motion has %d frames, the target %d: writing %d frames", n_motion, n, n_motion)
-    n = min(n, n_motion)
-    smoothed = smoothed[:n]
-    camera = default_camera((h, w)) if camera is None else camera
-    if tuple(camera.size) != (h, w):
-        raise InputError(f"camera: its image size {tuple(camera.size)} differs from the target video's {(h, w)}")
-
-    out.parent.mkdir(parents=True, exist_ok=True)
-    arrays = {"smoothed": smoothed.numpy(), "fingerprint": np.array(fp)}
-    if raw is not None:
-        arrays.update(raw=raw.numpy(), outliers=outliers.numpy(), switches=switches.numpy(),
-                      smoothing=np.array(smoothing))
-    if ev is not None:
-        arrays.update(evidence_M=ev[0].numpy(), evidence_r=ev[1].numpy())
-    if prior is not None:
-        arrays.update(prior=prior.numpy())
-    # the light-sequence format (sh = the light each frame is rendered with), readable by smooth-light
-    save_light_sequence(lights_file, smoothed, **arrays)
-    png = light_curves_png(raw[:n] if raw is not None else None, smoothed,
-                           outliers=outliers[:n] if outliers is not None else None,
-                           switches=switches[:n] if switches is not None else None,
-                           title=f"{Path(target).name}: light of the target, {smoothing}")
-    with atomic_write(plot) as f:
-        f.write(png)
-
-    params = frame_slice(params, 0, n, n_motion)  # a motion longer than the video is cut
+        lit = _TargetLight(_given_light(light, n))
+    params, n = _motion_for(motion_frames, n)
+    smoothed = lit.smoothed[:n]
+    camera = _camera_for(camera, info.size)
+    method = lit.method or smoothing  # the file and the plot name the method used
+    write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,
+                       lit.evidence, lit.prior, method, title=f"{Path(target).name}: light of the target, {method}")
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
                                 occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True)
-    written = 0
-    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=target) as writer:
-        pairs = zip(backgrounds, frames, strict=False)
-        for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
-            if written == n:
-                break
-            r = fr.render
-            if antialias:
-                a = r.alpha[0][..., None]
-                bgf = torch.from_numpy(bg).float() / 255
-                comp = linear_to_srgb(r.image[0].clamp(0, 1)) * a + bgf * (1 - a)
-                smooth = aa(comp[None], r.frags, camera.transform(fr.verts), body_model.faces)[0]
-                comp = torch.where(silhouette_pixels(a[..., 0] > 0)[..., None], smooth, comp)
-                writer.write(comp)
-            else:
-                writer.write(_composite_covered(r, bg))
-            written += 1
-        if written < n:
-            raise InputError(f"{plate or target}: only {written} frames decoded, {n} expected")
+    written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,
+                             progress, plate or target)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
-    return AvatarResult(written, out, lights_file, plot, raw, smoothed, reused, outliers, switches)
+    return AvatarResult(written, out, lights_file, plot, lit.raw, smoothed, lit.reused, lit.outliers, lit.switches)

@@ -1,12 +1,14 @@
 """Where the CNN runs: PyTorch (eager) or an exported ONNX model in ONNX Runtime.
 
-Both backends are *predictors*: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
+Both backends are :class:`Predictor` s: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
 at the photo's own resolution (crop around the mask, resize to the working size, run, paste
 back), ``predictor.light(image, mask) -> (K, 3)`` (the light only, nothing pasted back),
 ``predictor.light_evidence(image, mask) -> (light (K, 3), Evidence | None, prior (K, 3) | None)``
 (what a video pools over a shot, :mod:`relightnet.temporal.pooling`; None for a network that
-regresses its light), ``predictor.lmax`` the SH order of the model and ``predictor.solve_reg``
-its light solve's λ. The jobs take either.
+regresses its light), ``predictor.lmax`` the SH order of the model, ``predictor.solve_reg``
+its light solve's λ, ``predictor.size`` its working size (from the checkpoint's configuration,
+:attr:`~relightnet.model.NetConfig.input_size`, or the ONNX file's metadata) and
+``predictor.has_mask_head``. The jobs take any predictor (or a :class:`RelightNet`, wrapped).
 """
 
 from __future__ import annotations
@@ -15,29 +17,63 @@ import hashlib
 import logging
 import os
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 import torch
 
 from ..checks import InputError, sh_order_from_count
+from ..model.inference import paste_from_box
 from ..model.network import Prediction, RelightNet
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["BACKENDS", "TorchPredictor", "OnnxPredictor", "as_predictor", "make_predictor", "onnx_cache_dir"]
+__all__ = ["BACKENDS", "Predictor", "TorchPredictor", "OnnxPredictor", "as_predictor", "make_predictor",
+           "exported_onnx", "onnx_cache_dir"]
 
 #: Where the CNN runs: PyTorch or ONNX Runtime (``--backend``).
 BACKENDS = ("torch", "onnx")
 
 
+@runtime_checkable
+class Predictor(Protocol):
+    """What the jobs need from the CNN, whatever runs it (module docstring)."""
+
+    #: SH order of the light.
+    lmax: int
+    #: working size (side of the square crop the network sees).
+    size: int
+    #: λ of the network's light solve.
+    solve_reg: float
+    #: whether ``mask=None`` is accepted (the network finds the person itself).
+    has_mask_head: bool
+
+    def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
+        """Albedo, transport, light (and mask) at the photo's resolution, batch 1."""
+
+    def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
+        """The light (K, 3) only."""
+
+    def light_evidence(self, image: torch.Tensor, mask: torch.Tensor | None = None):
+        """``(light (K, 3), Evidence | None, prior (K, 3) | None)``."""
+
+
+def _check_size(size, multiple: int = 16) -> int:
+    if isinstance(size, bool) or not isinstance(size, int) or size < multiple or size % multiple:
+        raise InputError(f"size: expected a positive multiple of {multiple}, got {size!r}")
+    return size
+
+
 class TorchPredictor:
-    """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size).
+    """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size,
+    ``model.config.input_size``).
 
     The model's weights are switched to channels-last memory format (in place; same results
     to ~1e-5): about 1.5x faster convolutions on CPU.
     """
 
     def __init__(self, model: RelightNet, size: int | None = None) -> None:
-        self.model, self.size = model.to(memory_format=torch.channels_last), size
+        self.model = model.to(memory_format=torch.channels_last)
+        self.size = model.config.input_size if size is None else _check_size(size, model.config.multiple)
         self.lmax = model.config.lmax
         self.has_mask_head = bool(model.config.mask_head)
         self.solve_reg = model.config.solve_reg
@@ -76,9 +112,7 @@ class OnnxPredictor:
         from ..model.onnx_serving import OnnxRelighter
 
         self.relighter = OnnxRelighter(path, threads=threads)
-        self.size = int(self.relighter.metadata.get("relightnet.input_size", 128)) if size is None else int(size)
-        if self.size % 16:
-            raise InputError(f"size: expected a multiple of 16, got {self.size}")
+        self.size = _check_size(self.relighter.input_size if size is None else size)
         self.lmax = sh_order_from_count(self.relighter.n_coeffs, "ONNX model light")
         self.has_mask_head = False
         self.solve_reg = float(self.relighter.metadata.get("relightnet.solve_reg", 1e-2))
@@ -101,14 +135,12 @@ class OnnxPredictor:
 
     @torch.no_grad()
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
-        from ..model.inference import _paste
-
         res, box = self._step(image, mask)
         h, w = image.shape[-2:]
         inside = mask.float()[None, None]
         return Prediction(
-            albedo=_paste(torch.from_numpy(res["albedo"]), box, h, w) * inside,
-            transport=_paste(torch.from_numpy(res["transport"]), box, h, w) * inside,
+            albedo=paste_from_box(torch.from_numpy(res["albedo"]), box, h, w) * inside,
+            transport=paste_from_box(torch.from_numpy(res["transport"]), box, h, w) * inside,
             light=torch.from_numpy(res["light_raw"]),
             mask=inside,
             evidence=_evidence(res),
@@ -125,22 +157,39 @@ def _evidence(res: dict):
     return Evidence(torch.from_numpy(res["evidence_M"]), torch.from_numpy(res["evidence_r"]))
 
 
-def as_predictor(model) -> TorchPredictor | OnnxPredictor:
-    """A predictor from a :class:`RelightNet` (wrapped) or a predictor (returned as is)."""
+def as_predictor(model, size: int | None = None) -> Predictor:
+    """A :class:`Predictor` from a :class:`RelightNet` (wrapped, at ``size`` or its own working size)
+    or a predictor (returned as is; its size is set when it is made, ``size`` must be None or agree)."""
     if isinstance(model, RelightNet):
-        return TorchPredictor(model)
-    if callable(model) and hasattr(model, "lmax") and hasattr(model, "light"):
+        return TorchPredictor(model, size)
+    if isinstance(model, Predictor):
+        if size is not None and size != model.size:
+            raise InputError(f"size: the predictor works at {model.size}; give size={size} when making it "
+                             "(make_predictor(..., size=...))")
         return model
     raise InputError(f"model: expected a RelightNet or a predictor, got {type(model).__name__}")
 
 
 def onnx_cache_dir() -> Path:
-    """Where exported models of ``--backend onnx`` are kept: ``$RELIGHTNET_CACHE`` or ~/.cache/relightnet."""
+    """Where :func:`exported_onnx` keeps exports by default: ``$RELIGHTNET_CACHE`` or ~/.cache/relightnet."""
     return Path(os.environ.get("RELIGHTNET_CACHE") or Path.home() / ".cache" / "relightnet")
 
 
-def _exported(checkpoint) -> Path:
-    """The ONNX export of a checkpoint, made once and cached by the checkpoint's content hash."""
+def exported_onnx(checkpoint=None, cache_dir=None) -> Path:
+    """The ONNX export of a checkpoint, made once and kept on disk (an explicit, documented cache).
+
+    ``--backend onnx`` with a ``.pt`` checkpoint runs the model exported by ``relightnet export``
+    (no smoothing in the graph); the export takes seconds, so it is written once as
+    ``CACHE/<checkpoint stem>-<first 16 hex digits of its SHA-256>.onnx`` and reused while the
+    checkpoint's content is the same. Delete the folder to drop it.
+
+    Args:
+        checkpoint: a ``.pt`` checkpoint (default: the shipped model).
+        cache_dir: the folder (default: :func:`onnx_cache_dir`).
+
+    Returns:
+        The path of the ``.onnx`` file.
+    """
     from ..model.checkpoint import load_checkpoint, load_model, shipped_checkpoint
     from ..model.onnx_export import export_onnx
 
@@ -148,7 +197,7 @@ def _exported(checkpoint) -> Path:
     if not ckpt.is_file():
         raise InputError(f"{ckpt}: checkpoint not found")
     digest = hashlib.sha256(ckpt.read_bytes()).hexdigest()[:16]
-    out = onnx_cache_dir() / f"{ckpt.stem}-{digest}.onnx"
+    out = Path(onnx_cache_dir() if cache_dir is None else cache_dir) / f"{ckpt.stem}-{digest}.onnx"
     if not out.is_file():
         logger.info("exporting %s to ONNX (once): %s", ckpt, out)
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -157,25 +206,31 @@ def _exported(checkpoint) -> Path:
     return out
 
 
-def make_predictor(backend: str = "torch", checkpoint=None, device: str = "cpu", threads: int = 0):
-    """A predictor for the jobs.
+def make_predictor(backend: str = "torch", checkpoint=None, device: str = "cpu", threads: int = 0,
+                   size: int | None = None, cache_dir=None) -> Predictor:
+    """A :class:`Predictor` for the jobs.
 
     Args:
         backend: ``"torch"`` or ``"onnx"``.
         checkpoint: a ``.pt`` checkpoint (default: the shipped model); for ``onnx`` also a
-            ``.onnx`` file, else the checkpoint is exported once into :func:`onnx_cache_dir`.
+            ``.onnx`` file, else the checkpoint's export (:func:`exported_onnx`, in ``cache_dir``).
         device: torch device (``onnx`` runs on the CPU).
         threads: ONNX Runtime intra-op threads (0: default).
+        size: working size, a multiple of 16 (default: the model's training size).
+        cache_dir: where :func:`exported_onnx` keeps exports (default: :func:`onnx_cache_dir`).
     """
     from ..model.checkpoint import load_model
 
     if backend not in BACKENDS:
         raise InputError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
+    if size is not None:
+        _check_size(size)
     if backend == "torch":
         if checkpoint is not None and str(checkpoint).endswith(".onnx"):
             raise InputError(f"{checkpoint}: an ONNX model needs --backend onnx")
-        return TorchPredictor(load_model(checkpoint, device=device))
+        return TorchPredictor(load_model(checkpoint, device=device), size)
     if device != "cpu":
         raise InputError(f"device: the onnx backend runs on the CPU, got {device!r}")
-    path = Path(checkpoint) if checkpoint is not None and str(checkpoint).endswith(".onnx") else _exported(checkpoint)
-    return OnnxPredictor(path, threads=threads)
+    onnx_file = checkpoint is not None and str(checkpoint).endswith(".onnx")
+    path = Path(checkpoint) if onnx_file else exported_onnx(checkpoint, cache_dir)
+    return OnnxPredictor(path, threads=threads, size=size)

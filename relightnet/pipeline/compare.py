@@ -10,7 +10,7 @@ outside ``mask``. Per clip:
 1. **Light.** The CNN estimates L̂_t from each target frame (``image_composite``, the person
    over a background, 8-bit sRGB) with its mask; L̃_t =
    :func:`~relightnet.temporal.smooth_lights` (L̂, method, outlier_eps="3mad",
-   switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.pipeline.avatar.smooth_video_lights`):
+   switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.pipeline.video_lights.smooth_video_lights`):
    by default one light solve per shot for a network that solves its light (``pooled``), else
    the robust Hermite spline (``smoothing="none"``, or fewer than 3 frames: L̃ = L̂).
 2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
@@ -35,63 +35,41 @@ lights of the data are on an absolute scale. The light error (irradiance L2,
 Aggregates: per clip, the mean over its frames (PSNR: mean of the per-frame dB values) and
 the temporal error pooled over its frame pairs; over the run, the mean over all frames of
 all clips, and the mean of the clips' temporal and light errors. The report's files are
-described in :mod:`relightnet.pipeline.compare_report`.
+described in :mod:`relightnet.pipeline.compare_report`; one clip's stages are in
+:mod:`relightnet.pipeline.compare_clip`.
 """
 
 from __future__ import annotations
 
 import logging
-import math
+import shutil
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from ..checks import InputError, check_device, sh_order_from_count
-from ..io.image import linear_to_srgb, srgb_to_linear, to_uint8
-from ..model.network import photo_albedo
-from ..sh.io import resize_sh
-from ..temporal import jitter, light_distance, light_error
-from . import metrics as M
-from .avatar import SMOOTHING, smooth_video_lights
-from .backends import as_predictor
+from ..checks import InputError, check_device
+from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing
+from .compare_clip import (
+    CLIP_FIELDS,
+    CLIP_FPS,
+    LIGHTS,
+    PATHS,
+    ClipOutputs,
+    clip_metrics,
+    compare_clip,
+    source_light,
+)
 
 logger = logging.getLogger(__name__)
 
+#: The smoothing methods the comparison accepts.
+SMOOTHING = VIDEO_SMOOTHING
+
 __all__ = ["PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "source_light",
            "compare_clip", "clip_metrics", "compare"]
-
-#: The two paths and the three lights each is shaded with (the row order of the tables).
-PATHS = ("2d", "3d")
-LIGHTS = ("true", "raw", "smoothed")
-#: Frame rate of the generated clips (``meta["fps"]``).
-CLIP_FPS = 30.0
-#: Arrays of a clip that the comparison reads.
-CLIP_FIELDS = ("image", "image_composite", "mask", "albedo", "transport", "light", "background")
-
-
-@dataclass(frozen=True, eq=False)
-class ClipOutputs:
-    """What :func:`compare_clip` makes for one clip (channels-last, linear RGB).
-
-    Attributes:
-        lights: ``"true"``, ``"raw"``, ``"smoothed"`` → (T, K, 3), K of the data.
-        renders: ``(path, light)`` → (T, H, W, 3) output of a path under a light, 0 off its mask.
-        alpha_3d: (T, H, W) coverage of the 3D path's rasterization.
-        source: (T, H, W, 3) the 2D path's input image I_src (linear).
-        outliers, switches: (T,) bool, what the smoother flagged (all False without smoothing).
-        seconds: time spent per stage (``cnn``, ``prt``, ``render``).
-    """
-
-    lights: dict
-    renders: dict
-    alpha_3d: torch.Tensor
-    source: torch.Tensor
-    outliers: torch.Tensor
-    switches: torch.Tensor
-    seconds: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -102,153 +80,6 @@ class CompareResult:
     out_dir: Path
     files: dict
     metrics: dict
-
-
-def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> torch.Tensor:
-    """The 2D path's fixed source light: a preset scaled so that its level is ``level``.
-
-    The level is the data generator's exposure rule (:mod:`relightnet.data.lights`: the
-    largest luminance of the irradiance over all normals), so I_src is exposed like the data.
-
-    Returns:
-        (K, 3) float32, K = (lmax+1)².
-    """
-    from ..data.lights import light_level
-    from ..sh import preset_light
-
-    sh = preset_light(name, lmax)
-    return (sh * (level / light_level(sh))).float()
-
-
-def _shade(albedo: torch.Tensor, transport: torch.Tensor, lights: torch.Tensor) -> torch.Tensor:
-    """(T, H, W, 3) albedo ⊙ (transport (T, H, W, K) · lights (T, K, 3))."""
-    return albedo * torch.einsum("thwk,tkc->thwc", transport, lights.to(transport))
-
-
-def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "auto",
-                 source: str = "studio", bounces: int = 0, tick=None, cnn_albedo: bool = False) -> ClipOutputs:
-    """Run both paths on one clip (module docstring).
-
-    Args:
-        model: the CNN: a :class:`~relightnet.model.RelightNet` (eval mode, any device; run at its
-            training size) or a predictor of :mod:`relightnet.pipeline.backends` (torch or ONNX).
-        clip: the clip's arrays as stored (numpy, leading T): :data:`CLIP_FIELDS`.
-        geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
-        n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections; a
-            bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default).
-        smoothing: one of :data:`SMOOTHING`.
-        source: preset name of the 2D path's source light.
-        tick: optional callable, called after every frame.
-        cnn_albedo: the 2D path relights the CNN's albedo, not the photo's (module docstring).
-
-    Returns:
-        :class:`ClipOutputs`.
-    """
-    from ..prt import vertex_transport
-    from ..render.frame import render_mesh
-
-    true = torch.from_numpy(np.asarray(clip["light"], np.float32))
-    T, K = true.shape[0], true.shape[1]
-    lmax = sh_order_from_count(K)
-    predict = as_predictor(model)
-    mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
-    comp = torch.from_numpy(np.asarray(clip["image_composite"])).permute(0, 3, 1, 2)
-    albedo = torch.from_numpy(np.asarray(clip["albedo"], np.float32))
-    src = _shade(albedo, torch.from_numpy(np.asarray(clip["transport"], np.float32)),
-                 source_light(source, lmax)[None].expand(T, -1, -1))
-    if geometry.verts.shape[0] != T:
-        raise InputError(f"geometry: {geometry.verts.shape[0]} frames for a clip of {T}")
-    secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
-    raw, evs, priors, a2, t2, a3, t3, al3 = [], [], [], [], [], [], [], []
-    for t in range(T):
-        c0 = time.perf_counter()
-        light, ev, prior = predict.light_evidence(comp[t], mask[t])
-        raw.append(resize_sh(light.float().cpu(), lmax))
-        evs.append(ev)
-        priors.append(prior)
-        img = to_uint8(src[t]).permute(2, 0, 1)
-        p2 = predict(img, mask[t])
-        a = p2.albedo if cnn_albedo else photo_albedo(srgb_to_linear(img.float() / 255)[None].to(p2.albedo), p2)
-        a2.append(a[0].permute(1, 2, 0).float().cpu())
-        t2.append(p2.transport[0].permute(1, 2, 0).float().cpu())
-        c1 = time.perf_counter()
-        Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=lmax,
-                              n_dirs=n_dirs, occlusion=True, bounces=bounces, seed=prt_seed,
-                              threads=torch.get_num_threads())
-        c2 = time.perf_counter()
-        rend = render_mesh(geometry.verts[t], geometry.faces, Tv, geometry.albedo, true[t], geometry.camera,
-                           maps=True)
-        a3.append(rend.albedo[0])
-        t3.append(rend.transport[0])
-        al3.append(rend.alpha[0])
-        c3 = time.perf_counter()
-        secs["cnn"] += c1 - c0
-        secs["prt"] += c2 - c1
-        secs["render"] += c3 - c2
-        if tick is not None:
-            tick()
-    raw = torch.stack(raw)
-    smoothed, outliers, switches = smooth_video_lights(raw, smoothing, *_stack_evidence(evs, priors),
-                                                       predict.solve_reg, CLIP_FPS)
-    smoothed = resize_sh(smoothed, lmax)
-    lights = {"true": true, "raw": raw, "smoothed": smoothed}
-    a2, t2, a3, t3, al3 = (torch.stack(x) for x in (a2, t2, a3, t3, al3))
-    renders = {}
-    for name, L in lights.items():
-        renders[("2d", name)] = _shade(a2, t2, resize_sh(L, predict.lmax))
-        renders[("3d", name)] = _shade(a3, t3, L) * al3[..., None]
-    return ClipOutputs(lights, renders, al3, src, outliers, switches, secs)
-
-
-def _srgb(x: torch.Tensor) -> torch.Tensor:
-    """(T, H, W, 3) linear → (T, 3, H, W) sRGB-encoded in [0, 1]."""
-    return linear_to_srgb(x.clamp(0, 1)).permute(0, 3, 1, 2)
-
-
-def _floats(x: torch.Tensor) -> list:
-    return [float(v) for v in x.flatten()]
-
-
-def clip_metrics(out: ClipOutputs, gt: torch.Tensor, mask: torch.Tensor) -> dict:
-    """The numbers of one clip.
-
-    Args:
-        out: a clip's :class:`ClipOutputs`.
-        gt: (T, H, W, 3) the true relit frames (linear).
-        mask: (T, H, W) the ground-truth mask.
-
-    Returns:
-        ``{"rows": [{"path", "light", "rmse", "psnr", "ssim", "temporal", "per_frame": {...}}, ...] (6),
-        "light": {"raw"|"smoothed": {"error", "relative", "jitter", "per_frame"}, "true": {"jitter"}},
-        "mask_iou_3d", "smoother_outliers", "smoother_switches"}``; per-frame lists have T entries
-        (``temporal``: T − 1, empty for a single frame); jitter is NaN below 3 frames.
-    """
-    g = _srgb(gt)
-    rows = []
-    for path in PATHS:
-        for light in LIGHTS:
-            x = _srgb(out.renders[(path, light)])
-            per = {"rmse": M.masked_rmse(x, g, mask), "psnr": M.psnr(x, g, mask), "ssim": M.ssim(x, g, mask)}
-            te = M.temporal_error(x, g, mask, reduction="none") if len(g) > 1 else torch.zeros(0)
-            row = {"path": path, "light": light, **{k: float(v.mean()) for k, v in per.items()},
-                   "temporal": float(M.temporal_error(x, g, mask)) if len(g) > 1 else math.nan,
-                   "per_frame": {**{k: _floats(v) for k, v in per.items()}, "temporal": _floats(te)}}
-            rows.append(row)
-    true = out.lights["true"].double()
-    lights = {}
-    for name in ("raw", "smoothed"):
-        est = out.lights[name].double()
-        lights[name] = {"error": float(light_error(est, true)), "relative": float(light_error(est, true, True)),
-                        "per_frame": _floats(light_distance(est, true))}
-    for name in ("raw", "smoothed", "true"):
-        lights.setdefault(name, {})["jitter"] = float(jitter(out.lights[name].double())) if len(g) >= 3 else math.nan
-    gm, am = mask > 0.5, out.alpha_3d > 0.5
-    return {"rows": rows, "light": lights, "mask_iou_3d": float((gm & am).sum() / (gm | am).sum().clamp_min(1)),
-            "smoother_outliers": torch.nonzero(out.outliers).flatten().tolist(),
-            "smoother_switches": torch.nonzero(out.switches).flatten().tolist()}
-
-
-# ----------------------------------------------------------------------------- the job
 
 
 def _open_data(data_dir, split: str):
@@ -304,14 +135,79 @@ def _one_thread_geometry(cfg, split, index, T, assets):
         torch.set_num_threads(n)
 
 
-def _stack_evidence(evs: list, priors: list):
-    """Per-frame (Evidence | None, prior | None) lists → (Evidence (T, ...) | None, priors (T, K, 3) | None)."""
-    from ..model.light_solve import Evidence
+def _check_options(smoothing, n_dirs, clips, bounces, source, size) -> None:
+    """Every option of :func:`compare` checked before any work (InputError naming it)."""
+    from ..sh import preset_names
 
-    if any(e is None for e in evs):
-        return None, None
-    ev = Evidence(torch.cat([e[0] for e in evs]).float().cpu(), torch.cat([e[1] for e in evs]).float().cpu())
-    return ev, (None if any(p is None for p in priors) else torch.stack(priors).float().cpu())
+    check_smoothing(smoothing, SMOOTHING)
+    for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < lo):
+            raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
+    if source not in preset_names():
+        raise InputError(f"source: expected a preset name ({', '.join(preset_names())}), got {source!r}")
+    if size is not None and (isinstance(size, bool) or not isinstance(size, int) or size < 16 or size % 16):
+        raise InputError(f"size: expected a positive multiple of 16, got {size!r}")
+
+
+def _clip_record(index: int, meta: dict, clip: dict, out: ClipOutputs) -> dict:
+    """The numbers of one clip with what the data says about it (its switches, light source, bounce)."""
+    mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
+    rec = {"index": index, **clip_metrics(out, torch.from_numpy(np.asarray(clip["image"])), mask),
+           "switch_frames": list(meta.get("switch_frames", [])),
+           "light_source": str(meta.get("light", {}).get("source", "?")),
+           "bounce": bool(meta.get("flags", {}).get("bounce", False))}
+    if rec["mask_iou_3d"] < 0.99:
+        logger.warning("clip %d: the 3D path's mask differs from the clip's (IoU %.3f): was the data made "
+                       "by another generator or body-model version?", index, rec["mask_iou_3d"])
+    return rec
+
+
+def _run_clips(stage: Path, predictor, cfg, files, split, clips, assets, opts: dict, progress: bool):
+    """Both paths on every clip, each clip added to the staged report as it is done:
+    returns (records, light arrays, seconds per stage)."""
+    from tqdm import tqdm
+
+    from ..io import VideoWriter
+    from . import compare_report as R
+
+    T = cfg.sequence_frames
+    n_total = sum(c for _, c in files) if clips is None else min(clips, sum(c for _, c in files))
+    records, light_arrays = [], {}
+    secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
+    with (tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True) as bar,
+          VideoWriter(stage / "side_by_side.mp4", fps=CLIP_FPS) as video):
+        for meta, clip in _clips(files, clips):
+            index = int(meta["seed"]["index"])
+            geo = _one_thread_geometry(cfg, split, index, T, assets)
+            out = compare_clip(predictor, clip, geo, tick=lambda: bar.update(1), **opts)
+            for k in secs:
+                secs[k] += out.seconds[k]
+            rec = _clip_record(index, meta, clip, out)
+            records.append(rec)
+            R.add_clip(stage, video, clip, out, rec, light_arrays)
+    return records, light_arrays, secs
+
+
+def _write_report(stage: Path, records, light_arrays, settings: dict, secs: dict, total: float, T: int) -> dict:
+    """metrics.json, lights.npz, report.md and the summary plots into the staged report: returns the metrics."""
+    from . import compare_report as R
+
+    R.plot_summary(stage / "plots" / "errors.png", stage / "plots" / "light_error.png", records)
+    frames = len(records) * T
+    metrics = {
+        "format": "relightnet-compare/1",
+        "settings": {"data": settings["data"], "split": settings["split"], "clips": [r["index"] for r in records],
+                     **{k: v for k, v in settings.items() if k not in ("data", "split")}},
+        "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,
+                   **{f"{k}_s": v for k, v in secs.items()}},
+        "summary": R.summarize(records),
+        "clips": records,
+    }
+    R.write_json(stage / "metrics.json", metrics)
+    R.write_lights(stage / "lights.npz", light_arrays)
+    with (stage / "report.md").open("w", encoding="utf-8") as f:
+        f.write(R.format_report(metrics))
+    return metrics
 
 
 @torch.no_grad()
@@ -347,89 +243,37 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     Raises:
         InputError: a missing or unusable dataset, an empty split, a bad checkpoint or option.
     """
-    from tqdm import tqdm
-
     from ..data.sample import assets_for
-    from ..io import VideoWriter
     from ..model.checkpoint import shipped_checkpoint
-    from ..sh import preset_names
     from . import compare_report as R
     from .backends import make_predictor
 
     t_start = time.perf_counter()
-    if smoothing not in SMOOTHING:
-        raise InputError(f"smoothing: expected one of {', '.join(SMOOTHING)}, got {smoothing!r}")
-    for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):
-        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < lo):
-            raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
-    if source not in preset_names():
-        raise InputError(f"source: expected a preset name ({', '.join(preset_names())}), got {source!r}")
+    _check_options(smoothing, n_dirs, clips, bounces, source, size)
     dev = check_device(device, "device")
     cfg, files = _open_data(data_dir, split)
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: exists and is not a folder")
-    if size is not None and (isinstance(size, bool) or not isinstance(size, int) or size < 16 or size % 16):
-        raise InputError(f"size: expected a positive multiple of 16, got {size!r}")
-    predictor = make_predictor(backend, checkpoint, str(dev))
-    if size is not None:
-        predictor.size = size
-    size = predictor.size if predictor.size is not None else int(getattr(predictor.model, "input_size", 256))
+    predictor = make_predictor(backend, checkpoint, str(dev), size=size)
     assets = assets_for(body)
-    T = cfg.sequence_frames
-    n_total = sum(c for _, c in files) if clips is None else min(clips, sum(c for _, c in files))
-
+    settings = {"data": str(Path(data_dir)), "split": split,
+                "checkpoint": str(shipped_checkpoint() if checkpoint is None else Path(checkpoint)),
+                "backend": backend, "size": predictor.size, "device": str(dev), "smoothing": smoothing,
+                "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"}, "n_dirs": n_dirs,
+                "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
+                "albedo_2d": "cnn" if cnn_albedo else "photo", "dataset": cfg.to_dict()}
+    opts = {"n_dirs": n_dirs, "prt_seed": prt_seed, "smoothing": smoothing, "source": source, "bounces": bounces,
+            "cnn_albedo": cnn_albedo}
     stage = R.staging_dir(out_dir)
     try:
         (stage / "plots").mkdir()
-        records, light_arrays = [], {}
-        secs = {"cnn": 0.0, "prt": 0.0, "render": 0.0}
-        with (tqdm(total=n_total * T, unit="frame", desc="compare", disable=not progress, dynamic_ncols=True) as bar,
-              VideoWriter(stage / "side_by_side.mp4", fps=CLIP_FPS) as video):
-            for meta, clip in _clips(files, clips):
-                index = int(meta["seed"]["index"])
-                geo = _one_thread_geometry(cfg, split, index, T, assets)
-                out = compare_clip(predictor, clip, geo, n_dirs, prt_seed, smoothing, source, bounces,
-                                   tick=lambda: bar.update(1), cnn_albedo=cnn_albedo)
-                for k in secs:
-                    secs[k] += out.seconds[k]
-                mask = torch.from_numpy(np.asarray(clip["mask"], np.float32))
-                rec = {"index": index, **clip_metrics(out, torch.from_numpy(np.asarray(clip["image"])), mask),
-                       "switch_frames": list(meta.get("switch_frames", [])),
-                       "light_source": str(meta.get("light", {}).get("source", "?")),
-                       "bounce": bool(meta.get("flags", {}).get("bounce", False))}
-                if rec["mask_iou_3d"] < 0.99:
-                    logger.warning("clip %d: the 3D path's mask differs from the clip's (IoU %.3f): was the data made "
-                                   "by another generator or body-model version?", index, rec["mask_iou_3d"])
-                records.append(rec)
-                R.add_clip(stage, video, clip, out, rec, light_arrays)
-        R.plot_summary(stage / "plots" / "errors.png", stage / "plots" / "light_error.png", records)
+        records, light_arrays, secs = _run_clips(stage, predictor, cfg, files, split, clips, assets, opts, progress)
         total = time.perf_counter() - t_start
-        frames = len(records) * T
-        ckpt = str(shipped_checkpoint() if checkpoint is None else Path(checkpoint))
-        metrics = {
-            "format": "relightnet-compare/1",
-            "settings": {"data": str(Path(data_dir)), "split": split, "clips": [r["index"] for r in records],
-                         "checkpoint": ckpt, "backend": backend, "size": size, "device": str(dev),
-                         "smoothing": smoothing, "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"},
-                         "n_dirs": n_dirs,
-                         "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
-                         "albedo_2d": "cnn" if cnn_albedo else "photo",
-                         "dataset": cfg.to_dict()},
-            "timing": {"frames": frames, "total_s": total, "frames_per_s": frames / total,
-                       **{f"{k}_s": v for k, v in secs.items()}},
-            "summary": R.summarize(records),
-            "clips": records,
-        }
-        R.write_json(stage / "metrics.json", metrics)
-        R.write_lights(stage / "lights.npz", light_arrays)
-        with (stage / "report.md").open("w", encoding="utf-8") as f:
-            f.write(R.format_report(metrics))
+        metrics = _write_report(stage, records, light_arrays, settings, secs, total, cfg.sequence_frames)
         files_out = R.publish(stage, out_dir)
     except BaseException:
-        import shutil
-
         shutil.rmtree(stage, ignore_errors=True)
         raise
-    logger.info("wrote %s (%d clips, %d frames, %.1f s)", out_dir, len(records), frames, total)
+    logger.info("wrote %s (%d clips, %d frames, %.1f s)", out_dir, len(records), metrics["timing"]["frames"], total)
     return CompareResult(out_dir, files_out, metrics)

@@ -5,24 +5,31 @@ back at the original resolution, relight with the new light over the untouched b
 The albedo that is relit is the photo divided by the predicted shading
 (:func:`~relightnet.model.photo_albedo`), so the photo keeps its detail; ``detail=False``
 relights the CNN's own albedo (blurred to the working size on a large photo).
+
+:func:`relight_prediction` is the relighting step itself, shared by ``relight-image``,
+``relight-video`` and the 2D path of ``compare``; :func:`over_photo` puts its result over the
+photo.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass
 
 import torch
 
 from ..checks import check_finite, check_shape, sh_order_from_count
-from ..io.image import linear_to_srgb, srgb_to_linear
-from ..model.inference import predict_image
-from ..model.network import Prediction, RelightNet, photo_albedo, shading_map
+from ..color import linear_to_srgb, luminance, srgb_to_linear
+from ..model.network import Prediction, photo_albedo, shading_map
+from ..render.shading import composite, shade, to_channels_first, to_channels_last
 from ..sh.io import resize_sh
+from .backends import as_predictor
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["RelitImage", "relight_image", "match_exposure", "to_model_order"]
+__all__ = ["RelitImage", "Relit", "relight_image", "relight_prediction", "over_photo", "match_exposure",
+           "to_model_order"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +45,23 @@ class RelitImage:
     albedo: torch.Tensor
 
 
+@dataclass(frozen=True, eq=False)
+class Relit:
+    """What :func:`relight_prediction` returns (CNN layout, linear RGB).
+
+    Attributes:
+        linear: (B, 3, H, W) the relit person A ⊙ (T · L′), zero where the maps are.
+        albedo: (B, 3, H, W) the albedo that was relit.
+        light: the light L′ used ((K, 3) or (B, K, 3); exposure-matched when asked).
+        shading: (B, 3, H, W) its shading T · L′.
+    """
+
+    linear: torch.Tensor
+    albedo: torch.Tensor
+    light: torch.Tensor
+    shading: torch.Tensor
+
+
 def match_exposure(new_light: torch.Tensor, pred: Prediction, shading: torch.Tensor | None = None) -> torch.Tensor:
     """Scale ``new_light`` (K, 3) so the person's mean shading luminance stays what it was.
 
@@ -46,10 +70,9 @@ def match_exposure(new_light: torch.Tensor, pred: Prediction, shading: torch.Ten
     ``shading``: ``pred.shading()`` (B, 3, H, W) when the caller has it already.
     """
     m = pred.mask
-    lum = torch.tensor([0.2126, 0.7152, 0.0722])
 
     def level(s):
-        return float((torch.einsum("bchw,c->bhw", s, lum.to(s))[:, None] * m).sum() / m.sum().clamp_min(1))
+        return float((luminance(to_channels_last(s))[:, None] * m).sum() / m.sum().clamp_min(1))
 
     old = level(pred.shading() if shading is None else shading)
     new = level(shading_map(pred.transport, new_light.to(pred.transport)))
@@ -64,18 +87,65 @@ def to_model_order(light: torch.Tensor, lmax: int) -> torch.Tensor:
     return resize_sh(light, lmax)
 
 
+def relight_prediction(pred: Prediction, image: torch.Tensor, light: torch.Tensor, detail: bool = True,
+                       keep_exposure: bool = True, reference: torch.Tensor | None = None) -> Relit:
+    """Relight what the CNN predicted for a photo (or a batch of frames) with a new light.
+
+    Args:
+        pred: the :class:`Prediction` at the photo's resolution (a predictor's output), batch B.
+        image: (B, 3, H, W) the photo, sRGB in [0, 1] (or uint8).
+        light: (K, 3) or (B, K, 3) new light at the model's order, camera-relative light frame.
+        detail: relight the photo's own albedo (photo / predicted shading,
+            :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
+        keep_exposure: scale the light so the person keeps the photo's exposure
+            (:func:`match_exposure`; a (K, 3) light).
+        reference: (B, K, 3) the light taken as the photo's own (the exposure reference and the
+            divisor of the photo albedo); default ``pred.light`` (a video passes its smoothed estimate).
+
+    Returns:
+        :class:`Relit`.
+    """
+    dims = check_shape(image, ["B", 3, "H", "W"], name="image")
+    check_shape(pred.albedo, [dims["B"], 3, dims["H"], dims["W"]], name="prediction albedo")
+    if image.dtype == torch.uint8:
+        image = image.float() / 255
+    ref = pred if reference is None else dataclasses.replace(pred, light=reference)
+    before = ref.shading() if detail or keep_exposure else None
+    new = match_exposure(light, ref, before) if keep_exposure else light
+    albedo = photo_albedo(srgb_to_linear(image.to(pred.albedo)), ref, shading=before) if detail else pred.albedo
+    linear, shading = shade(to_channels_last(albedo), to_channels_last(pred.transport), new.to(pred.albedo),
+                            with_shading=True)
+    return Relit(to_channels_first(linear), albedo, new, to_channels_first(shading))
+
+
+def over_photo(relit: torch.Tensor, mask: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
+    """The relit person, sRGB-encoded, composited over the photo (the background kept as shot).
+
+    Args:
+        relit: (B, 3, H, W) linear (:attr:`Relit.linear`).
+        mask: (B, 1, H, W) the person's coverage in [0, 1].
+        image: (B, 3, H, W) the photo, sRGB in [0, 1].
+
+    Returns:
+        (B, H, W, 3) sRGB in [0, 1].
+    """
+    fg = to_channels_last(linear_to_srgb(relit.clamp(0, 1)))
+    return composite(fg, to_channels_last(mask), to_channels_last(image.to(fg)))
+
+
 @torch.no_grad()
-def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
+def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
                   keep_exposure: bool = True, size: int | None = None, detail: bool = True) -> RelitImage:
     """Relight a photo.
 
     Args:
-        model: the CNN (e.g. ``relightnet.model.load_model()``).
+        model: the CNN: a :class:`~relightnet.model.RelightNet` (e.g. ``relightnet.model.load_model()``)
+            or a :class:`~relightnet.pipeline.backends.Predictor` (torch or ONNX backend).
         image: (3, H, W) sRGB in [0, 1] (or uint8).
         light: (K, 3) new light, camera-relative light frame, linear RGB.
         mask: (H, W) person mask; None uses the model's mask head.
         keep_exposure: scale the light so the person keeps the photo's exposure.
-        size: working size (default: the model's training size).
+        size: working size (default: the model's, from its checkpoint); only with a RelightNet.
         detail: relight the photo's own albedo (photo / predicted shading, full detail); False
             relights the CNN's albedo.
 
@@ -84,21 +154,16 @@ def relight_image(model: RelightNet, image: torch.Tensor, light: torch.Tensor, m
     """
     check_shape(light, ["K", 3], name="light")
     check_finite(light, "light")
-    light = to_model_order(light, model.config.lmax)
+    predict = as_predictor(model, size=size)
+    light = to_model_order(light, predict.lmax)
     if image.dtype == torch.uint8:
         image = image.float() / 255
-    pred, _ = predict_image(model, image, mask, size=size)
-    before = pred.shading()
-    new = match_exposure(light, pred, before) if keep_exposure else light
+    pred = predict(image, mask)
     image = image.to(pred.albedo)
-    albedo = photo_albedo(srgb_to_linear(image)[None], pred, shading=before) if detail else pred.albedo
-    shading = shading_map(pred.transport, new.to(pred.albedo))
-    relit = (albedo * shading)[0]
-    lit = float(((shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum().clamp_min(1))
+    relit = relight_prediction(pred, image[None], light, detail=detail, keep_exposure=keep_exposure)
+    lit = float(((relit.shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum().clamp_min(1))
     if lit < 0.5:
         logger.warning("light: it lights only %.0f%% of the person (negative or zero irradiance elsewhere): "
                        "is it a valid SH light?", 100 * lit)
-    m = pred.mask[0]
-    out = linear_to_srgb(relit.clamp(0, 1)) * m + image * (1 - m)  # background kept as shot
-    return RelitImage(out.permute(1, 2, 0).cpu(), pred, new, mask is None, albedo[0].cpu())
-
+    out = over_photo(relit.linear, pred.mask, image[None])[0]
+    return RelitImage(out.cpu(), pred, relit.light, mask is None, relit.albedo[0].cpu())

@@ -3,32 +3,31 @@
 Frames and masks are read one at a time and the output is written as it goes, so memory
 does not depend on the video's length. The light estimated from each source frame is
 smoothed causally before it sets the exposure reference, so the relit person does not
-flicker with the per-frame estimate: a network that solves its light pools the solve's
-evidence since the last light switch (:class:`relightnet.temporal.PooledSolve`: under a
+flicker with the per-frame estimate. ``smoothing`` names a causal method of
+:mod:`relightnet.temporal.registry`; by default (``auto``) a network that solves its light pools
+the solve's evidence since the last light switch (:class:`relightnet.temporal.PooledSolve`: under a
 constant light the estimate settles instead of following each frame), one that regresses it
-is smoothed by an EMA; the new light can turn about the up axis over time.
+is smoothed by an EMA (weight ``alpha``); the new light can turn about the up axis over time.
 As for photos, the albedo relit is the frame divided by the predicted shading, so the
 frames keep their detail.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
+import warnings
 from pathlib import Path
 
 import torch
 
 from ..checks import InputError
 from ..io import VideoWriter
-from ..io.image import linear_to_srgb, srgb_to_linear
-from ..model.network import photo_albedo, shading_map
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
-from ..temporal.pooling import PooledSolve
+from ..temporal.registry import STREAMING_SMOOTHING, check_smoothing, make_smoother, resolve_smoothing
 from .backends import as_predictor
-from .relight_image import match_exposure, to_model_order
+from .relight_image import over_photo, relight_prediction, to_model_order
 
 logger = logging.getLogger(__name__)
 
@@ -37,8 +36,8 @@ __all__ = ["relight_video"]
 
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
-                  smoothing: float = 0.3, progress: bool = True, detail: bool = True,
-                  mask_source: str = "segment") -> int:
+                  smoothing: str = "auto", progress: bool = True, detail: bool = True,
+                  mask_source: str = "segment", alpha: float = 0.3) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -50,11 +49,14 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
-        smoothing: EMA weight of the newest frame in the source-light estimate of a network that
-            regresses its light; 1 = no smoothing (also no pooling for a network that solves it).
+        smoothing: how the source-light estimate is smoothed, a causal method
+            (:data:`~relightnet.temporal.registry.STREAMING_SMOOTHING`: ``auto``, ``pooled``, ``ema``,
+            ``one-euro``, ``fir``, ``gated-one-euro``, ``none``). A number is the former spelling
+            (deprecated): the EMA weight ``alpha`` with ``auto``, 1 meaning ``none``.
         detail: relight each frame's own albedo (frame / predicted shading under the smoothed
             source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
         mask_source: without ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`).
+        alpha: ``ema``'s weight of the newest frame, in (0, 1].
 
     Returns:
         The number of frames written.
@@ -63,15 +65,13 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
 
     if not math.isfinite(turntable_deg_per_s) or abs(turntable_deg_per_s) > 1e6:
         raise InputError(f"turntable: expected degrees per second (a finite number), got {turntable_deg_per_s}")
-    if not 0 < smoothing <= 1:
-        raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
+    smoothing, alpha = _smoothing_spelling(smoothing, alpha)
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
     info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
     light = to_model_order(light, predict.lmax)
-    pool = PooledSolve(reg=predict.solve_reg, lmax=predict.lmax) if smoothing < 1 else None
-    src = state = None
+    smoother = state = None
     n = 0
     empty: list[int] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
@@ -83,24 +83,16 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 n += 1
                 continue
             pred = predict(img, mask)
-            est = pred.light[0]
-            if pool is not None and pred.evidence is not None:
-                y, state = pool(pred.light, state, None if state is None else torch.zeros(1, dtype=torch.bool),
-                                evidence=pred.evidence, prior=pred.light_head)
-                src = y[0]
-            else:
-                src = est if src is None else smoothing * est + (1 - smoothing) * src
+            if smoother is None:  # auto: pooled or ema, whether the network solves its light
+                smoother = _smoother(smoothing, pred.evidence is not None, predict, alpha)
+            kw = {"evidence": pred.evidence, "prior": pred.light_head} if getattr(smoother, "uses_evidence", False) \
+                else {}
+            y, state = smoother(pred.light, state, torch.tensor([state is None]), **kw)
+            src = y[0]
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
-            # Exposure reference: the smoothed source light, not this frame's raw estimate.
-            ref = dataclasses.replace(pred, light=src[None])
-            before = ref.shading()
-            new = match_exposure(new, ref, before)
-            albedo = pred.albedo
-            if detail:
-                albedo = photo_albedo(srgb_to_linear(img.to(albedo))[None], ref, shading=before)
-            relit = (albedo * shading_map(pred.transport, new))[0]
-            m = pred.mask[0]
-            writer.write((linear_to_srgb(relit.clamp(0, 1)) * m + img * (1 - m)).permute(1, 2, 0))
+            # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
+            relit = relight_prediction(pred, img[None], new, detail=detail, reference=src[None])
+            writer.write(over_photo(relit.linear, pred.mask, img[None])[0])
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
             raise InputError(f"{masks or video}: every mask is empty: no person to relight")
@@ -108,3 +100,24 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         logger.warning("%d frame(s) with an empty mask were written unchanged (first: frame %d)", len(empty), empty[0])
     logger.info("wrote %s (%d frames)", Path(out), n)
     return n
+
+
+def _smoothing_spelling(smoothing, alpha: float) -> tuple[str, float]:
+    """``(method, alpha)`` from the ``smoothing`` argument; a number is the deprecated spelling."""
+    if isinstance(smoothing, (int, float)) and not isinstance(smoothing, bool):
+        warnings.warn("relight_video(smoothing=<number>) is deprecated: give a method name (smoothing='auto') "
+                      "and the EMA weight as alpha=", DeprecationWarning, stacklevel=3)
+        if not 0 < smoothing <= 1:
+            raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
+        return ("none" if smoothing == 1 else "auto"), float(smoothing)
+    check_smoothing(smoothing, STREAMING_SMOOTHING)
+    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
+        raise InputError(f"alpha: expected a weight in (0, 1], got {alpha!r}")
+    return smoothing, float(alpha)
+
+
+def _smoother(smoothing: str, has_evidence: bool, predict, alpha: float):
+    """The causal smoother of the source light (:func:`relightnet.temporal.make_smoother`)."""
+    name = resolve_smoothing(smoothing, has_evidence, causal=True)
+    opts = {"ema": {"alpha": alpha}, "pooled": {"reg": predict.solve_reg}}.get(name, {})
+    return make_smoother(name, predict.lmax, **opts)

@@ -1,7 +1,13 @@
-"""Shading and compositing: the ``shade`` primitive of the 3D (and 2D) path.
+"""Shading and compositing: the ``shade`` and ``composite`` primitives of both paths.
 
-pixel = albedo ⊙ S with S = Σ_k T_k L_k per RGB channel (docs/design.md, "Transport and shading"), all linear.
-Rasterizer outputs are channels-last, so these functions take (..., C) tensors.
+pixel = albedo ⊙ S with S = Σ_k T_k L_k per RGB channel (docs/design.md, "Transport and shading"),
+all linear. These are the only kernels for T·L (:func:`shading`), A ⊙ (T·L) (:func:`shade`)
+and alpha compositing (:func:`composite`) in relightnet: the CNN's maps, the 3D renderer and
+every job use them.
+
+Rasterizer outputs are channels-last, so these functions take (..., C) tensors; the CNN's
+maps are channels-first (B, C, H, W). :func:`to_channels_last` and :func:`to_channels_first`
+are the one named pair that converts (views, no copy).
 """
 
 from __future__ import annotations
@@ -11,7 +17,7 @@ from torch import nn
 
 from ..checks import check_finite, check_sh_count, check_shape
 
-__all__ = ["shading", "shade", "composite", "Shade"]
+__all__ = ["shading", "shade", "composite", "composite_covered", "Shade", "to_channels_last", "to_channels_first"]
 
 #: Rows grouped per GEMM row in :func:`_project_rows` (see there).
 _GROUP = 4
@@ -36,6 +42,18 @@ def _project_rows(t: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
     return out
 
 
+def to_channels_last(x: torch.Tensor) -> torch.Tensor:
+    """CNN layout → rasterizer layout: (B, C, H, W) → (B, H, W, C) (a view)."""
+    check_shape(x, ["B", "C", "H", "W"], name="channels-first image")
+    return x.permute(0, 2, 3, 1)
+
+
+def to_channels_first(x: torch.Tensor) -> torch.Tensor:
+    """Rasterizer layout → CNN layout: (B, H, W, C) → (B, C, H, W) (a view)."""
+    check_shape(x, ["B", "H", "W", "C"], name="channels-last image")
+    return x.permute(0, 3, 1, 2)
+
+
 def shading(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
     """S = T · L.
 
@@ -54,6 +72,14 @@ def shading(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
     if not per_channel:
         check_shape(transport, ["...", k], name="transport")
     light = light.to(transport.dtype)
+    if not per_channel and transport.dim() >= 3 and transport.stride(-1) != 1:
+        # A channels-last view of channels-first memory (the CNN's maps, to_channels_last):
+        # Sᵀ = Lᵀ Tᵀ in that memory layout, so the long pixel axis stays contiguous.
+        if light.dim() == 3 and transport.shape[0] != light.shape[0]:
+            raise ValueError(f"transport: a batched light (B={light.shape[0]}, K, 3) needs transport with leading "
+                             f"dim B, got {tuple(transport.shape)}")
+        t = transport.reshape(transport.shape[0], -1, k).transpose(1, 2)  # (B, K, N)
+        return torch.matmul(light.transpose(-1, -2), t).transpose(1, 2).reshape(*transport.shape[:-1], 3)
     if light.dim() == 2:
         if per_channel:
             return (transport * light).sum(-2)
@@ -65,13 +91,16 @@ def shading(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
         raise ValueError(
             f"transport: a batched light (B={b}, K, 3) needs transport with leading dim B, got {tuple(transport.shape)}"
         )
-    lb = light.reshape(b, *([1] * (transport.dim() - (3 if per_channel else 2))), k, 3)
     if per_channel:
+        lb = light.reshape(b, *([1] * (transport.dim() - 3)), k, 3)
         return (transport * lb).sum(-2)
-    return (transport.unsqueeze(-2) @ lb).squeeze(-2)
+    # One (N, K) @ (K, 3) product per batch item (the leading dims after B are flattened; for a
+    # channels-last view of a CNN map this is a view too).
+    return torch.bmm(transport.reshape(b, -1, k), light).reshape(*transport.shape[:-1], 3)
 
 
-def shade(albedo: torch.Tensor, transport: torch.Tensor, light: torch.Tensor, check: bool = True) -> torch.Tensor:
+def shade(albedo: torch.Tensor, transport: torch.Tensor, light: torch.Tensor, check: bool = True,
+          with_shading: bool = False):
     """Lambertian PRT shading: albedo ⊙ (T · L).
 
     Args:
@@ -79,14 +108,17 @@ def shade(albedo: torch.Tensor, transport: torch.Tensor, light: torch.Tensor, ch
         transport: (..., K) or per-channel (..., K, 3), same leading dims as ``albedo``.
         light: (K, 3) or (B, K, 3) linear RGB SH light in the light frame.
         check: validate values (NaN/Inf in the light).
+        with_shading: also return the shading S = T · L.
 
     Returns:
-        (..., 3) linear radiance.
+        (..., 3) linear radiance; with ``with_shading``, ``(radiance, S)`` both (..., 3).
     """
     if check:
         check_shape(albedo, ["...", 3], name="albedo")
         check_finite(light, "light")
     s = shading(transport, light)
+    if with_shading:
+        return albedo * s, s
     if s.requires_grad or albedo.requires_grad or s.shape != albedo.shape:
         return albedo * s
     return s.mul_(albedo)
@@ -110,6 +142,25 @@ def composite(fg: torch.Tensor, alpha: torch.Tensor, bg: torch.Tensor) -> torch.
     check_shape(bg, ["...", fg.shape[1], fg.shape[2], fg.shape[3]], name="bg")
     alpha = alpha.to(fg.dtype)
     return torch.lerp(bg.to(fg.dtype).expand_as(fg), fg, alpha)
+
+
+def composite_covered(fg: torch.Tensor, pix: torch.Tensor, bg: torch.Tensor) -> torch.Tensor:
+    """:func:`composite` for a binary coverage given as the covered pixels: they take ``fg``, every
+    other pixel keeps ``bg`` (which is not modified), without touching the uncovered pixels.
+
+    Args:
+        fg: (N, C) the covered pixels' values (any dtype, e.g. 8-bit).
+        pix: (N,) int64 flat indices into H·W (a rasterizer's ``Fragments.pix`` for one image).
+        bg: (H, W, C).
+
+    Returns:
+        (H, W, C) of ``bg``'s dtype.
+    """
+    check_shape(bg, ["H", "W", "C"], name="bg")
+    check_shape(fg, [pix.shape[0], bg.shape[-1]], name="fg")
+    out = bg.clone()
+    out.view(-1, bg.shape[-1]).index_copy_(0, pix, fg.to(out.dtype))
+    return out
 
 
 class Shade(nn.Module):

@@ -21,6 +21,7 @@ import math
 import torch
 
 from ..checks import check_shape
+from ..color import luminance
 from .basis import sh_basis
 from .directions import fibonacci_sphere
 from .irradiance import cosine_lobe_per_coeff
@@ -30,8 +31,6 @@ __all__ = ["METRIC_DIRECTIONS", "irradiance_samples", "scale_invariant_light_err
 
 #: Directions the irradiance is compared on.
 METRIC_DIRECTIONS = 4096
-
-_LUMA = (0.2126, 0.7152, 0.0722)
 
 
 def irradiance_samples(sh: torch.Tensor, hemisphere: bool = False) -> torch.Tensor:
@@ -85,7 +84,7 @@ def dominant_direction(sh: torch.Tensor) -> torch.Tensor:
     the light comes from.
     """
     check_shape(sh, ["...", "K", 3], name="light")
-    lum = sh.double() @ torch.tensor(_LUMA, dtype=torch.float64, device=sh.device)  # (..., K)
+    lum = luminance(sh.double())  # (..., K)
     v = torch.stack([lum[..., 3], lum[..., 1], lum[..., 2]], -1)
     return v / v.norm(dim=-1, keepdim=True).clamp_min(1e-30)
 

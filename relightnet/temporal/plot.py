@@ -6,15 +6,11 @@ import io
 
 import torch
 
+from ..color import luminance
+
 __all__ = ["light_curves_png"]
 
-_LUMA = (0.2126, 0.7152, 0.0722)
 _COEFFS = ((0, "DC (l=0)"), (1, "l=1, m=-1 (y)"), (2, "l=1, m=0 (z)"), (3, "l=1, m=1 (x)"))
-
-
-def _luma(x: torch.Tensor) -> torch.Tensor:
-    r, g, b = _LUMA
-    return r * x[..., 0] + g * x[..., 1] + b * x[..., 2]
 
 
 def light_curves_png(raw: torch.Tensor | None, smoothed: torch.Tensor, truth: torch.Tensor | None = None,
@@ -40,9 +36,9 @@ def light_curves_png(raw: torch.Tensor | None, smoothed: torch.Tensor, truth: to
     coeffs = [c for c in _COEFFS if c[0] < smoothed.shape[1]]
     fig = Figure(figsize=(10, 2.2 * len(coeffs)), dpi=80)
     axes = fig.subplots(len(coeffs), 1, sharex=True, squeeze=False)[:, 0]
-    sm_l = _luma(smoothed).numpy()
-    raw_l = _luma(raw.detach().cpu().float()).numpy() if raw is not None else None
-    tr_l = _luma(truth.detach().cpu().float()).numpy() if truth is not None else None
+    sm_l = luminance(smoothed).numpy()
+    raw_l = luminance(raw.detach().cpu().float()).numpy() if raw is not None else None
+    tr_l = luminance(truth.detach().cpu().float()).numpy() if truth is not None else None
     out_t = outliers.nonzero().flatten().tolist() if outliers is not None else []
     sw_t = switches.nonzero().flatten().tolist() if switches is not None else []
     for ax, (k, name) in zip(axes, coeffs, strict=True):

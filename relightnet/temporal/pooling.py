@@ -10,7 +10,7 @@ the person turns, while a light switch splits the shot:
   → one joint solve per segment (``window=None``) or per sliding window of frames inside the
   segment (``window`` frames, triangular weights, for light that changes slowly);
 - causal (:class:`PooledSolve`, one step with explicit state, loop-free, so it lives inside the
-  exported ONNX graph): an outlier gate on the per-frame light (:func:`~relightnet.temporal.causal.gate_step`:
+  exported ONNX graph): an outlier gate on the per-frame light (:func:`~relightnet.temporal.gate.gate_step`:
   isolated outliers are dropped, a jump that persists ``persist`` frames restarts the pool) and
   a running mean of the evidence since the last restart, with a floor ``alpha`` on the new
   frame's weight so that slow changes are followed (memory about ``1/alpha`` frames).
@@ -22,7 +22,8 @@ import torch
 
 from ..checks import InputError, check_shape
 from ..model.light_solve import Evidence, pool_evidence, solve_light
-from .causal import _Causal, _check_alpha, _check_positive, _weights, gate_step
+from .causal import _Causal, _check_alpha, _check_positive, _weights
+from .gate import gate_step
 from .offline import detect_switches
 
 __all__ = ["POOL_SECONDS", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step", "PooledSolve"]

@@ -26,17 +26,13 @@ import math
 import torch
 
 from ..checks import InputError
-from ..names import OFFLINE_METHODS, SMOOTHING
+from ..names import OFFLINE_METHODS
 
 __all__ = [
-    "METHODS", "SMOOTHING", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
+    "METHODS", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
 ]
 
-#: Offline methods: keys of :func:`smoothing_matrix`. What the video jobs (avatar, compare) accept
-#: for their light smoothing, ``SMOOTHING``: ``auto`` (``pooled`` when the network solves its light,
-#: else ``hermite``), ``pooled`` (one light solve per shot from the pooled evidence,
-#: :mod:`relightnet.temporal.pooling`), an offline method, or none. Both lists live in
-#: :mod:`relightnet.names` (torch-free, for the command line's ``--help``).
+#: Offline methods: keys of :func:`smoothing_matrix`.
 METHODS = OFFLINE_METHODS
 
 _F64 = torch.float64

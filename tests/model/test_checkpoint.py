@@ -10,7 +10,8 @@ import torch
 from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.model import NetConfig, RelightNet, load_checkpoint, load_model, save_checkpoint
-from relightnet.model.checkpoint import FORMAT, SHIPPED, convert_checkpoint
+from relightnet.model.checkpoint import FORMAT, SHIPPED
+from relightnet.model.convert import convert_checkpoint
 
 CFG = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
 

@@ -45,8 +45,7 @@ def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
     from relightnet.model.onnx_export import export_onnx
     from relightnet.pipeline.backends import OnnxPredictor
 
-    net = RelightNet(NetConfig(width=8, levels=2)).eval()
-    net.input_size = 32
+    net = RelightNet(NetConfig(width=8, levels=2, input_size=32)).eval()  # the working size is the config's
     export_onnx(net, tmp_path / "t.onnx", smoothing="none", example_size=32)
     onnx = OnnxPredictor(tmp_path / "t.onnx")
     assert onnx.size == 32 and onnx.lmax == 2 and not onnx.has_mask_head
@@ -58,3 +57,36 @@ def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
     torch.testing.assert_close(got.light, want.light, rtol=1e-4, atol=1e-4)
     torch.testing.assert_close(got.transport, want.transport, rtol=1e-4, atol=1e-4)
     torch.testing.assert_close(onnx.light(img, mask), want.light[0], rtol=1e-4, atol=1e-4)
+
+
+def test_predictors_follow_the_protocol_and_take_their_size_from_the_config(tmp_path):
+    from relightnet.model import save_checkpoint
+    from relightnet.pipeline.backends import Predictor
+
+    net = RelightNet(NetConfig(width=8, levels=2, input_size=48)).eval()
+    p = as_predictor(net)
+    assert isinstance(p, Predictor) and p.size == 48
+    assert as_predictor(net, size=32).size == 32
+    with pytest.raises(InputError, match="works at 48"):
+        as_predictor(p, size=64)
+    ckpt = save_checkpoint(tmp_path / "m.pt", net, net.config, step=0)
+    assert make_predictor("torch", ckpt).size == 48 and make_predictor("torch", ckpt, size=32).size == 32
+    with pytest.raises(InputError, match="multiple of 16"):
+        make_predictor("torch", ckpt, size=40)
+    from relightnet.model.onnx_export import export_onnx
+
+    export_onnx(net, tmp_path / "m.onnx", smoothing="none", example_size=32)
+    onnx = make_predictor("onnx", tmp_path / "m.onnx")
+    assert isinstance(onnx, Predictor) and onnx.size == 48
+
+
+def test_crop_and_paste_are_public_and_inverse():
+    from relightnet.model import CropBox, crop_to_box, paste_from_box
+
+    x = torch.rand(1, 2, 20, 30)
+    box = CropBox(-3, 5, 16)
+    c = crop_to_box(x, box)
+    assert c.shape == (1, 2, 16, 16) and (c[..., :3, :] == 0).all()
+    back = paste_from_box(c, box, 20, 30)
+    torch.testing.assert_close(back[..., 0:13, 5:21], x[..., 0:13, 5:21])
+    assert (back[..., :, :5] == 0).all()

@@ -87,3 +87,37 @@ def test_killed_relight_video_leaves_no_temp_file_after_a_rerun(tmp_path, masked
     assert left and not out.exists()
     assert main(["-q", *argv]) == 0  # the rerun starts clean and removes the dead run's file
     assert temp_files(out.parent) == [] and len(list(read_video(out))) == 40
+
+
+def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys):
+    """--smoothing takes the registry's causal names; a number (the former spelling) still works, with a note."""
+    import pytest
+
+    from relightnet.checks import InputError
+    from relightnet.pipeline import make_predictor, relight_video
+    from relightnet.sh import preset_light
+
+    video, masks = masked_clip(tmp_path)
+    outs = {}
+    for name, extra in (("ema", ["--alpha", "0.3"]), ("auto", []), ("one-euro", []), ("none", [])):
+        outs[name] = tmp_path / f"{name}.mkv"
+        assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset",
+                     "--smoothing", name, *extra, "--out", str(outs[name])]) == 0
+    # auto is ema for the shipped model (it regresses its light); ema at 0.3 is the default
+    for a, b in zip(read_video(outs["ema"]), read_video(outs["auto"]), strict=True):
+        np.testing.assert_array_equal(a, b)
+    old = tmp_path / "old.mkv"
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--smoothing", "0.3",
+                 "--out", str(old)]) == 0
+    assert "deprecated" in capsys.readouterr().err
+    for a, b in zip(read_video(outs["ema"]), read_video(old), strict=True):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(SystemExit) as e:  # an offline method: refused by the parser
+        main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--smoothing", "hermite",
+              "--out", str(tmp_path / "x.mkv")])
+    assert e.value.code == 2 and "hermite" in capsys.readouterr().err
+    with pytest.raises(InputError, match="alpha"):
+        relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "y.mkv", alpha=0)
+    with pytest.warns(DeprecationWarning):
+        relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "z.mkv",
+                      smoothing=1.0, progress=False)

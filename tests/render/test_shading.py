@@ -94,3 +94,52 @@ def test_shade_and_composite_gradcheck(device):
     t3 = torch.randn(2, 4, 9, 3, generator=g, dtype=torch.float64).to(device).requires_grad_(True)
     lb = torch.randn(2, 9, 3, generator=g, dtype=torch.float64).to(device).requires_grad_(True)
     assert torch.autograd.gradcheck(lambda t, light: shading(t, light), (t3, lb))
+
+
+def test_channel_layout_pair_is_a_view_and_round_trips():
+    from relightnet.render import to_channels_first, to_channels_last
+
+    x = torch.randn(2, 5, 4, 3)
+    y = to_channels_last(x)
+    assert y.shape == (2, 4, 3, 5) and y.data_ptr() == x.data_ptr()
+    assert torch.equal(to_channels_first(y), x)
+    with pytest.raises(ShapeError, match="channels-first"):
+        to_channels_last(torch.zeros(3, 4, 5))
+
+
+@pytest.mark.parametrize("batched", [False, True])
+def test_shading_of_a_cnn_map_equals_the_per_pixel_sum(batched):
+    """A channels-last view of (B, K, H, W) memory goes through the transposed product: same values."""
+    from relightnet.render import to_channels_last
+
+    g = torch.Generator().manual_seed(1)
+    T = torch.randn(3, 9, 6, 5, generator=g, dtype=torch.float64)
+    L = torch.randn(3, 9, 3, generator=g, dtype=torch.float64) if batched else torch.randn(9, 3, generator=g,
+                                                                                         dtype=torch.float64)
+    want = torch.einsum("bkhw,bkc->bhwc", T, L) if batched else torch.einsum("bkhw,kc->bhwc", T, L)
+    torch.testing.assert_close(shading(to_channels_last(T), L), want)
+    with pytest.raises(ValueError, match="leading dim"):
+        shading(to_channels_last(T), torch.randn(2, 9, 3, dtype=torch.float64))
+
+
+def test_shade_with_shading_returns_both():
+    A, T, L = torch.rand(4, 3), torch.randn(4, 9), torch.randn(9, 3)
+    rad, S = shade(A, T, L, with_shading=True)
+    torch.testing.assert_close(S, shading(T, L))
+    torch.testing.assert_close(rad, A * S)
+
+
+def test_composite_covered_equals_composite_with_binary_alpha():
+    from relightnet.render import composite_covered
+
+    g = torch.Generator().manual_seed(2)
+    bg = torch.randint(0, 256, (5, 4, 3), generator=g, dtype=torch.uint8)
+    fg = torch.randint(0, 256, (1, 5, 4, 3), generator=g, dtype=torch.uint8)
+    alpha = (torch.rand(1, 5, 4, generator=g) > 0.5).float()
+    pix = torch.nonzero(alpha.flatten()).flatten()
+    got = composite_covered(fg.reshape(-1, 3)[pix], pix, bg)
+    want = composite(fg.float(), alpha, bg.float())[0].to(torch.uint8)
+    assert torch.equal(got, want)
+    assert not torch.equal(got, bg) or pix.numel() == 0
+    with pytest.raises(ShapeError, match="fg"):
+        composite_covered(torch.zeros(2, 3, dtype=torch.uint8), torch.tensor([0]), bg)

@@ -1,0 +1,175 @@
+"""The light of a video, the first stages of the video jobs: estimate per frame → smooth over time.
+
+:func:`estimate_video_evidence` runs the CNN on every frame (streaming) and keeps what a video
+needs (the per-frame lights, and for a network that solves its light the solve's evidence and
+priors); :func:`smooth_video_lights` smooths them with a method of
+:mod:`relightnet.temporal.registry`. ``avatar``, ``compare`` and ``evaluate --light`` use both.
+
+The estimates of ``avatar`` are kept in its side file ``OUT.lights.npz``
+(:func:`write_video_lights`) with a fingerprint of the inputs (:func:`lights_fingerprint`): when
+it matches, a rerun reuses them (:func:`read_light_estimates`) instead of running the CNN again.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..checks import InputError
+from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing
+from .backends import as_predictor
+
+__all__ = ["estimate_video_lights", "estimate_video_evidence", "smooth_video_lights", "lights_fingerprint",
+           "read_light_estimates", "write_video_lights"]
+
+
+@torch.no_grad()
+def estimate_video_lights(model, video, masks=None, progress: bool = True, mask_source: str = "segment"
+                          ) -> torch.Tensor:
+    """Per-frame light estimates of a video (the first pass of ``avatar``).
+
+    Args:
+        model: a :class:`~relightnet.model.RelightNet` or a predictor (:mod:`.backends`).
+        video: the target video file.
+        masks: folder of mask images or a mask video (one per frame), or None: ``mask_source``
+            (``segment``: the person segmentation; ``head``: the model's mask head).
+
+    Returns:
+        (T, K, 3) raw lights, camera-relative light frame, linear RGB.
+    """
+    return estimate_video_evidence(model, video, masks, progress, mask_source)[0]
+
+
+@torch.no_grad()
+def estimate_video_evidence(model, video, masks=None, progress: bool = True, mask_source: str = "segment"):
+    """Per-frame lights of a video with the light solve's evidence (for pooling over shots).
+
+    Same arguments as :func:`estimate_video_lights`.
+
+    Returns:
+        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.model.light_solve.Evidence`
+        (``M`` (T, 3, K, K), ``r`` (T, 3, K)) and priors (T, K, 3) — None for a network that
+        regresses its light (and the prior None for ``light_mode="solve"``).
+    """
+    from tqdm import tqdm
+
+    from ..model.light_solve import stack_evidence
+    from ..segment.sources import video_masks
+
+    predict = as_predictor(model)
+    if masks is None and mask_source == "head" and not predict.has_mask_head:
+        raise InputError("--mask-source head: this model has no mask head; give --target-masks or use 'segment'")
+    info, _, frames = video_masks(video, masks, mask_source)
+    lights, evs, priors = [], [], []
+    for _, img, mask in tqdm(frames, total=info.n_frames or None, desc="estimate light",
+                             unit="frame", disable=not progress):
+        light, ev, prior = predict.light_evidence(img, mask)
+        lights.append(light.float().cpu())
+        evs.append(ev)
+        priors.append(prior)
+    if not lights:
+        raise InputError(f"{video}: the video has no frames")
+    return (torch.stack(lights), *stack_evidence(evs, priors))
+
+
+def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
+                        fps: float = 30.0):
+    """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
+
+    ``method`` is any name of :data:`~relightnet.temporal.registry.VIDEO_SMOOTHING`
+    (:func:`relightnet.temporal.smooth_sequence`). ``pooled`` shares the light across frames: the
+    per-frame evidence of the light solve (``evidence``, ``prior`` from :func:`estimate_video_evidence`,
+    ``reg`` the network's λ) of the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS`
+    (triangular weights, at the video's ``fps``) and between the same detected light switches is
+    solved jointly; ``hermite``/``poly``/``savgol`` are robust regressions with 3-MAD outlier
+    correction and automatic switch detection (fewer than 3 frames: the raw lights); the causal
+    filters run over the sequence with their default options; ``auto`` is ``pooled`` when there is
+    evidence, else ``hermite``; ``none`` returns the raw lights.
+    """
+    from ..temporal.registry import SMOOTHING_METHODS, resolve_smoothing, smooth_sequence
+
+    check_smoothing(method, VIDEO_SMOOTHING)
+    name = resolve_smoothing(method, evidence is not None)
+    robust = not SMOOTHING_METHODS[name].causal
+    if robust and raw.shape[0] < 3:  # too short to fit: the raw lights
+        name = "none"
+    opts = {"outlier_eps": "3mad", "switches": "auto"} if robust and name != "none" else {}
+    res = smooth_sequence(raw, name, evidence, prior, reg, fps, **opts)
+    return res.smoothed, res.outliers, res.switches
+
+
+def lights_fingerprint(video, masks, predictor_name: str, mask_source: str = "segment") -> str:
+    """What the light estimates of a video depend on: the video's and masks' names, sizes and
+    modification times, and the model's name (a JSON string)."""
+    def stat(p):
+        p = Path(p)
+        if p.is_dir():
+            return sorted((f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in p.iterdir())
+        st = p.stat()
+        return [p.name, st.st_size, st.st_mtime_ns]
+
+    return json.dumps({"video": stat(video), "masks": mask_source if masks is None else stat(masks),
+                       "model": predictor_name}, sort_keys=True)
+
+
+def read_light_estimates(path: Path, fingerprint: str):
+    """``(raw, evidence, prior)`` saved by an earlier run with the same inputs, or None (no file,
+    another fingerprint, a damaged or foreign file: it is then rewritten)."""
+    from ..io.arrays import read_npz
+    from ..model.light_solve import Evidence
+
+    if not path.is_file():
+        return None
+    try:
+        z = read_npz(path, "light estimates", ("fingerprint", "raw", "evidence_M", "evidence_r", "prior"))
+    except InputError:
+        return None
+    if not ("raw" in z and "fingerprint" in z and z["fingerprint"].size == 1 and str(z["fingerprint"]) == fingerprint
+            and z["raw"].dtype.kind == "f" and z["raw"].ndim == 3):
+        return None
+    raw = torch.from_numpy(z["raw"])
+    t, k = raw.shape[:2]
+    ev = prior = None
+    if "evidence_M" in z and "evidence_r" in z:
+        M, r = z["evidence_M"], z["evidence_r"]
+        if M.shape != (t, 3, k, k) or r.shape != (t, 3, k) or M.dtype.kind != "f" or r.dtype.kind != "f":
+            return None
+        ev = Evidence(torch.from_numpy(M), torch.from_numpy(r))
+    if "prior" in z:
+        if z["prior"].shape != raw.shape or z["prior"].dtype.kind != "f":
+            return None
+        prior = torch.from_numpy(z["prior"])
+    return raw, ev, prior
+
+
+def write_video_lights(lights_file: Path, plot: Path, smoothed: torch.Tensor, fingerprint: str, raw=None,
+                       outliers=None, switches=None, evidence=None, prior=None, smoothing: str = "",
+                       title: str = "") -> None:
+    """Write a video job's light side files atomically: ``lights_file`` in the light-sequence
+    format (:func:`relightnet.sh.save_light_sequence`: ``sh`` = ``smoothed`` (T, K, 3), the light
+    of each frame, readable by ``smooth-light``; side arrays ``smoothed``, ``fingerprint``, and with
+    estimates ``raw``, ``outliers``, ``switches``, ``smoothing``, ``evidence_M``/``evidence_r``,
+    ``prior``) and ``plot`` (light curves, PNG); the folder is made if needed."""
+    from ..io import atomic_write
+    from ..sh.io import save_light_sequence
+    from ..temporal.plot import light_curves_png
+
+    n = smoothed.shape[0]
+    lights_file.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {"smoothed": smoothed.numpy(), "fingerprint": np.array(fingerprint)}
+    if raw is not None:
+        arrays.update(raw=raw.numpy(), outliers=outliers.numpy(), switches=switches.numpy(),
+                      smoothing=np.array(smoothing))
+    if evidence is not None:
+        arrays.update(evidence_M=evidence[0].numpy(), evidence_r=evidence[1].numpy())
+    if prior is not None:
+        arrays.update(prior=prior.numpy())
+    save_light_sequence(lights_file, smoothed, **arrays)
+    png = light_curves_png(raw[:n] if raw is not None else None, smoothed,
+                           outliers=outliers[:n] if outliers is not None else None,
+                           switches=switches[:n] if switches is not None else None, title=title)
+    with atomic_write(plot) as f:
+        f.write(png)
