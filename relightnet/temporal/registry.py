@@ -67,6 +67,7 @@ _ROBUST = ("outlier_eps", "iterations", "switches", "switch_window", "switch_eps
 #: The gate's options (causal methods smoothed by :func:`smooth_sequence` with ``outlier_eps``).
 _GATE = ("eps", "persist", "gamma", "init")
 
+#: Every smoothing method by name (``auto`` is not one: :func:`resolve_smoothing` picks one).
 SMOOTHING_METHODS: dict[str, SmoothingMethod] = {m.name: m for m in (
     SmoothingMethod("hermite", True, False, False, ("knot_spacing", "tangents", *_ROBUST),
                     "robust cubic Hermite spline with outlier correction and switch splitting"),

@@ -171,7 +171,7 @@ def test_avatar_cli_and_every_bad_input(target, tmp_path, capsys):
     np.savez(bad / "m2.npz", poses=np.zeros((N, 70), np.float32), betas=np.zeros(10, np.float32),
              trans=np.zeros((N, 3), np.float32))
     fails(["--light", "studio", "--body", f"smpl:{smpl}", "--motion", str(bad / "m2.npz")], "72")
-    fails(["--light", "studio", "--albedo", str(bad / "nope.png")], "texture file not found")
+    fails(["--light", "studio", "--albedo", str(bad / "nope.png")], "nope.png: not found (expected an existing file or folder)")
     (bad / "cam.json").write_text(json.dumps({"eye": [0, 1]}))
     fails(["--light", "studio", "--camera", str(bad / "cam.json")], "--camera")
     fails(["--light", "studio", "--out", str(tmp_path / "o.gif")], "o.gif", argv=[
@@ -189,7 +189,8 @@ def test_avatar_with_an_smpl_motion_file_shorter_than_the_video(target, tmp_path
                  progress=False)
     frames = list(read_video(res.video))
     assert len(frames) == N - 1
-    assert np.load(tmp_path / "s.lights.npz")["smoothed"].shape == (N - 1, 9, 3)
+    # the lights file describes the target: one light per target frame, also those past the motion's end
+    assert np.load(tmp_path / "s.lights.npz")["smoothed"].shape == (N, 9, 3)
 
 
 def test_avatar_over_a_clean_plate(target, anny_body, tmp_path):

@@ -191,7 +191,7 @@ def test_bad_inputs_write_nothing(seq_dir, tiny_dataset, tmp_path, capsys):
         assert len(err.splitlines()) == 1 and words in err, err
         assert _no_leftovers(tmp_path, "rep")
 
-    fails(["--data", str(tmp_path / "nope")], "dataset folder not found")
+    fails(["--data", str(tmp_path / "nope")], "nope: not found (expected a dataset folder of clips")
     fails(["--data", str(tiny_dataset)], "still samples")
     fails(["--data", str(seq_dir), "--split", "val"], "has no clips")
     bad = tmp_path / "bad.pt"
@@ -204,7 +204,7 @@ def test_bad_inputs_write_nothing(seq_dir, tiny_dataset, tmp_path, capsys):
     assert "multiple of 16" in capsys.readouterr().err and _no_leftovers(tmp_path, "rep")
     out.write_text("a file")
     assert main(["compare", "--data", str(seq_dir), "--out", str(out)]) == 1
-    assert "not a folder" in capsys.readouterr().err and out.read_text() == "a file"
+    assert "rep: is a file; expected a folder" in capsys.readouterr().err and out.read_text() == "a file"
     out.unlink()
     with pytest.raises(InputError, match="smoothing"):
         compare(seq_dir, out, smoothing="kalman")
