@@ -46,3 +46,11 @@ def test_export_and_run_a_video(tiny_dataset, tmp_path, masked_clip, capsys):
     assert "multiple of 16 from 16 to 2048" in capsys.readouterr().err
     assert main(["export", "--checkpoint", str(run / "last.pt"), "--out", str(tmp_path / "m.txt")]) == 1
     assert "expected a file ending in .onnx" in capsys.readouterr().err and not (tmp_path / "m.txt").exists()
+
+
+def test_export_refuses_an_option_its_smoother_would_ignore(tmp_path, capsys):
+    out = tmp_path / "m.onnx"
+    assert main(["export", "--out", str(out), "--smoothing", "one-euro", "--alpha", "0.5"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--alpha: applies to --smoothing ema, not one-euro" in err[0], err
+    assert list(tmp_path.iterdir()) == []

@@ -113,6 +113,11 @@ def test_bad_inputs_exit_1_with_one_line_and_nothing_written(tmp_path, sequences
     line = _one_line_error(capsys, main(["smooth-light", str(noisy_f), *tail, "--method", "ema",
                                          "--outlier-eps", "0.5"]))
     assert "causal" in line
+    # an option of another method would be ignored: refused, naming the methods it belongs to
+    line = _one_line_error(capsys, main(["smooth-light", str(noisy_f), *tail, "--smoothing", "ema", "--knots", "4"]))
+    assert "--knots: applies to --smoothing hermite, not ema" in line
+    line = _one_line_error(capsys, main(["smooth-light", str(noisy_f), *tail, "--alpha", "0.5"]))
+    assert "--alpha: applies to --smoothing ema, not hermite" in line
     assert "o.npy" in _one_line_error(capsys, main(["smooth-light", str(noisy_f), str(tmp_path / "o.npy")]))
     line = _one_line_error(capsys, main(["smooth-light", str(noisy_f), str(out), "--plot", str(tmp_path / "p.jpg")]))
     assert "png" in line

@@ -120,6 +120,22 @@ def out_dir(path: str | Path, option: str = "--out") -> Path:
     return p
 
 
+def method_options(p: argparse.ArgumentParser, uses: dict[str, tuple[str, ...]]) -> None:
+    """Record which methods each option of ``p`` applies to (``uses``: option dest → method names),
+    for :func:`check_method_options` (call after the options are added: it reads their defaults)."""
+    p.set_defaults(method_options={dest: (methods, p.get_default(dest)) for dest, methods in uses.items()})
+
+
+def check_method_options(args: argparse.Namespace, method: str, option: str = "--smoothing") -> None:
+    """Refuse an option given with a value for a method it does not apply to (it would be ignored)."""
+    from ..checks import InputError
+
+    for dest, (methods, default) in getattr(args, "method_options", {}).items():
+        if getattr(args, dest) != default and method not in methods:
+            raise InputError(f"--{dest.replace('_', '-')}: applies to {option} {' / '.join(methods)}, "
+                             f"not {method} (it would be ignored)")
+
+
 def exposure_arg(text: str):
     if text == "auto":
         return text

@@ -7,7 +7,16 @@ import logging
 from pathlib import Path
 
 from ..names import STREAMING_SMOOTHING
-from .common import add_checkpoint_args, add_command, in_path, out_dir, out_file, work_size
+from .common import (
+    add_checkpoint_args,
+    add_command,
+    check_method_options,
+    in_path,
+    method_options,
+    out_dir,
+    out_file,
+    work_size,
+)
 
 logger = logging.getLogger("relightnet.onnx")
 
@@ -19,8 +28,11 @@ def run_export(args: argparse.Namespace) -> int:
 
     out = out_file(args.out, suffixes=(".onnx",))
     ckpt = Path(in_path(args.checkpoint, "--checkpoint")) if args.checkpoint else shipped_checkpoint()
+    if args.smoothing != "auto":  # refused before the model loads
+        check_method_options(args, args.smoothing)
     net = load_model(ckpt)
     smoothing = resolve_smoothing(args.smoothing, net.solves, causal=True)
+    check_method_options(args, smoothing)
     opts = {"alpha": args.alpha} if smoothing == "ema" else {}
     out = export_onnx(net, out, smoothing=smoothing,
                       train_config=load_checkpoint(ckpt).get("train_config"), **opts)
@@ -57,6 +69,7 @@ def register(sub) -> None:
                    help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
                         "since the last light switch — for a network that solves its light, else ema)")
     p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
+    method_options(p, {"alpha": ("ema",)})
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")
     p.add_argument("--int8-mode", choices=("static", "dynamic"), default="static",
                    help="static: QDQ int8 convolutions calibrated on 16 generated people (default); "

@@ -6,9 +6,10 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, nonneg_int, out_file, pos_float, pos_int
+from .common import add_command, check_method_options, method_options, nonneg_int, out_file, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
+
 
 def _smooth(args, sh):
     """(smoothed, outliers (T,) bool, switches (T,) bool) for the chosen method (the registry's
@@ -51,6 +52,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     from ..temporal.registry import SEQUENCE_SMOOTHING, check_smoothing
 
     check_smoothing(args.method, SEQUENCE_SMOOTHING, "--smoothing")
+    check_method_options(args, args.method)
     parse_eps(args.outlier_eps)
     out = out_file(args.output, "OUT", (".npz", ".json"))
     plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
@@ -135,4 +137,9 @@ def register(sub) -> None:
                    help="causal: frames a jump must last to count as a switch (default: 2)")
     p.add_argument("--truth", default=None, help="true light sequence, for the error and the plot")
     p.add_argument("--plot", default=None, help="write a .png of raw/smoothed/true coefficients over time")
+    offline, causal = ("hermite", "poly", "savgol"), ("ema", "one-euro", "fir", "gated-one-euro")
+    method_options(p, {"knots": ("hermite",), "tangents": ("hermite",), "degree": ("poly", "savgol", "fir"),
+                       "window": ("poly", "savgol", "fir"), "switches": offline, "iterations": offline,
+                       "alpha": ("ema",), "min_cutoff": ("one-euro",), "beta": ("one-euro",),
+                       "rate": ("one-euro",), "persist": causal})
     p.set_defaults(func=run_smooth)
