@@ -32,13 +32,22 @@ from .metrics import jitter, light_error, outlier_scores, step_lag
 from .offline import (
     SmoothResult,
     detect_switches,
+    frame_noise,
     running_median,
     smooth_hermite,
     smooth_lights,
     smooth_poly,
     smooth_savgol,
 )
-from .pooling import POOL_SECONDS, PooledSolve, pool_shot_lights, pool_window, pooled_step, pooling_weights
+from .pooling import (
+    POOL_SECONDS,
+    SWITCH_NOISE,
+    PooledSolve,
+    pool_shot_lights,
+    pool_window,
+    pooled_step,
+    pooling_weights,
+)
 from .registry import (
     SEQUENCE_SMOOTHING,
     SMOOTHING_METHODS,
@@ -59,10 +68,10 @@ __all__ = [
     "light_distance", "light_norm", "light_weights", "local_outlier_threshold", "outlier_threshold",
     "parse_eps", "robust_scale",
     "jitter", "light_error", "outlier_scores", "step_lag",
-    "METHODS", "SmoothResult", "detect_switches", "hermite_basis", "hermite_matrix", "poly_matrix",
+    "METHODS", "SmoothResult", "detect_switches", "frame_noise", "hermite_basis", "hermite_matrix", "poly_matrix",
     "running_median", "savgol_matrix", "smooth_hermite", "smooth_lights", "smooth_poly", "smooth_savgol",
     "smoothing_matrix",
     "SEQUENCE_SMOOTHING", "SMOOTHING_METHODS", "STREAMING_SMOOTHING", "VIDEO_SMOOTHING", "SmoothingMethod",
     "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence", "smoothing_names",
-    "POOL_SECONDS", "PooledSolve", "pool_shot_lights", "pool_window", "pooled_step", "pooling_weights",
+    "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "pool_shot_lights", "pool_window", "pooled_step", "pooling_weights",
 ]

@@ -34,7 +34,7 @@ from .distance import light_distance, light_norm, local_outlier_threshold, outli
 from .smoothers import _check_method, _check_pos, smoothing_matrix
 
 __all__ = [
-    "SmoothResult", "running_median", "detect_switches",
+    "SmoothResult", "running_median", "frame_noise", "detect_switches",
     "smooth_lights", "smooth_poly", "smooth_savgol", "smooth_hermite",
 ]
 
@@ -92,7 +92,7 @@ def _as_batch(lights: torch.Tensor, name: str = "lights") -> tuple[torch.Tensor,
 
 
 def detect_switches(
-    lights: torch.Tensor, window: int = 5, eps="8mad", min_jump: float = 0.0
+    lights: torch.Tensor, window: int = 5, eps="8mad", min_jump: float = 0.0, noise: float | None = None
 ) -> torch.Tensor:
     """Find persistent jumps (light switches) in light sequences.
 
@@ -100,22 +100,31 @@ def detect_switches(
     steps stay); the jump at frame t is the light distance between the means of
     the ``window`` cleaned frames before and after t. It peaks at a step;
     a peak above the threshold (``eps`` over the sequence's jump values, at
-    least ``min_jump``) that is the largest within ``window`` frames is a switch.
+    least ``min_jump``, and with ``noise`` at least that many times the
+    sequence's :func:`frame_noise`) that is the largest within ``window``
+    frames is a switch.
 
     Args:
         lights: (T, K, 3) or (B, T, K, 3).
         window: frames on each side; a switch is never within ``window`` frames
             of the sequence's ends, and switches are more than ``window`` apart.
-        eps: threshold as for :func:`~relightnet.temporal.distance.parse_eps` (not None).
+        eps: threshold as for :func:`~relightnet.temporal.distance.parse_eps`
+            (None only with ``noise``).
         min_jump: absolute lower bound of the threshold (light distance).
+        noise: lower bound of the threshold in units of the frame noise. A
+            threshold over the jump values needs many frames away from any step;
+            one over the frame noise also works on a clip that is mostly
+            step (a short shot, or a switch half-way).
 
     Returns:
         (T,) or (B, T) bool, True on the first frame after each switch.
     """
     x, batched = _as_batch(lights)
     window = _check_pos(window, "window")
-    if parse_eps(eps) is None:
+    if parse_eps(eps) is None and noise is None:
         raise InputError("switch eps: expected a threshold, got none")
+    if noise is not None and not noise > 0:
+        raise InputError(f"switch noise: expected a positive number, got {noise!r}")
     b, t_len, k, _ = x.shape
     out = torch.zeros(b, t_len, dtype=torch.bool, device=x.device)
     if t_len >= 2 * window + 1:
@@ -125,13 +134,27 @@ def detect_switches(
         left = (csum[:, t] - csum[:, t - window]) / window
         right = (csum[:, t + window] - csum[:, t]) / window
         jump = light_distance(left, right)  # (B, len(t)), jump at boundary t (between t-1 and t)
-        thr = outlier_threshold(jump, eps, floor=min_jump)
+        floor = torch.full((b,), float(min_jump), dtype=x.dtype, device=x.device)
+        if noise is not None:
+            floor = torch.maximum(floor, noise * frame_noise(x))
+        thr = outlier_threshold(jump, eps, floor=floor) if parse_eps(eps) is not None else floor
         peak = F.max_pool1d(jump[:, None], 2 * window + 1, 1, window)[:, 0]
         first = torch.ones_like(jump, dtype=torch.bool)
         first[:, 1:] = jump[:, 1:] > jump[:, :-1]  # on a flat top keep only the first frame
         hit = (jump > thr[:, None]) & (jump >= peak) & first
         for bi, ti in hit.nonzero().tolist():
             out[bi, _refine_switch(x[bi], int(t[ti]), window)] = True
+    return out if batched else out[0]
+
+
+def frame_noise(lights: torch.Tensor) -> torch.Tensor:
+    """How much single frames scatter: the median light distance of a frame from the 5-frame
+    running median of its sequence ((T, K, 3) → (), (B, T, K, 3) → (B,)). A step moves few
+    frames away from the running median, noise moves all of them."""
+    x, batched = _as_batch(lights)
+    b, t_len, k, _ = x.shape
+    med = running_median(x.reshape(b, t_len, k * 3), 5).reshape(b, t_len, k, 3)
+    out = light_distance(x, med).median(-1).values
     return out if batched else out[0]
 
 

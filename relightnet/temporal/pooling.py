@@ -26,11 +26,19 @@ from .causal import _Causal, _check_alpha, _check_positive, _weights
 from .gate import gate_step
 from .offline import detect_switches
 
-__all__ = ["POOL_SECONDS", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step", "PooledSolve"]
+__all__ = ["POOL_SECONDS", "SWITCH_NOISE", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step",
+           "PooledSolve"]
 
 #: How far (seconds) the video jobs pool a frame's evidence to either side, inside its segment: a
 #: constant light stays constant, a light that turns (a camera pan) is still followed.
 POOL_SECONDS = 1.0
+
+
+#: A light switch in a shot is a jump between the means of 5 frames before and after it of at
+#: least this many times the frame noise (:func:`~relightnet.temporal.offline.frame_noise`). A
+#: threshold over the noise, not over the jump values, also finds a switch in a short shot,
+#: where most frames are near the step.
+SWITCH_NOISE = 8.0
 
 
 def pool_window(fps: float, seconds: float = POOL_SECONDS) -> int:
@@ -71,7 +79,8 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
         prior: (T, K, 3) per-frame prior lights (the hybrid's head), pooled with the same weights; or None.
         reg: the solve's λ (the network's ``solve_reg``).
         window: see :func:`pooling_weights`.
-        switches: ``"auto"`` (detected on the per-frame lights), ``None`` (one segment) or a (T,) bool tensor.
+        switches: ``"auto"`` (detected on the per-frame lights: :func:`~relightnet.temporal.offline.detect_switches`
+            with :data:`SWITCH_NOISE`), ``None`` (one segment) or a (T,) bool tensor.
 
     Returns:
         ``(pooled (T, K, 3), per_frame (T, K, 3), switches (T,) bool)``.
@@ -80,7 +89,7 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
     dims = check_shape(M, ["T", 3, "K", "K"], name="evidence M")
     per_frame = solve_light(evidence, prior, reg)
     if isinstance(switches, str) and switches == "auto":
-        switches = detect_switches(per_frame.double())
+        switches = detect_switches(per_frame.double(), eps=None, noise=SWITCH_NOISE)
     elif switches is None:
         switches = torch.zeros(dims["T"], dtype=torch.bool)
     else:

@@ -155,3 +155,19 @@ def test_bad_inputs():
         smooth_hermite(x, knot_spacing=0)
     with pytest.raises(ShapeError, match="switches"):
         smooth_lights(x, switches=torch.zeros(5, dtype=torch.bool))
+
+
+def test_frame_noise_scales_with_the_noise_and_ignores_a_step():
+    from relightnet.temporal import frame_noise
+
+    truth, quiet = rotating(t_len=60, step=30, noise=0.02, seed=4)
+    _, loud = rotating(t_len=60, step=30, noise=0.08, seed=4)
+    q, lo = float(frame_noise(quiet)), float(frame_noise(loud))
+    assert 3 < lo / q < 5  # proportional to the noise
+    assert float(frame_noise(truth)) < 0.1 * q  # a clean step is not noise
+    both = frame_noise(torch.stack([quiet, loud]))
+    assert both.shape == (2,) and torch.allclose(both, torch.tensor([q, lo], dtype=both.dtype))
+    with pytest.raises(InputError, match="noise"):
+        detect_switches(quiet, noise=0.0)
+    with pytest.raises(InputError, match="threshold"):
+        detect_switches(quiet, eps=None)

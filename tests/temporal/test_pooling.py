@@ -113,3 +113,21 @@ def test_a_window_follows_a_turning_light():
     rel = lambda x: float((light_distance(x, truth) / light_norm(truth)).mean())  # noqa: E731
     assert rel(win) < 0.5 * rel(shot)
     assert pool_window(30.0) == 30 and pool_window(0.5) == 1
+
+
+def test_a_switch_half_way_through_a_short_shot_is_found():
+    """24 frames with the switch at 12: most jump values are near the step, so a threshold over
+    them (the offline smoothers' 8 MAD) finds nothing; one over the frame noise finds it."""
+    from relightnet.temporal import SWITCH_NOISE, detect_switches, frame_noise
+
+    a, b = _light(4), _light(5)
+    ev = _frames([a] * 12 + [b] * 12, noise=0.3, seed=1)
+    pooled, per_frame, switches = pool_shot_lights(ev, None, 1e-6)
+    assert not detect_switches(per_frame.double()).any()
+    assert switches.nonzero().flatten().tolist() == [12]
+    assert float(light_distance(pooled[12:], b).max() / light_norm(b)) < 0.05
+    # the same shot without the switch: none found, one pooled light
+    ev = _frames([a] * 24, noise=0.3, seed=1)
+    pooled, per_frame, switches = pool_shot_lights(ev, None, 1e-6)
+    assert not switches.any() and float(frame_noise(per_frame)) > 0
+    assert not detect_switches(per_frame.double(), eps=None, noise=SWITCH_NOISE).any()
