@@ -1,17 +1,14 @@
-"""Checkpoints: plain content only, weights_only loading, refusals by name, conversion, the shipped model."""
+"""Checkpoints: plain content only, weights_only loading, refusals by name, the shipped model."""
 
 import dataclasses
 import os
 
-import numpy as np
 import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.cli import main
-from relightnet.model import NetConfig, RelightNet, load_checkpoint, load_model, save_checkpoint
+from relightnet.model import NetConfig, RelightNet, load_model, save_checkpoint
 from relightnet.model.checkpoint import FORMAT, SHIPPED
-from relightnet.model.convert import convert_checkpoint
 
 CFG = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
 
@@ -47,26 +44,7 @@ def test_payload_is_refused_by_name_and_not_run(tmp_path):
     torch.save(_state(extra=_Payload(marker)), tmp_path / "evil.pt")
     with pytest.raises(InputError, match=r"evil.pt: refused: the checkpoint holds posix.system .*convert-checkpoint"):
         load_model(tmp_path / "evil.pt")
-    with pytest.raises(InputError, match="refused: it holds posix.system"):
-        convert_checkpoint(tmp_path / "evil.pt", tmp_path / "new.pt")
-    assert not marker.exists() and not (tmp_path / "new.pt").exists()
-
-
-def test_older_checkpoint_with_numpy_and_config_objects_converts(tmp_path, capsys):
-    torch.manual_seed(0)
-    net = RelightNet(CFG)
-    old = {"format": "relightnet-ckpt-1", "net_config": CFG, "model": net.state_dict(), "step": np.int64(7),
-           "input_size": np.int32(32), "stats": np.arange(3.0)}
-    torch.save(old, tmp_path / "old.pt")
-    with pytest.raises(InputError, match="holds .*relightnet.model.network.NetConfig|holds numpy"):
-        load_checkpoint(tmp_path / "old.pt")
-    assert main(["-q", "convert-checkpoint", str(tmp_path / "old.pt"), str(tmp_path / "new.pt")]) == 0
-    state = load_checkpoint(tmp_path / "new.pt")
-    assert state["format"] == FORMAT and state["step"] == 7 and type(state["step"]) is int
-    assert state["net_config"] == dataclasses.asdict(CFG) and torch.equal(state["stats"], torch.arange(3.0).double())
-    m = load_model(tmp_path / "new.pt")
-    assert m.input_size == 32 and all(torch.equal(a, b) for a, b in zip(m.state_dict().values(),
-                                                                         net.state_dict().values(), strict=True))
+    assert not marker.exists()
 
 
 def test_bad_configurations_and_weights_allocate_nothing(tmp_path):

@@ -1,4 +1,5 @@
-"""Pipeline-test fixtures: running a command in a child process and killing it mid-run."""
+"""Pipeline-test fixtures: running a command in a child process and killing it mid-run; generated test clips
+(``seq_dir``, ``clip0``) and the shipped model."""
 
 from __future__ import annotations
 
@@ -10,6 +11,11 @@ import time
 from pathlib import Path
 
 import pytest
+import torch
+
+#: frames and side of the generated test clips
+T = 3
+RES = 32
 
 
 def temp_files(folder: Path) -> list[Path]:
@@ -44,3 +50,42 @@ def kill_mid_run():
                     f"{child.stderr.read().decode()[-500:]}")
 
     return run
+
+
+@pytest.fixture(scope="session")
+def seq_dir(tmp_path_factory, anny_body):
+    """2 test clips of 3 frames at 32², one clip per shard."""
+    from relightnet.data import SynthConfig, run_synth
+
+    out = tmp_path_factory.mktemp("seq") / "clips"
+    cfg = SynthConfig(seed=4, res=RES, n_dirs=16, shard_size=1, counts={"train": 0, "val": 0, "test": 2},
+                      sequence_frames=T)
+    run_synth(out, cfg, workers=0, progress=False, body=anny_body)
+    return out
+
+
+@pytest.fixture(scope="session")
+def clip0(seq_dir, anny_body):
+    """(config, meta, arrays of CLIP_FIELDS, ClipGeometry) of test clip 0."""
+    from relightnet.data import load_manifest, read_shard
+    from relightnet.data.render_sample import clip_geometry
+    from relightnet.data.shards import dataset_config
+    from relightnet.pipeline.compare import CLIP_FIELDS
+
+    cfg = dataset_config(load_manifest(seq_dir))
+    a = read_shard(seq_dir / "test-00000.npz")
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)  # as the generator ran
+    try:
+        geo = clip_geometry(cfg, "test", 0, T, anny_body)
+    finally:
+        torch.set_num_threads(n)
+    return cfg, a["meta"][0], {k: a[k][0] for k in CLIP_FIELDS}, geo
+
+
+@pytest.fixture(scope="session")
+def model():
+    """The shipped model."""
+    from relightnet.model import load_model
+
+    return load_model()

@@ -9,7 +9,7 @@ import torch
 from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import VideoWriter, read_video, video_info, write_image
-from relightnet.pipeline.avatar import avatar, smooth_video_lights
+from relightnet.pipeline.avatar import avatar
 from relightnet.render import render_body_frames
 from relightnet.sh import save_light
 
@@ -102,14 +102,6 @@ def test_avatar_mask_head_and_onnx_backend_agree(target, model, anny_body, tmp_p
     t = avatar(video, tmp_path / "t.mkv", model=TorchPredictor(model), body=anny_body, target_masks=masks,
                n_dirs=8, progress=False)
     torch.testing.assert_close(a.lights_raw, t.lights_raw, atol=1e-3, rtol=1e-3)
-
-
-def test_smoothing_none_and_short_clips():
-    raw = torch.randn(5, 9, 3)
-    sm, out, sw = smooth_video_lights(raw, "none")
-    assert torch.equal(sm, raw) and not out.any() and not sw.any()
-    sm, _, _ = smooth_video_lights(raw[:2], "hermite")
-    assert torch.equal(sm, raw[:2])
 
 
 def _smpl_file(tmp_path) -> Path:

@@ -1,0 +1,88 @@
+"""ONNX export: the graph equals the torch model and its smoother frame by frame; metadata; refusals."""
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.model import NetConfig, RelightNet
+from relightnet.model.onnx_export import SMOOTHERS, StreamingRelighter, export_onnx, make_smoother
+from relightnet.model.onnx_serving import OnnxRelighter
+
+from .conftest import NET, TRAIN_CONFIG
+from .conftest import make_inputs as _inputs
+
+
+def test_ort_matches_torch_at_several_sizes_and_batches(exported):
+    net, path = exported
+    ref = StreamingRelighter(net, make_smoother("ema", alpha=0.4)).eval()
+    r = OnnxRelighter(path)
+    assert r.metadata["relightnet.sh_order"] == "2" and r.metadata["relightnet.smoothing"] == "ema"
+    for b, h, w in ((1, 32, 32), (3, 48, 64), (2, 96, 32)):
+        img, mask = _inputs(b, h, w)
+        state = torch.randn(b, 1, 9, 3)
+        first = torch.tensor([True] + [False] * (b - 1))
+        outs = r.run({"image": img.numpy(), "mask": mask.numpy(), "light_state": state.numpy(),
+                      "is_first": first.numpy()})
+        with torch.no_grad():
+            expected = ref(img, mask, state, first)
+        for o, e in zip(outs, expected, strict=True):
+            assert np.abs(o - e.numpy()).max() <= 1e-4
+
+
+def test_pooled_solve_in_the_graph_equals_torch_over_12_frames(tmp_path):
+    """A hybrid network exported with the 'pooled' smoother: evidence outputs and the pooled light match torch
+    frame by frame, and the predictor hands the evidence to the video jobs."""
+    from relightnet.pipeline.backends import OnnxPredictor
+
+    torch.manual_seed(1)
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32, light_mode="hybrid")).eval()
+    path = export_onnx(net, tmp_path / "p.onnx", smoothing="pooled", example_size=32)
+    r = OnnxRelighter(path)
+    assert r.evidence_outputs == ("evidence_M", "evidence_r", "light_prior")
+    assert r.metadata["relightnet.light_mode"] == "hybrid"
+    ref = StreamingRelighter(net, make_smoother("pooled", reg=net.config.solve_reg)).eval()
+    state = torch.zeros(1, ref.smoother.state_size, 9, 3)
+    for t in range(12):
+        img, mask = _inputs(1, 32, 32, seed=t % 3)  # three "poses" under one light
+        out = r.step(img.numpy(), mask.numpy())
+        with torch.no_grad():
+            exp = ref(img, mask, state, torch.tensor([t == 0]))
+        state = exp[4]
+        for name, e in zip(("light_raw", "light_smoothed", "evidence_M", "evidence_r", "light_prior"),
+                           (exp[2], exp[3], exp[5], exp[6], exp[7]), strict=True):
+            np.testing.assert_allclose(out[name], e.numpy(), rtol=1e-3, atol=1e-4)
+    light, ev, prior = OnnxPredictor(path).light_evidence(img[0], mask[0, 0])
+    assert ev is not None and prior is not None and light.shape == (9, 3)
+    with pytest.raises(InputError, match="pooled"):
+        export_onnx(RelightNet(NET).eval(), tmp_path / "h.onnx", smoothing="pooled")
+
+
+def test_metadata_describes_the_graph(exported):
+    import onnx
+
+    net, path = exported
+    meta = {p.key: p.value for p in onnx.load(str(path)).metadata_props}
+    assert meta["relightnet.smoothing"] == "ema" and meta["relightnet.state_size"] == "1"
+    assert meta["relightnet.light_mode"] == net.config.light_mode
+    assert meta["relightnet.input_size"] == str(net.config.input_size)
+    digest = hashlib.sha256(json.dumps(TRAIN_CONFIG, sort_keys=True).encode()).hexdigest()
+    assert meta["relightnet.train_config_sha256"] == digest
+    graph = onnx.load(str(path)).graph
+    assert [i.name for i in graph.input] == ["image", "mask", "light_state", "is_first"]
+    assert [o.name for o in graph.output] == ["albedo", "transport", "light_raw", "light_smoothed", "light_state_out"]
+
+
+def test_bad_exports_write_nothing(tmp_path):
+    net = RelightNet(NET).eval()
+    with pytest.raises(InputError, match="expected an .onnx output file"):
+        export_onnx(net, tmp_path / "m.txt")
+    with pytest.raises(InputError, match="example_size: expected a multiple of 16, got 20"):
+        export_onnx(net, tmp_path / "m.onnx", example_size=20)
+    with pytest.raises(InputError):
+        export_onnx(net, tmp_path / "m.onnx", smoothing="no-such-smoother")
+    assert list(tmp_path.iterdir()) == []
+    assert "ema" in SMOOTHERS and "pooled" in SMOOTHERS

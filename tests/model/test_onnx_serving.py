@@ -1,0 +1,117 @@
+"""Serving an exported model with ONNX Runtime: OnnxRelighter (streaming state, input checks), int8, run_video."""
+
+import numpy as np
+import pytest
+import torch
+
+from relightnet.checks import InputError, ShapeError
+from relightnet.model import normalize_input
+from relightnet.model.onnx_export import make_smoother
+from relightnet.model.onnx_serving import OnnxRelighter, calibration_set, quantize_int8, run_video
+
+from .conftest import make_inputs as _inputs
+
+
+def test_smoothing_layer_in_ort_equals_torch_over_50_frames(exported):
+    net, path = exported
+    smoother = make_smoother("ema", alpha=0.4)
+    r = OnnxRelighter(path)
+    state = None
+    for t in range(50):
+        img, mask = _inputs(1, 32, 32, seed=t)
+        out = r.step(img.numpy(), mask.numpy())
+        with torch.no_grad():
+            raw = net(normalize_input(img, mask)).light
+            y, state = smoother(raw, state if state is not None else torch.zeros(1, 1, 9, 3),
+                                torch.tensor([t == 0]))
+        assert np.abs(out["light_smoothed"] - y.numpy()).max() <= 1e-4
+    r.reset()
+    img, mask = _inputs(1, 32, 32, seed=0)
+    first = r.step(img.numpy(), mask.numpy())
+    np.testing.assert_allclose(first["light_smoothed"], first["light_raw"], atol=1e-6)
+
+
+def test_bad_inputs_and_files(exported, tmp_path):
+    _, path = exported
+    r = OnnxRelighter(path)
+    img, mask = _inputs(1, 32, 32)
+    with pytest.raises(InputError, match="expected exactly"):
+        r.run({"img": img.numpy()})
+    with pytest.raises(InputError, match="float32"):
+        r.step(img.double().numpy(), mask.numpy())
+    with pytest.raises(ShapeError, match="multiples of 16"):
+        r.step(np.zeros((1, 3, 30, 32), np.float32), np.zeros((1, 1, 30, 32), np.float32))
+    with pytest.raises(ShapeError, match="mask: expected"):
+        r.step(img.numpy(), np.zeros((1, 1, 16, 16), np.float32))
+    bad = tmp_path / "trunc.onnx"
+    bad.write_bytes(path.read_bytes()[:5000])
+    with pytest.raises(InputError, match="unreadable ONNX model"):
+        OnnxRelighter(bad)
+    with pytest.raises(InputError, match="not found"):
+        OnnxRelighter(tmp_path / "none.onnx")
+
+
+@pytest.mark.parametrize("mode", ["static", "dynamic"])
+def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
+    import onnx
+
+    _, path = exported
+    calib = [tuple(t.numpy() for t in _inputs(1, 32, 32, seed=s)) for s in range(4)]
+    q = quantize_int8(path, tmp_path / "m_int8.onnx", mode=mode, calibration=calib)
+    assert q.stat().st_size < path.stat().st_size
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+    ops = {n.op_type for n in onnx.load(str(q)).graph.node}
+    assert ("QuantizeLinear" in ops) if mode == "static" else ("DynamicQuantizeLinear" in ops or "MatMulInteger" in ops
+                                                                 or "ConvInteger" in ops)
+    a, b = OnnxRelighter(path), OnnxRelighter(q)
+    img, mask = _inputs(1, 32, 32, seed=9)
+    fa, fb = a.step(img.numpy(), mask.numpy()), b.step(img.numpy(), mask.numpy())
+    rel = np.abs(fa["albedo"] - fb["albedo"]).mean() / np.abs(fa["albedo"]).mean()
+    assert rel < 0.1
+    with pytest.raises(InputError, match="mode"):
+        quantize_int8(path, tmp_path / "x.onnx", mode="int4")
+
+
+def test_calibration_set_draws_generated_people():
+    pairs = calibration_set(n=2, size=32)
+    assert len(pairs) == 2
+    for img, mask in pairs:
+        assert img.shape == (1, 3, 32, 32) and img.dtype == np.float32 and 0 <= img.min() and img.max() <= 1
+        assert mask.shape == (1, 1, 32, 32) and 0 < mask.mean() < 1
+    assert not np.array_equal(pairs[0][0], pairs[1][0])
+
+
+def test_input_size_and_step_photo(exported):
+    net, path = exported
+    r = OnnxRelighter(path)
+    assert r.input_size == net.config.input_size and (r.state_size, r.n_coeffs) == (1, 9)
+    assert r.evidence_outputs == ()
+    image = torch.zeros(3, 40, 24)
+    mask = torch.zeros(40, 24)
+    mask[8:32, 6:18] = 1
+    image[:, 8:32, 6:18] = 0.6
+    out, box = r.step_photo((image * 255).to(torch.uint8), mask, 32)
+    assert out["albedo"].shape == (1, 3, 32, 32) and out["light_raw"].shape == (1, 9, 3)
+    assert np.isfinite(out["light_smoothed"]).all()
+    assert box is not None
+    with pytest.raises(ShapeError):
+        r.step_photo(image, mask[:20], 32)
+
+
+def test_run_video_streams_every_frame(exported, masked_clip, tmp_path):
+    from relightnet.io.video import count_frames, video_info
+    from relightnet.sh import load_light
+
+    _, path = exported
+    video, masks = masked_clip(tmp_path, n=4, h=48, w=64)
+    res = run_video(path, video, masks, tmp_path / "out", size=32)
+    assert res["raw"].shape == (4, 9, 3) and res["smoothed"].shape == (4, 9, 3)
+    np.testing.assert_allclose(res["smoothed"][0], res["raw"][0], atol=1e-6)  # the stream starts at frame 0
+    np.testing.assert_allclose(load_light(tmp_path / "out" / "lights_raw.npz").numpy(), res["raw"], atol=1e-6)
+    np.testing.assert_allclose(load_light(tmp_path / "out" / "lights_smoothed.npz").numpy(), res["smoothed"],
+                               atol=1e-6)
+    assert count_frames(tmp_path / "out" / "albedo.mp4") == 4
+    assert video_info(tmp_path / "out" / "albedo.mp4").size == (48, 64)
+    with pytest.raises(InputError, match="multiple of 16"):
+        run_video(path, video, masks, tmp_path / "o2", size=20)
+    assert not (tmp_path / "o2").exists()
