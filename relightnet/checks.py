@@ -19,6 +19,8 @@ from collections.abc import Iterable, Mapping, Sequence
 
 import torch
 
+from .errors import InputError, RelightError, ShapeError
+
 __all__ = [
     "RelightError",
     "ShapeError",
@@ -31,18 +33,6 @@ __all__ = [
     "sh_order_from_count",
     "check_device",
 ]
-
-
-class RelightError(Exception):
-    """Base class of every error relightnet raises on bad input."""
-
-
-class InputError(RelightError, ValueError):
-    """A value is not acceptable: NaN, out of range, unreadable file, ..."""
-
-
-class ShapeError(InputError):
-    """A tensor or array has the wrong shape (a kind of bad input)."""
 
 
 def _fmt(spec: Sequence) -> str:

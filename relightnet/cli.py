@@ -93,10 +93,10 @@ def configure_logging(verbose: bool = False, quiet: bool = False) -> None:
 def error_line(e: BaseException) -> str | None:
     """The one-line message of an error caused by the user's input, or None for a bug.
 
-    Input errors are relightnet's :class:`~relightnet.checks.RelightError`, ``ValueError``
+    Input errors are relightnet's :class:`~relightnet.errors.RelightError`, ``ValueError``
     and ``OSError`` (a missing file or folder, no permission, a full disk).
     """
-    from .checks import RelightError  # imports torch: only once something went wrong
+    from .errors import RelightError
 
     if isinstance(e, OSError) and e.filename is not None and not isinstance(e, RelightError):
         text = f"{e.filename}: {(e.strerror or str(e)).lower()}"

@@ -35,7 +35,7 @@ _MADE: list[Path] = []
 
 def _check_writable_parent(path: Path, option: str) -> None:
     """Make the missing parent folders of ``path``; an InputError naming ``option`` if that fails."""
-    from ..checks import InputError
+    from ..errors import InputError
 
     parent = path.parent
     missing = []
@@ -70,7 +70,7 @@ def in_path(path: str | Path, option: str, expected: str = "an existing file or 
     Raises:
         InputError: ``option PATH: not found (expected ...)``.
     """
-    from ..checks import InputError
+    from ..errors import InputError
 
     p = Path(path)
     if not p.exists():
@@ -91,7 +91,7 @@ def out_file(path: str | Path, option: str = "--out", suffixes: tuple[str, ...] 
     Raises:
         InputError: a wrong suffix, a folder at ``path``, or a parent folder that cannot be made.
     """
-    from ..checks import InputError
+    from ..errors import InputError
 
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
@@ -111,7 +111,7 @@ def out_dir(path: str | Path, option: str = "--out") -> Path:
     Raises:
         InputError: a file at ``path``, or a parent folder that cannot be made.
     """
-    from ..checks import InputError
+    from ..errors import InputError
 
     p = Path(path)
     if p.exists() and not p.is_dir():
@@ -128,7 +128,7 @@ def method_options(p: argparse.ArgumentParser, uses: dict[str, tuple[str, ...]])
 
 def check_method_options(args: argparse.Namespace, method: str, option: str = "--smoothing") -> None:
     """Refuse an option given with a value for a method it does not apply to (it would be ignored)."""
-    from ..checks import InputError
+    from ..errors import InputError
 
     for dest, (methods, default) in getattr(args, "method_options", {}).items():
         if getattr(args, dest) != default and method not in methods:
@@ -244,6 +244,11 @@ def read_photo(image: str, mask: str | None, mask_source: str = "segment"):
     Returns:
         ((3, H, W) sRGB in [0, 1], (H, W) mask or None, (H, W) alpha or None).
     """
+    from ..io.probe import check_image_file
+
+    check_image_file(image, "an image")  # an oversized photo is refused before torch loads
+    if mask:
+        check_image_file(mask, "a mask image")
     from ..io import read_image_alpha, read_mask
     from ..segment.sources import person_mask
 

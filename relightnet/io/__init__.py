@@ -2,26 +2,34 @@
 
 Every writer goes through :func:`atomic_write`, so an interrupted run never
 leaves a truncated file behind.
+
+The names below are loaded from their modules on first use, so that the torch-free parts
+(:mod:`.probe`, :mod:`.limits`) can refuse an oversized file before torch is imported.
 """
 
-from .atomic import atomic_write
-from .envmap import ENVMAP_SUFFIXES, read_envmap, write_envmap
-from .image import (
-    linear_to_srgb,
-    read_alpha,
-    read_image,
-    read_image_alpha,
-    read_mask,
-    srgb_to_linear,
-    to_uint8,
-    write_image,
-)
-from .video import VideoInfo, VideoWriter, count_frames, frames_with_masks, read_masks, read_video, video_info
+from importlib import import_module
 
-__all__ = [
-    "atomic_write",
-    "ENVMAP_SUFFIXES", "read_envmap", "write_envmap",
-    "linear_to_srgb", "srgb_to_linear", "to_uint8", "read_image", "read_image_alpha", "read_alpha", "read_mask",
-    "write_image",
-    "VideoInfo", "VideoWriter", "count_frames", "frames_with_masks", "read_masks", "read_video", "video_info",
-]
+#: Where each public name lives (loaded on first access).
+_WHERE = {
+    "atomic_write": "atomic",
+    "ENVMAP_SUFFIXES": "envmap", "read_envmap": "envmap", "write_envmap": "envmap",
+    "linear_to_srgb": "image", "srgb_to_linear": "image", "to_uint8": "image", "read_image": "image",
+    "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
+    "VideoInfo": "video", "VideoWriter": "video", "count_frames": "video", "frames_with_masks": "video",
+    "read_masks": "video", "read_video": "video", "video_info": "video",
+}
+
+__all__ = list(_WHERE)
+
+
+def __getattr__(name: str):
+    """Load a public name from its module on first use (PEP 562)."""
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

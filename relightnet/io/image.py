@@ -22,7 +22,7 @@ from ..checks import InputError, ShapeError, check_finite
 from ..color import linear_to_srgb, srgb_to_linear
 from .atomic import atomic_write
 from .limits import check_pixels, max_pixels
-from .probe import header_size
+from .probe import check_image_file
 
 __all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_image_alpha",
            "read_alpha", "read_mask"]
@@ -116,16 +116,7 @@ def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     The size in the file's header is checked against the pixel limit before decoding.
     """
     path = Path(path)
-    if not path.exists():
-        raise InputError(f"{path}: no such file")
-    if not path.is_file():
-        raise InputError(f"{path}: is a folder or special file, not a file")
-    try:
-        size = header_size(path)
-    except OSError as e:
-        raise InputError(f"{path}: cannot read {what} ({e})") from None
-    if size is not None:
-        check_pixels(*size, f"{path}")
+    size = check_image_file(path, what)
     try:
         with open_limited(path, what) as container:
             for frame in container.decode(video=0):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 
-from ..checks import InputError
+from ..errors import InputError
 
 __all__ = ["DEFAULT_MAX_PIXELS", "DEFAULT_MAX_ARRAY_BYTES", "max_pixels", "max_array_bytes", "check_pixels",
            "set_max_pixels"]

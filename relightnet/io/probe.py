@@ -12,7 +12,10 @@ import re
 import struct
 from pathlib import Path
 
-__all__ = ["header_size"]
+from ..errors import InputError
+from .limits import check_pixels
+
+__all__ = ["header_size", "check_image_file"]
 
 _HEAD = 1 << 16
 
@@ -169,3 +172,29 @@ _READERS = (
     (b"qoif", _qoi),
     *((f"P{k}".encode(), _pnm) for k in range(1, 8)),
 )
+
+
+def check_image_file(path: str | Path, what: str = "an image") -> tuple[int, int] | None:
+    """Refuse a missing path, a folder, or an image whose header is above the pixel limit
+    (:func:`relightnet.io.limits.check_pixels`), before anything is decoded. Imports no
+    torch, so the command line refuses an oversized photo at once.
+
+    Returns:
+        The header's (width, height), or None for a format :func:`header_size` does not know
+        (the decoder's own limit then applies).
+
+    Raises:
+        InputError: naming ``path``.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file")
+    if not path.is_file():
+        raise InputError(f"{path}: is a folder or special file, not a file")
+    try:
+        size = header_size(path)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read {what} ({e})") from None
+    if size is not None:
+        check_pixels(*size, f"{path}")
+    return size

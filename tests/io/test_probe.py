@@ -31,3 +31,22 @@ def test_unknown_or_damaged_headers_give_none(tmp_path):
     assert header_size(tmp_path / "cut.jpg") is None
     (tmp_path / "empty.png").write_bytes(b"\x89PNG\r\n\x1a\n")
     assert header_size(tmp_path / "empty.png") is None
+
+
+def test_check_image_file_refuses_before_decoding(tmp_path, monkeypatch):
+    from relightnet.errors import InputError
+    from relightnet.io.probe import check_image_file
+
+    small = tmp_path / "s.png"
+    Image.fromarray(np.zeros((6, 8, 3), np.uint8)).save(small)
+    assert check_image_file(small) == (8, 6)  # within the limit: its size
+    monkeypatch.setenv("RELIGHTNET_MAX_PIXELS", "40")
+    with pytest.raises(InputError, match=r"s.png: 8x6 pixels .* above the limit"):
+        check_image_file(small)
+    with pytest.raises(InputError, match="no such file"):
+        check_image_file(tmp_path / "none.png")
+    with pytest.raises(InputError, match="is a folder"):
+        check_image_file(tmp_path)
+    unknown = tmp_path / "u.bin"
+    unknown.write_bytes(b"not an image header")
+    assert check_image_file(unknown) is None  # unknown format: left to the decoder's own limit
