@@ -23,14 +23,7 @@ FLOAT_FIELDS = {  # name -> trailing shape
 UINT8_FIELDS = {"image_srgb": (RES, RES, 3), "image_composite": (RES, RES, 3), "parts": (RES, RES)}
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    # The generator runs one sample per worker process, single-threaded; on a loaded 2-core
-    # machine torch's intra-op threads make it ~8x slower.
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tests/data/conftest.py
 
 
 @pytest.fixture(scope="module")

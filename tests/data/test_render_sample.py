@@ -14,13 +14,7 @@ CFG = SynthConfig(res=32, n_dirs=8)
 T = 2
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    # As the generator's workers run (clip_geometry reproduces the masks bit for bit at the same thread count).
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tests/data/conftest.py
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,20 @@ import torch
 from relightnet.model import NetConfig, RelightNet
 
 NET = NetConfig(width=8, max_width=32, light_hidden=32)
+#: The smallest network of the checkpoint tests.
+TINY = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
+
+
+class Payload:
+    """A pickle payload: unpickling it would run ``touch PATH`` (what a safe loader must refuse)."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __reduce__(self):
+        import os
+
+        return os.system, (f"touch {self.path}",)
 TRAIN_CONFIG = {"lr": 1e-3, "net": {"width": 8}}
 
 

@@ -1,24 +1,16 @@
 """Checkpoints: plain content only, weights_only loading, refusals by name, the shipped model."""
 
 import dataclasses
-import os
 
 import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.model import NetConfig, RelightNet, load_model, save_checkpoint
+from relightnet.model import RelightNet, load_model, save_checkpoint
 from relightnet.model.checkpoint import FORMAT, SHIPPED
 
-CFG = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
-
-
-class _Payload:
-    def __init__(self, path):
-        self.path = path
-
-    def __reduce__(self):
-        return os.system, (f"touch {self.path}",)
+from .conftest import TINY as CFG
+from .conftest import Payload as _Payload
 
 
 def _state(**extra):

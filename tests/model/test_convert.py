@@ -1,7 +1,6 @@
 """Converting an older checkpoint (numpy values, config objects) to the safe form; refusals by name."""
 
 import dataclasses
-import os
 
 import numpy as np
 import pytest
@@ -9,19 +8,12 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.cli import main
-from relightnet.model import NetConfig, RelightNet, load_checkpoint, load_model
+from relightnet.model import RelightNet, load_checkpoint, load_model
 from relightnet.model.checkpoint import FORMAT
 from relightnet.model.convert import convert_checkpoint
 
-CFG = NetConfig(width=4, max_width=8, levels=2, light_hidden=8)
-
-
-class _Payload:
-    def __init__(self, path):
-        self.path = path
-
-    def __reduce__(self):
-        return os.system, (f"touch {self.path}",)
+from .conftest import TINY as CFG
+from .conftest import Payload as _Payload
 
 
 def _old(net, **extra):

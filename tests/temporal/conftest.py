@@ -3,6 +3,16 @@
 import pytest
 import torch
 
+from relightnet.sh import preset_light
+
+
+def step_seq(t_len=40, step=10, noise=0.0, seed=0):
+    """(truth, noisy) (T, 9, 3): the studio light switching to sunset at ``step``, plus Gaussian noise."""
+    a, b = preset_light("studio"), preset_light("sunset")
+    truth = torch.stack([a if t < step else b for t in range(t_len)])
+    g = torch.Generator().manual_seed(seed)
+    return truth, truth + noise * torch.randn(truth.shape, generator=g)
+
 
 def _poly_lights(t_len, degree, seed=0):
     """(T, 9, 3) lights whose every coefficient is a random polynomial of ``degree`` in t."""

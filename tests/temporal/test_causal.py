@@ -21,12 +21,7 @@ from relightnet.temporal import (
     step_lag,
 )
 
-
-def step_seq(t_len=40, step=10, noise=0.0, seed=0):
-    a, b = preset_light("studio"), preset_light("sunset")
-    truth = torch.stack([a if t < step else b for t in range(t_len)])
-    g = torch.Generator().manual_seed(seed)
-    return truth, truth + noise * torch.randn(truth.shape, generator=g)
+from .conftest import step_seq
 
 
 def all_filters():
