@@ -235,9 +235,10 @@ def test_killed_avatar_leaves_no_temp_file_after_a_rerun(target, tmp_path, kill_
     out = tmp_path / "o.mkv"
     argv = ["avatar", "--target", str(video), "--target-masks", str(masks), "--n-dirs", "8", "--motion", "idle",
             "--out", str(out)]
-    # SIGKILL once a temporary file exists: the encoder may hold the first frames in memory, so the
-    # file can stay empty until the end of a short clip (waiting for bytes would race with the rename).
-    left = kill_mid_run(argv, tmp_path, ready=lambda temps: any(p.is_file() for p in temps))
+    # SIGKILL once the video's temporary file exists (it lives from the first frame to the end; the
+    # encoder may hold the first frames in memory, so it can stay empty for a short clip, and the
+    # lights file's temporary lives too briefly to be seen again after the kill).
+    left = kill_mid_run(argv, tmp_path, ready=lambda temps: any(p.name.startswith(".o.mkv.") for p in temps))
     assert left and not out.exists()
     assert main(["-q", *argv]) == 0
     assert temp_files(tmp_path) == [] and len(list(read_video(out))) == N
