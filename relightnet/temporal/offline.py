@@ -114,7 +114,9 @@ def detect_switches(
         noise: lower bound of the threshold in units of the frame noise. A
             threshold over the jump values needs many frames away from any step;
             one over the frame noise also works on a clip that is mostly
-            step (a short shot, or a switch half-way).
+            step (a short shot, or a switch half-way). With it, a peak must
+            also be twice the jumps ``window`` frames to either side, so that a
+            light turning steadily (a flat jump profile) is no switch.
 
     Returns:
         (T,) or (B, T) bool, True on the first frame after each switch.
@@ -142,6 +144,9 @@ def detect_switches(
         first = torch.ones_like(jump, dtype=torch.bool)
         first[:, 1:] = jump[:, 1:] > jump[:, :-1]  # on a flat top keep only the first frame
         hit = (jump > thr[:, None]) & (jump >= peak) & first
+        if noise is not None:  # a step's jump profile peaks; a steady ramp's (a light turning) is flat
+            pad = F.pad(jump[:, None], (window, window), mode="replicate")[:, 0]
+            hit &= jump > 2 * torch.maximum(pad[:, :-2 * window], pad[:, 2 * window:])
         for bi, ti in hit.nonzero().tolist():
             out[bi, _refine_switch(x[bi], int(t[ti]), window)] = True
     return out if batched else out[0]

@@ -171,3 +171,12 @@ def test_frame_noise_scales_with_the_noise_and_ignores_a_step():
         detect_switches(quiet, noise=0.0)
     with pytest.raises(InputError, match="threshold"):
         detect_switches(quiet, eps=None)
+
+
+def test_noise_rule_finds_steps_not_steady_turns():
+    """Without noise a steadily turning light has frame noise 0: the jump profile is flat, no switch."""
+    turning = torch.stack([rotate_sh_up(preset_light("studio"), 0.05 * t) for t in range(60)])
+    assert not detect_switches(turning, eps=None, noise=8.0).any()
+    step, noisy = rotating(t_len=60, step=30, noise=0.02, seed=6)
+    assert detect_switches(noisy, eps=None, noise=8.0).nonzero().flatten().tolist() == [30]
+    assert detect_switches(step, eps=None, noise=8.0).nonzero().flatten().tolist() == [30]
