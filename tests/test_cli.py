@@ -155,8 +155,11 @@ def test_ctrl_c_in_train_is_one_line_with_the_resume_hint(tmp_path, tiny_dataset
     config = tmp_path / "long.yaml"
     config.write_text((REPO / "train/configs/tiny.yaml").read_text().replace("steps: 6", "steps: 100000"))
     run = tmp_path / "runs" / "x"
+    # A terminal's Ctrl-C reaches a process whose SIGINT is handled; a runner that starts the suite in the
+    # background (nohup, `cmd &`, some CI) hands SIGINT down ignored, and Python keeps it ignored: restore it.
     child = subprocess.Popen([sys.executable, "-m", "relightnet", "train", "--config", str(config), "--data",
                               str(tiny_dataset), "--out", str(run)], env=ENV, start_new_session=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         end = time.monotonic() + 300
