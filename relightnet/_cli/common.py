@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import InputError
 from ..names import MASK_SOURCES, MOTION_KINDS, POSE_PRESETS, light_presets
 
 
@@ -35,8 +36,6 @@ _MADE: list[Path] = []
 
 def _check_writable_parent(path: Path, option: str) -> None:
     """Make the missing parent folders of ``path``; an InputError naming ``option`` if that fails."""
-    from ..errors import InputError
-
     parent = path.parent
     missing = []
     q = parent
@@ -70,8 +69,6 @@ def in_path(path: str | Path, option: str, expected: str = "an existing file or 
     Raises:
         InputError: ``option PATH: not found (expected ...)``.
     """
-    from ..errors import InputError
-
     p = Path(path)
     if not p.exists():
         raise InputError(f"{option} {p}: not found (expected {expected})")
@@ -91,8 +88,6 @@ def out_file(path: str | Path, option: str = "--out", suffixes: tuple[str, ...] 
     Raises:
         InputError: a wrong suffix, a folder at ``path``, or a parent folder that cannot be made.
     """
-    from ..errors import InputError
-
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise InputError(f"{option} {p}: expected a file ending in {', '.join(suffixes)}")
@@ -111,8 +106,6 @@ def out_dir(path: str | Path, option: str = "--out") -> Path:
     Raises:
         InputError: a file at ``path``, or a parent folder that cannot be made.
     """
-    from ..errors import InputError
-
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InputError(f"{option} {p}: is a file; expected a folder (made if needed)")
@@ -128,8 +121,6 @@ def method_options(p: argparse.ArgumentParser, uses: dict[str, tuple[str, ...]])
 
 def check_method_options(args: argparse.Namespace, method: str, option: str = "--smoothing") -> None:
     """Refuse an option given with a value for a method it does not apply to (it would be ignored)."""
-    from ..errors import InputError
-
     for dest, (methods, default) in getattr(args, "method_options", {}).items():
         if getattr(args, dest) != default and method not in methods:
             raise InputError(f"--{dest.replace('_', '-')}: applies to {option} {' / '.join(methods)}, "

@@ -3,9 +3,11 @@
 Two streaming passes over the target video, so memory does not grow with its length:
 
 1. **Light.** The CNN estimates the SH light of every frame from the person in it (masks
-   given, or found by the person segmentation or the model's mask head). The per-frame estimates are smoothed over
-   time (default: robust Hermite splines with 3-MAD outlier correction and light-switch
-   detection, :func:`relightnet.temporal.smooth_lights`). ``light=`` skips this pass.
+   given, or found by the person segmentation or the model's mask head). The per-frame
+   estimates are smoothed over time (:func:`~relightnet.pipeline.video_lights.smooth_video_lights`;
+   default ``auto``: the shot's evidence pooled for a network that solves its light, else robust
+   Hermite splines with 3-MAD outlier correction and light-switch detection). ``light=`` skips
+   this pass.
 2. **Render.** The avatar (Anny or SMPL, posed by a motion) is rendered each frame with
    PRT transport (cosine × visibility by ray casting, optional interreflection) under that
    frame's smoothed light, and composited over the target frame.
@@ -137,11 +139,6 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     return composite_covered(fg, r.frags.pix, torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))).numpy()
 
 
-def _count_frames(video) -> int:
-    """Frames of a video: from the container, else by decoding it (streaming)."""
-    return count_frames(video)
-
-
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
                   fps: float, progress: bool) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
@@ -155,9 +152,9 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
         logger.info("reusing the light estimates in %s", lights_file)
     raw, ev, prior = cached if cached is not None else estimate_video_evidence(predict, target, target_masks,
                                                                                progress, mask_source)
-    smoothed, outliers, switches = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, fps)
-    return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None,
-                        resolve_smoothing(smoothing, ev is not None))
+    method = resolve_smoothing(smoothing, ev is not None)  # resolved once: smoothed with it, recorded as used
+    smoothed, outliers, switches = smooth_video_lights(raw, method, ev, prior, predict.solve_reg, fps)
+    return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None, method)
 
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
@@ -279,7 +276,7 @@ def avatar(
                             progress)
         n = lit.raw.shape[0]
     else:
-        n = _count_frames(target)
+        n = count_frames(target)  # from the container, else by decoding (streaming)
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]

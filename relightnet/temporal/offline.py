@@ -123,7 +123,8 @@ def detect_switches(
     """
     x, batched = _as_batch(lights)
     window = _check_pos(window, "window")
-    if parse_eps(eps) is None and noise is None:
+    by_jumps = parse_eps(eps) is not None
+    if not by_jumps and noise is None:
         raise InputError("switch eps: expected a threshold, got none")
     if noise is not None and not noise > 0:
         raise InputError(f"switch noise: expected a positive number, got {noise!r}")
@@ -139,7 +140,7 @@ def detect_switches(
         floor = torch.full((b,), float(min_jump), dtype=x.dtype, device=x.device)
         if noise is not None:
             floor = torch.maximum(floor, noise * frame_noise(x))
-        thr = outlier_threshold(jump, eps, floor=floor) if parse_eps(eps) is not None else floor
+        thr = outlier_threshold(jump, eps, floor=floor) if by_jumps else floor
         peak = F.max_pool1d(jump[:, None], 2 * window + 1, 1, window)[:, 0]
         first = torch.ones_like(jump, dtype=torch.bool)
         first[:, 1:] = jump[:, 1:] > jump[:, :-1]  # on a flat top keep only the first frame
