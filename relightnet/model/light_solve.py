@@ -13,6 +13,15 @@ the hybrid). Everything is differentiable, so the network is trained end to end 
 solve; the K × K system is solved by an unrolled Cholesky factorisation (a fixed number of
 tensor ops, so it exports to ONNX and runs the same in torch and ONNX Runtime).
 
+Precision: the normal equations are accumulated and factorised in float64, after scaling M to
+a unit diagonal (equilibration). A person seen from one side has normals on a hemisphere, where
+the SH functions are close to linearly dependent: M's condition number reaches 10⁵–10⁷ at a
+small λ, and a float32 solve then answers with errors of 10⁻² that depend on the summation
+order of the CPU's matmul kernels. In float64 the same error is ~10⁻⁹, the same on every CPU.
+The evidence stays float64 wherever it travels (pooling, light-sequence files, the ONNX
+graph's evidence outputs); only the streaming smoother's state in the ONNX graph stores it
+in float32 (:mod:`relightnet.temporal.pooling`), solved in float64 all the same.
+
 Evidence adds up: the normal equations of several frames under the same light are summed
 before one solve (:func:`pool_evidence`), which is how a video shares its light across a shot
 (:mod:`relightnet.temporal.pooling`).
@@ -56,15 +65,15 @@ def light_evidence(image: torch.Tensor, albedo: torch.Tensor, transport: torch.T
 
     Returns:
         :class:`Evidence` ``M`` (B, 3, K, K), ``r`` (B, 3, K), averaged over the person's pixels
-        (``weight > 0``), float32 whatever the inputs' dtype.
+        (``weight > 0``), float64 whatever the inputs' dtype (module docstring: precision).
     """
     dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
     b, h, w = dims["B"], dims["H"], dims["W"]
     check_shape(image, [b, 3, h, w], name="image")
     check_shape(albedo, [b, 3, h, w], name="albedo")
     check_shape(weight, [b, 1, h, w], name="weight")
-    image, albedo, transport, weight = (t.float() for t in (image, albedo, transport, weight))
-    n = (weight > 0).float().sum((2, 3)).clamp_min(1.0)[:, :, None]  # (B, 1, 1)
+    image, albedo, transport, weight = (t.double() for t in (image, albedo, transport, weight))
+    n = (weight > 0).double().sum((2, 3)).clamp_min(1.0)[:, :, None]  # (B, 1, 1)
     a = (albedo[:, :, None] * transport[:, None]).flatten(3)  # (B, 3, K, P)
     aw = a * weight.flatten(2)[:, :, None]  # (B, 3, K, P)
     M = aw @ a.transpose(-1, -2) / n[..., None]
@@ -75,8 +84,11 @@ def light_evidence(image: torch.Tensor, albedo: torch.Tensor, transport: torch.T
 def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     """Solve A x = b for symmetric positive definite A by an unrolled Cholesky factorisation.
 
-    K is fixed by the shape, so the loops unroll to a fixed graph (ONNX export works) and
-    autograd differentiates through them.
+    A is first scaled to a unit diagonal (D A D y = D b, x = D y with D = diag(A)^-1/2), which
+    leaves the answer unchanged and makes the factorisation's rounding depend on the scaled
+    matrix's condition number, not on how unequal the rows are. K is fixed by the shape, so
+    the loops unroll to a fixed graph (ONNX export works) and autograd differentiates through
+    them. The arithmetic is in A's dtype (the light solve gives float64).
 
     Args:
         A: (..., K, K) SPD.
@@ -86,14 +98,17 @@ def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         (..., K).
     """
     k = A.shape[-1]
+    d = A.diagonal(dim1=-2, dim2=-1).clamp_min(torch.finfo(A.dtype).tiny).rsqrt()  # (..., K)
+    A = A * d[..., :, None] * d[..., None, :]
+    b = b * d
     cols: list[torch.Tensor] = []  # columns of the lower factor G (A = G Gᵀ)
     for j in range(k):
         v = A[..., :, j]
         for i in range(j):
             v = v - cols[i] * cols[i][..., j : j + 1]
-        d = v[..., j : j + 1].clamp_min(1e-12).sqrt()
+        piv = v[..., j : j + 1].clamp_min(1e-12).sqrt()
         mask = (torch.arange(k, device=A.device) >= j).to(A.dtype)
-        cols.append(v / d * mask)
+        cols.append(v / piv * mask)
     G = torch.stack(cols, -1)  # (..., K, K), G[..., i, j] = cols[j][i]
     y: list[torch.Tensor] = []  # forward substitution G y = b
     for i in range(k):
@@ -107,7 +122,7 @@ def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         for j in range(i + 1, k):
             s = s - G[..., j, i] * x[j]
         x[i] = s / G[..., i, i]
-    return torch.stack(x, -1)
+    return torch.stack(x, -1) * d
 
 
 def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: float = 1e-2) -> torch.Tensor:
@@ -119,9 +134,9 @@ def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: floa
         reg: λ, relative to the mean diagonal of each channel's M.
 
     Returns:
-        (B, K, 3) light, float32.
+        (B, K, 3) light, float32 (solved in float64: module docstring).
     """
-    M, r = evidence
+    M, r = (x.double() for x in evidence)
     dims = check_shape(M, ["B", 3, "K", "K"], name="evidence M")
     check_shape(r, [dims["B"], 3, dims["K"]], name="evidence r")
     k = dims["K"]
@@ -131,7 +146,7 @@ def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: floa
     if prior is not None:
         check_shape(prior, [dims["B"], k, 3], name="prior")
         rhs = r + reg * s * prior.transpose(1, 2).to(r)
-    return spd_solve(M + reg * s[..., None] * eye, rhs).transpose(1, 2)
+    return spd_solve(M + reg * s[..., None] * eye, rhs).transpose(1, 2).float()
 
 
 def pool_evidence(evidence: Evidence, weights: torch.Tensor) -> Evidence:
@@ -142,16 +157,16 @@ def pool_evidence(evidence: Evidence, weights: torch.Tensor) -> Evidence:
         weights: (T', T) how much frame t counts for output t' (e.g. a window inside a shot).
 
     Returns:
-        :class:`Evidence` with leading dimension T'.
+        :class:`Evidence` with leading dimension T', float64.
     """
-    M, r = evidence
+    M, r = (x.double() for x in evidence)
     check_shape(weights, ["U", M.shape[0]], name="pooling weights")
     w = weights.to(M)
     return Evidence(torch.einsum("ut,tckl->uckl", w, M), torch.einsum("ut,tck->uck", w, r))
 
 
 def stack_evidence(evidence: list, priors: list) -> tuple[Evidence | None, torch.Tensor | None]:
-    """Per-frame solve outputs of a video → one sequence (float32, on the CPU).
+    """Per-frame solve outputs of a video → one sequence (evidence float64, priors float32, on the CPU).
 
     Args:
         evidence: T per-frame :class:`Evidence` (``M`` (1, 3, K, K), ``r`` (1, 3, K)) or None.
@@ -163,5 +178,5 @@ def stack_evidence(evidence: list, priors: list) -> tuple[Evidence | None, torch
     """
     if not evidence or any(e is None for e in evidence):
         return None, None
-    ev = Evidence(torch.cat([e[0] for e in evidence]).float().cpu(), torch.cat([e[1] for e in evidence]).float().cpu())
+    ev = Evidence(torch.cat([e[0] for e in evidence]).double().cpu(), torch.cat([e[1] for e in evidence]).double().cpu())
     return ev, (None if any(p is None for p in priors) else torch.stack(priors).float().cpu())

@@ -130,12 +130,15 @@ def pooled_step(light: torch.Tensor, evidence: Evidence, prior: torch.Tensor | N
     n = torch.where(restart, torch.ones_like(count), torch.where(outlier, count, count + 1))
     a = torch.where(outlier, torch.zeros_like(n), torch.maximum(1 / n, torch.full_like(n, alpha)))
     a = torch.where(restart, torch.ones_like(a), a)
-    M_new = (1 - a)[:, None, None, None] * M_prev + a[:, None, None, None] * evidence[0]
-    r_new = (1 - a)[:, None, None] * r_prev + a[:, None, None] * evidence[1]
+    # Pooled in float64 and solved so; the state keeps its own dtype (float32 in the ONNX graph's interface).
+    a64 = a.double()
+    M_new = (1 - a64)[:, None, None, None] * M_prev.double() + a64[:, None, None, None] * evidence[0].double()
+    r_new = (1 - a64)[:, None, None] * r_prev.double() + a64[:, None, None] * evidence[1].double()
     p = light if prior is None else prior
     p_new = (1 - a)[:, None, None] * p_prev + a[:, None, None] * p
     y = solve_light(Evidence(M_new, r_new), p_new if prior is not None else None, reg)
     ones = torch.ones_like(light)
+    M_new, r_new = M_new.to(state.dtype), r_new.to(state.dtype)
     new_state = torch.cat([M_new.permute(0, 2, 3, 1), r_new.transpose(1, 2)[:, None], p_new[:, None],
                            (n[:, None, None] * ones)[:, None], y[:, None], (scale[:, None, None] * ones)[:, None],
                            (gcount[:, None, None] * ones)[:, None]], 1)
