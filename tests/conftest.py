@@ -13,6 +13,22 @@ os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[1] 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 
+def pytest_report_header(config):
+    """The processor the suite runs on, as torch sees it (a red run on another CPU says which)."""
+    import platform
+
+    import torch
+
+    model = platform.processor()
+    try:
+        with open("/proc/cpuinfo") as f:
+            model = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), model)
+    except OSError:
+        pass
+    return (f"CPU: {model}; torch {torch.__version__} capability {torch.backends.cpu.get_cpu_capability()}, "
+            f"{torch.get_num_threads()} threads")
+
+
 def pytest_addoption(parser):
     group = parser.getgroup("relightnet")
     group.addoption("--device", default="cpu",

@@ -9,7 +9,7 @@ The exported graph is one step of a stream (loop-free, so any video length works
 
 B, H and W are dynamic (H, W multiples of 16). ``is_first`` starts a new sequence (the
 smoother's state is ignored and reset). A network that solves its light adds three outputs,
-the solve's per-frame evidence ``evidence_M`` (B, 3, K, K), ``evidence_r`` (B, 3, K) and
+the solve's per-frame evidence ``evidence_M`` (B, 3, K, K), ``evidence_r`` (B, 3, K) (both float64) and
 ``light_prior`` (B, K, 3) (zeros without a prior), so that a whole video can be pooled offline;
 its ``pooled`` smoother pools the evidence inside the graph
 (:class:`relightnet.temporal.pooling.PooledSolve`). The smoother is any module with
