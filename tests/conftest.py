@@ -13,8 +13,7 @@ os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[1] 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 
-def pytest_report_header(config):
-    """The processor the suite runs on, as torch sees it (a red run on another CPU says which)."""
+def _cpu_line() -> str:
     import platform
 
     import torch
@@ -27,6 +26,16 @@ def pytest_report_header(config):
         pass
     return (f"CPU: {model}; torch {torch.__version__} capability {torch.backends.cpu.get_cpu_capability()}, "
             f"{torch.get_num_threads()} threads")
+
+
+def pytest_report_header(config):
+    """The processor the suite runs on, as torch sees it (a red run on another CPU says which)."""
+    return _cpu_line()
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The same line at the end, where ``-q`` (``make test``) shows it too."""
+    terminalreporter.write_line(_cpu_line())
 
 
 def pytest_addoption(parser):
