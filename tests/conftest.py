@@ -13,6 +13,25 @@ os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[1] 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 
+def _inductor_cache() -> str:
+    """torch.compile's kernel cache, one folder per processor and ATen capability. A kernel cached
+    under one capability (AVX-512) and reused under another (ATEN_CPU_CAPABILITY=avx2, the stand-in for
+    an AVX2-only CPU; or a cache carried to another machine) crashed the process (segfault in
+    tests/raster/test_rasterize.py::test_compiled_kernels_match_eager)."""
+    import hashlib
+
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((ln for ln in f if ln.startswith("flags")), "")
+    except OSError:
+        flags = ""
+    key = hashlib.sha256((flags + os.environ.get("ATEN_CPU_CAPABILITY", "")).encode()).hexdigest()[:12]
+    return str(Path(__file__).resolve().parents[1] / ".cache" / "inductor" / key)
+
+
+os.environ.setdefault("TORCHINDUCTOR_CACHE_DIR", _inductor_cache())
+
+
 def _cpu_line() -> str:
     import platform
 
