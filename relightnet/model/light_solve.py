@@ -178,5 +178,5 @@ def stack_evidence(evidence: list, priors: list) -> tuple[Evidence | None, torch
     """
     if not evidence or any(e is None for e in evidence):
         return None, None
-    ev = Evidence(torch.cat([e[0] for e in evidence]).double().cpu(), torch.cat([e[1] for e in evidence]).double().cpu())
+    ev = Evidence(*(torch.cat([e[i] for e in evidence]).double().cpu() for i in (0, 1)))
     return ev, (None if any(p is None for p in priors) else torch.stack(priors).float().cpu())

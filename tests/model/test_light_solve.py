@@ -149,7 +149,8 @@ def test_the_order_of_summation_does_not_change_the_light(cone):
     the front view, 5e-6 for the 30° cone, cond ≈ 1e7), where the float32 solve moved by 3e-3 and 0.5."""
     image, albedo, T, inside, light = _front_of_sphere(max_angle_deg=cone)
     ev = light_evidence(image, albedo, T, inside)
-    cond = float(torch.linalg.cond(ev.M[0, 0] + 1e-6 * ev.M[0, 0].diagonal().mean() * torch.eye(9, dtype=torch.float64)))
+    M = ev.M[0, 0]
+    cond = float(torch.linalg.cond(M + 1e-6 * M.diagonal().mean() * torch.eye(9, dtype=torch.float64)))
     p = image.shape[-1] * image.shape[-2]
     tol = cond * p * torch.finfo(torch.float64).eps * float(light.abs().max())
     base = solve_light(ev, None, 1e-6)
