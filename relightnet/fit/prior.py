@@ -33,7 +33,7 @@ JOINT_LIMITS: dict[str, tuple[tuple[float, float], ...] | None] = {
     "neck01": ((-40, 50), (-60, 60), (-35, 35)),
     "head": ((-40, 45), (-60, 60), (-30, 30)),
     **{f"upperarm01.{s}": _ARM[s] for s in "LR"},
-    **{f"lowerarm01.{s}": ((-150, 10), (-75, 75), (-75, 75)) for s in "LR"},
+    **{f"lowerarm01.{s}": ((-150, 35), (-75, 75), (-75, 75)) for s in "LR"},
     **{f"wrist.{s}": ((-70, 70), (-60, 60), (-60, 60)) for s in "LR"},
     **{f"upperleg01.{s}": _LEG[s] for s in "LR"},
     **{f"lowerleg01.{s}": ((-5, 150), (-12, 12), (-12, 12)) for s in "LR"},
