@@ -88,9 +88,9 @@ class FitBody(nn.Module):
     def rest(self, phenotype: torch.Tensor) -> dict:
         """The rest body of a (1, 6) phenotype, for :meth:`points` (differentiable in ``phenotype``).
 
-        Skinning is linear, so each regressed landmark is Σ_bones T_b a_b with a_b = Σ_v w_v W_vb (v, 1):
-        ``coco`` (K, J, 4) holds those a, once per shape. Also: the silhouette vertices' rest
-        positions, the rest bone poses and the ground offset (world frame, ``ground="rest"``).
+        Skinning is linear, so each regressed landmark is Σ_bones T_b a_b with a_b = Σ_v w_v W_vb (v, 1),
+        and each silhouette vertex Σ_b T_b W_vb (v, 1): ``blend`` (J·4, K + S) holds those a, once
+        per shape. Also the rest bone poses and the ground offset (world frame, ``ground="rest"``).
         """
         anny = self.body.anny
         J = self.num_joints
@@ -101,9 +101,16 @@ class FitBody(nn.Module):
         rv = raw["rest_vertices"][0]
         cv = rv[self.landmarks.coco_vertices]
         vh = torch.cat([cv, torch.ones_like(cv[:, :1])], 1)
-        coco = torch.einsum("ku,uj,ud->kjd", self.landmarks.coco_weights.to(rv), self.coco_bone_weights.to(rv), vh)
-        return {"coco": coco, "verts": rv[self.silhouette_vertices], "bone_poses": raw["rest_bone_poses"],
-                "offset": offset}
+        wv = (self.landmarks.coco_weights.to(rv)[:, :, None] * vh[None]).transpose(1, 2)  # (K, 4, U)
+        coco = (wv @ self.coco_bone_weights.to(rv)).transpose(1, 2)  # (K, J, 4)
+        sv = rv[self.silhouette_vertices]
+        svh = torch.cat([sv, torch.ones_like(sv[:, :1])], 1)  # (S, 4)
+        sil = sv.new_zeros(len(sv), self.num_joints, 4)
+        sil = sil.index_put((torch.arange(len(sv))[:, None].expand_as(self.sil_bones), self.sil_bones),
+                            self.sil_weights.to(sv)[..., None] * svh[:, None], accumulate=True)
+        # (J·4, K + S): one matmul with the bone transforms gives every landmark and silhouette point
+        blend = torch.cat([coco, sil]).reshape(-1, self.num_joints * 4).T
+        return {"blend": blend, "bone_poses": raw["rest_bone_poses"], "offset": offset}
 
     def points(self, sub: torch.Tensor, trans: torch.Tensor, rest: dict) -> tuple[torch.Tensor, torch.Tensor]:
         """Landmark points (B, 33, 3) and silhouette vertices (B, S, 3) without skinning the whole mesh.
@@ -117,11 +124,9 @@ class FitBody(nn.Module):
         delta[..., :3, :3] = R
         delta[..., 3, 3] = 1.0
         T, poses = self.body.anny.get_bone_transforms(delta, rest["bone_poses"])
-        coco = anny_to_world(torch.einsum("bjmn,kjn->bkm", T[..., :3, :], rest["coco"]))
-        Tk = T[:, self.sil_bones]  # (B, S, K, 4, 4)
-        v = rest["verts"]
-        p = (Tk[..., :3, :3] @ v[None, :, None, :, None])[..., 0] + Tk[..., :3, 3]
-        sil = anny_to_world((self.sil_weights[None, :, :, None].to(p) * p).sum(2))
+        M = T[..., :3, :].transpose(1, 2).reshape(d["B"], 3, self.num_joints * 4)  # (B, 3, J·4)
+        p = anny_to_world((M @ rest["blend"]).transpose(1, 2))  # (B, K + S, 3)
         shift = (rest["offset"] + trans)[:, None]
         joints = anny_to_world(poses[..., :3, 3]) + shift
-        return self.landmarks.from_regressed(coco + shift, joints), sil + shift
+        k = len(self.landmarks.coco_slot)
+        return self.landmarks.from_regressed(p[:, :k] + shift, joints), p[:, k:] + shift
