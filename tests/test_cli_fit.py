@@ -43,3 +43,18 @@ def test_render_body_reads_a_fitted_motion(tmp_path, anny_body, capsys):
     assert main(["render-body", "--motion", str(tmp_path / "bad.npz"), "--light", "studio",
                  "--out", str(tmp_path / "b.mp4")]) == 1
     assert "key 'bone_names'" in capsys.readouterr().err
+
+
+def test_avatar_motion_from_refuses_a_second_motion(tmp_path, capsys):
+    src = tmp_path / "src.png"
+    write_image(src, torch.zeros((16, 16, 3)), srgb=False)
+    clip = tmp_path / "t.mp4"
+    from relightnet.io import VideoWriter
+
+    with VideoWriter(clip, fps=10) as w:
+        for _ in range(2):
+            w.write(np.zeros((16, 16, 3), np.uint8))
+    assert main(["avatar", "--motion-from", str(src), "--motion", "walk", "--target", str(clip), "--light", "studio",
+                 "--out", str(tmp_path / "o" / "a.mp4")]) == 1
+    assert "--motion-from" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
