@@ -15,8 +15,8 @@ from .albedo import (
     skin_color,
     vertex_to_texture,
 )
-from .anny_motion import AnnyMotion, is_anny_motion, load_anny_motion, save_anny_motion
 from .anny_model import ANNY_TO_WORLD, PHENOTYPES, POSE_PRESETS, AnnyBody, anny_to_world, load_anny, pose_preset
+from .anny_motion import AnnyMotion, is_anny_motion, load_anny_motion, save_anny_motion
 from .base import (
     GROUND_MODES,
     BodyModel,

@@ -87,8 +87,9 @@ def _validated(raw: dict, fname: str, bone_names=None) -> AnnyMotion:
     pose = _array(raw, "pose", fname, (T, J, 3), "pose (T, J, 3)")
     names = tuple(str(n) for n in np.asarray(raw.get("bone_names", [])).reshape(-1))
     if len(names) != J or (bone_names is not None and tuple(bone_names) != names):
-        raise InputError(f"{fname}: key 'bone_names': expected this body's {J if bone_names is None else len(bone_names)} "
-                         f"bone names in order, got {len(names)} names")
+        n = J if bone_names is None else len(bone_names)
+        raise InputError(f"{fname}: key 'bone_names': expected the body's {n} bone names in order, "
+                         f"got {len(names)} names")
     trans = _array(raw, "trans", fname, (T, 3), "trans (T, 3)")
     phen = _array(raw, "phenotype", fname, (len(PHENOTYPES),), "phenotype (6,)")
     for j, (n, (lo, hi, _)) in enumerate(PHENOTYPES.items()):

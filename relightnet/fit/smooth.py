@@ -18,7 +18,6 @@ from ..body.anny_motion import AnnyMotion
 from ..body.base import matrix_to_rotvec, rotvec_to_matrix
 from ..checks import InputError, check_shape
 from .body_model import FitBody
-from .prior import FIT_BONES
 from .solve import FitResult
 
 __all__ = ["gaussian_weights", "smooth_rotations", "smooth_motion", "place_in_world", "FOOT_SLOTS"]

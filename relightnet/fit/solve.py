@@ -23,8 +23,8 @@ import torch
 
 from ..body.anny_model import PHENOTYPES
 from ..checks import InputError
-from .camera import project_points
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
+from .camera import project_points
 from .init import initial_orientation, initial_translation
 from .landmarks import landmark_weights
 from .observe import Observations, world_to_view_axes
