@@ -6,7 +6,8 @@ the frames go through the shipped segmentation (landmarks and masks), then ``rel
 MPJPE and PA-MPJPE (mm, over the 21 landmarks Anny's COCO regressor defines, hips aligned),
 2D landmark error (median, % of the true silhouette's height), silhouette IoU against the
 true mask and the segmentation's, acceleration error before/after smoothing (mm/frame²),
-foot skating of the fitted motion placed on the ground (mm/frame), ms per frame.
+foot skating of the fitted motion placed on the ground, and after retargeting with the feet
+held (mm/frame), ms per frame of the fit and of the segmentation.
 
     python benchmarks/bench_fit.py --clips 3 --frames 12 --res 256 --threads 2
 """
@@ -24,6 +25,7 @@ from relightnet.data.framing import camera_intrinsics
 from relightnet.fit import FitBody, fit_observations, observe_frames, project_points
 from relightnet.fit.metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
 from relightnet.fit.preview import fit_silhouettes
+from relightnet.fit.retarget import retarget_motion
 from relightnet.fit.smooth import place_in_world, smooth_motion
 from relightnet.segment import PersonModels
 
@@ -56,6 +58,8 @@ def _clip(cfg, index, fb, models, args) -> dict:
     sil = fit_silhouettes(smooth, fb)
     world = place_in_world(smooth, fb)
     w_pts = _points(fb, _as_result(smooth, world, fb))
+    moved = retarget_motion(world, fb)  # the avatar's motion: the same body, feet held on the ground
+    r_pts = _points(fb, _as_result(smooth, moved, fb))
     return {
         "mpjpe": float(mpjpe(p_s, true_pts, coco).mean()), "pa_mpjpe": float(pa_mpjpe(p_s, true_pts, coco).mean()),
         "lm2d": float(landmark_error(project_points(p_s, intr), project_points(true_pts, intr), coco,
@@ -64,7 +68,8 @@ def _clip(cfg, index, fb, models, args) -> dict:
         "seg_iou_true": float(mask_iou(obs.masks, true_mask).mean()),
         "accel_raw": float(acceleration_error(p_raw, true_pts, coco).mean()),
         "accel_smooth": float(acceleration_error(p_s, true_pts, coco).mean()),
-        "skate": foot_skating(w_pts), "ms_fit": 1000 * raw.seconds / args.frames, "ms_seg": 1000 * t_seg / args.frames,
+        "skate_fit": foot_skating(w_pts), "skate_retarget": foot_skating(r_pts),
+        "ms_fit": 1000 * raw.seconds / args.frames, "ms_seg": 1000 * t_seg / args.frames,
         "motion": sample.meta["pose"].get("name", "?"),
     }
 

@@ -116,8 +116,13 @@ class AnnyLandmarks(nn.Module):
 
     def from_regressed(self, coco: torch.Tensor, joints: torch.Tensor) -> torch.Tensor:
         """(B, 33, 3) from the regressed points (B, Kc, 3) (rows ``coco_slot``) and joints (B, J, 3)."""
+        check_shape(joints, ["B", "J", 3], name="joints")
+        return self.assemble(coco, joints[:, self.joint_index])
+
+    def assemble(self, coco: torch.Tensor, hands: torch.Tensor) -> torch.Tensor:
+        """(B, 33, 3) from the regressed points (B, Kc, 3) and the hand joints (B, Kh, 3) (rows ``joint_slot``)."""
         d = check_shape(coco, ["B", len(self.coco_slot), 3], name="coco")
-        check_shape(joints, [d["B"], "J", 3], name="joints")
+        check_shape(hands, [d["B"], len(self.joint_slot), 3], name="hands")
         out = coco.new_zeros(d["B"], len(LANDMARK_NAMES), 3)
         out = out.index_copy(1, self.coco_slot, coco)
-        return out.index_copy(1, self.joint_slot, joints[:, self.joint_index])
+        return out.index_copy(1, self.joint_slot, hands)

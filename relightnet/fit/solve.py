@@ -8,7 +8,8 @@ minimises per frame
 (:mod:`.terms`, :mod:`.prior`): first the root rotation and translation alone (the first
 quarter of the iterations, no silhouette), then every fitted bone. A video's first window
 also fits the shape (:data:`SHAPE_NAMES`, shared over the shot, pulled toward the defaults);
-later windows keep it, start from the previous window's last pose (a warm start) and take
+later windows keep it, start from the previous window's last pose, orientation included (a
+warm start), and take
 ``warm_iters`` iterations; their acceleration term includes the two frames before them.
 Afterwards :func:`relightnet.fit.smooth_motion` smooths the whole track.
 """
@@ -42,7 +43,7 @@ class FitWeights:
 
     reprojection: float = 1e4
     world: float = 1.0
-    silhouette: float = 3e3
+    silhouette: float = 1e4
     limits: float = 100.0
     rest: float = 0.3
     smooth: float = 0.05
@@ -141,14 +142,18 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
 
 
 def _start(fb: FitBody, ev: dict, base, free, intr, prev_sub) -> _Window:
-    """Initial window: root and translation from the landmarks, other bones from ``prev_sub`` (or rest)."""
+    """Initial window: the pose of ``prev_sub`` (the previous window's last frame) or, for the first
+    window, the rest pose turned as the landmarks say; the translation from the landmarks."""
     B = ev["lm"].shape[0]
     with torch.no_grad():
         rest = fb.rest(phenotype_from_free(free, base))
         zero = torch.zeros(1, len(FIT_BONES), 3)
         rest_pts, _ = fb.points(zero, torch.zeros(1, 3), rest)
-        sub = zero.expand(B, -1, -1).clone() if prev_sub is None else prev_sub.expand(B, -1, -1).clone()
-        sub[:, 0] = initial_orientation(rest_pts[0], ev["world"], ev["w"])
+        if prev_sub is None:  # the first window: the orientation from the landmarks, the rest pose
+            sub = zero.expand(B, -1, -1).clone()
+            sub[:, 0] = initial_orientation(rest_pts[0], ev["world"], ev["w"])
+        else:  # later windows: the previous frame's pose, orientation included (no front/back flips)
+            sub = prev_sub.expand(B, -1, -1).clone()
         pts, _ = fb.points(sub, torch.zeros(B, 3), rest)
         trans = initial_translation(pts, ev["lm"], ev["w"], intr)
     return _Window(sub, trans, free.clone())
