@@ -10,6 +10,7 @@ foot skating of the fitted motion placed on the ground, and after retargeting wi
 held (mm/frame), ms per frame of the fit and of the segmentation.
 
     python benchmarks/bench_fit.py --clips 3 --frames 12 --res 256 --threads 2
+    python benchmarks/bench_fit.py --speed --frames 16 --threads 2   # the fit's time alone, 720p
 """
 
 from __future__ import annotations
@@ -81,6 +82,26 @@ def _as_result(result, motion, fb):
     return replace(result, pose=motion.pose[:, fb.bone_index], trans=motion.trans)
 
 
+def _speed(fb, args) -> None:
+    """Fit time alone (after the landmarks) at 720p on evidence made from a known walking body:
+    wall and CPU seconds (CPU / threads estimates the wall time of an unloaded machine)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from tests.fit.conftest import known_clip
+
+    print("| input | frames | iterations | wall ms/frame | CPU ms/frame / threads |\n|---|---|---|---|---|")
+    for T, iters, warm in ((1, args.iters, args.warm_iters), (args.frames, args.iters, args.warm_iters)):
+        obs, intr, _ = known_clip(fb, T=T, size=(720, 1280), fov=60.0)
+        w0, c0 = time.perf_counter(), time.process_time()
+        fit_observations(obs, intr, fb, iters, warm, args.window)
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+        kind = "photo" if T == 1 else "video"
+        print(f"| {kind} 720p | {T} | {iters} first window, {warm} later | {1000 * wall / T:.0f} | "
+              f"{1000 * cpu / T / args.threads:.0f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--clips", type=int, default=3)
@@ -91,8 +112,12 @@ def main() -> None:
     ap.add_argument("--window", type=int, default=8)
     ap.add_argument("--sigma", type=float, default=1.5)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--speed", action="store_true", help="only time the fit (synthetic 720p evidence)")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
+    if args.speed:
+        _speed(FitBody(), args)
+        return
     cfg = SynthConfig(seed=0, res=args.res, lmax=2, n_dirs=16, counts={"train": 0, "val": 0, "test": args.clips},
                       hdri_test=("night", "sunrise"), noise_std=0.0, partial_crop_prob=0.0,
                       sequence_frames=args.frames, clip_lights="constant")
