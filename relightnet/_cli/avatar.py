@@ -33,16 +33,43 @@ def run(args: argparse.Namespace) -> int:
         if value:
             in_path(value, option)
     info = video_info(args.target)  # fail early, before loading the model
+    motion = args.motion or "walk"
+    if args.motion_from:
+        if args.motion or args.body != "anny":
+            raise ValueError("--motion-from: the motion comes from the source video; it drives Anny "
+                             "(drop --motion and --body)")
+        motion = _motion_from(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
     light = load_light(args.light) if args.light else None
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
-    res = avatar(args.target, out, model=predictor, motion=args.motion, body=args.body, albedo=args.albedo,
+    res = avatar(args.target, out, model=predictor, motion=motion, body=args.body, albedo=args.albedo,
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
                  mask_source=args.mask_source)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
+
+
+def _motion_from(source):
+    """Fit the source, retarget to the default avatar: body parameters for the avatar job."""
+    import torch
+
+    from ..body import PHENOTYPES
+    from ..fit import FitBody
+    from ..fit.job import fit_file
+    from ..fit.metrics import foot_skating
+    from ..fit.retarget import retarget_motion
+
+    fb = FitBody()
+    fitted = fit_file(source, fb=fb)
+    moved = retarget_motion(fitted.motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))
+    with torch.no_grad():
+        out = fb.body(pose=moved.pose, trans=moved.trans, phenotype=moved.phenotype[None])
+        skate = foot_skating(fb.landmarks(out.verts, out.joints))
+    logger.info("%s: fitted %d frame(s) in %.1f s; retargeted to the avatar, foot skating %.1f mm/frame", source,
+                moved.n_frames, fitted.raw.seconds, skate)
+    return moved.body_params()
 
 
 def register(sub) -> None:
@@ -55,7 +82,8 @@ def register(sub) -> None:
         "  relightnet avatar --target clip.mp4 --target-masks masks/ --motion walk --out avatar.mp4\n"
         "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
         "--albedo skin.png --out a.mp4\n"
-        "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n",
+        "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n"
+        "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n",
     )
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
     p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
@@ -63,9 +91,12 @@ def register(sub) -> None:
     add_mask_source_arg(p)
     p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
                    "target's frames")
-    p.add_argument("--motion", default="walk",
-                   help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video) or an SMPL-style motion "
-                   "file (.npz/.pkl) for --body smpl:PATH (default: walk)")
+    p.add_argument("--motion", default=None,
+                   help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video), an Anny motion file from "
+                   "`relightnet fit`, or an SMPL-style motion file (.npz/.pkl) for --body smpl:PATH (default: walk)")
+    p.add_argument("--motion-from", metavar="SOURCE",
+                   help="motion transfer: fit the person in this video (or photo) and let the avatar perform "
+                   "the motion (retargeted to its body, feet held on the ground)")
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
     p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP

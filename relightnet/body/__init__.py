@@ -16,6 +16,7 @@ from .albedo import (
     vertex_to_texture,
 )
 from .anny_model import ANNY_TO_WORLD, PHENOTYPES, POSE_PRESETS, AnnyBody, anny_to_world, load_anny, pose_preset
+from .anny_motion import AnnyMotion, is_anny_motion, load_anny_motion, save_anny_motion
 from .base import (
     GROUND_MODES,
     BodyModel,
@@ -36,6 +37,7 @@ __all__ = [
     "SMPLBody", "SMPL_KEYS", "SMPL_JOINT_NAMES", "load_smpl_file", "smpl_to_world", "spherical_uv",
     "make_motion", "MOTION_KINDS",
     "Motion", "load_motion", "save_motion", "reorient_motion", "Z_UP_TO_Y_UP",
+    "AnnyMotion", "is_anny_motion", "load_anny_motion", "save_anny_motion",
     "REGIONS", "ANNY_PARTS", "Albedo", "anny_part_labels", "region_labels", "skin_color", "default_albedo",
     "vertex_to_texture",
 ]

@@ -39,7 +39,8 @@ def open_motion(motion, body, fps: float = 30.0, seed: int = 0) -> Callable[[int
     """Check a motion against its body now (reading a motion file once); frames come later.
 
     Args:
-        motion: a preset name (:data:`relightnet.body.MOTION_KINDS`; Anny only), an SMPL-style
+        motion: a preset name (:data:`relightnet.body.MOTION_KINDS`; Anny only), an Anny motion
+            file (.npz from ``relightnet fit``, :mod:`relightnet.body.anny_motion`), an SMPL-style
             motion file (.npz/.pkl: poses (T, 72), betas (10,), trans (T, 3); SMPL bodies only),
             or a mapping of parameters with a frame axis of T.
         body: the body model they drive.
@@ -49,7 +50,7 @@ def open_motion(motion, body, fps: float = 30.0, seed: int = 0) -> Callable[[int
         ``frames(n_frames) -> (params, T)``: a preset is made ``n_frames`` long; a file or a
         mapping has its own T.
     """
-    from ..body import MOTION_KINDS, AnnyBody, load_motion, make_motion
+    from ..body import MOTION_KINDS, AnnyBody, is_anny_motion, load_anny_motion, load_motion, make_motion
 
     is_anny = isinstance(body, AnnyBody)
     if isinstance(motion, Mapping):
@@ -57,9 +58,15 @@ def open_motion(motion, body, fps: float = 30.0, seed: int = 0) -> Callable[[int
         return lambda n_frames: fixed
     motion = str(motion)
     if Path(motion).suffix.lower() in _MOTION_FILES:
+        if is_anny_motion(motion):  # written by `relightnet fit`
+            if not is_anny:
+                raise InputError(f"--motion {motion}: an Anny motion file (from `relightnet fit`) drives --body anny")
+            am = load_anny_motion(motion, body.joint_names)
+            fixed = am.body_params(), am.n_frames
+            return lambda n_frames: fixed
         if is_anny:
             raise InputError(f"--motion {motion}: SMPL-style motion files drive an SMPL body (--body smpl:MODEL.npz); "
-                             f"for Anny use a preset: {', '.join(MOTION_KINDS)}")
+                             f"for Anny use a preset ({', '.join(MOTION_KINDS)}) or a motion from `relightnet fit`")
         m = load_motion(motion)
         fixed = m.body_params(), m.n_frames
         return lambda n_frames: fixed

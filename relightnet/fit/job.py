@@ -1,0 +1,140 @@
+"""The whole fit of a photo or a video file: read, observe, fit, smooth, place, write.
+
+:func:`fit_file` is what ``relightnet fit`` and ``avatar --motion-from`` call; the outputs
+(:func:`write_preview`, :func:`write_fit_masks`) re-read the input, so no video is held in memory.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+
+from ..checks import InputError
+from .body_model import FitBody
+from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics
+from .observe import observe_frames
+from .smooth import place_in_world, smooth_motion
+from .solve import FitResult, FitWeights, fit_observations
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["PHOTO_SUFFIXES", "FitOptions", "FitOutput", "media_frames", "fit_file", "write_preview",
+           "write_fit_masks"]
+
+#: Inputs read as a photo; anything else is read as a video.
+PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How to fit: iterations (first window, later windows), window length, shape on/off,
+    the final smoothing (Gaussian sigma in frames, 0: none), the field of view used when the
+    input has no EXIF focal length, and the term weights."""
+
+    iters: int = 120
+    warm_iters: int = 50
+    window: int = 8
+    fit_shape: bool = True
+    smooth_sigma: float = 1.5
+    fov_deg: float = DEFAULT_FOV_DEG
+    weights: FitWeights = FitWeights()
+
+
+@dataclass(frozen=True, eq=False)
+class FitOutput:
+    """raw: the fit before smoothing; result: after; motion: the world-frame AnnyMotion; fps."""
+
+    raw: FitResult
+    result: FitResult
+    motion: object
+    fps: float
+
+
+def media_frames(path: str | Path) -> tuple[Iterator[torch.Tensor], float, bool]:
+    """(3, H, W) sRGB frames in [0, 1] of a photo or a video, its frame rate, and whether it is a photo."""
+    from ..io import read_image, read_video, video_info
+
+    path = Path(path)
+    if path.suffix.lower() in PHOTO_SUFFIXES:
+        return iter([read_image(path).permute(2, 0, 1).contiguous()]), 30.0, True
+    info = video_info(path)
+    frames = (torch.from_numpy(f).permute(2, 0, 1).float() / 255 for f in read_video(path))
+    return frames, float(info.fps), False
+
+
+def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody | None = None,
+             models=None) -> FitOutput:
+    """Fit Anny to the largest person of a photo or video.
+
+    Raises:
+        InputError: no person in the photo / in any frame of the video (one line naming the file).
+    """
+    path = Path(path)
+    frames, fps, photo = media_frames(path)
+    obs = observe_frames(frames, models, name=str(path))
+    if photo and not bool(obs.found[0]):
+        raise InputError(f"{path}: no person found (expected a photo showing a person)")
+    intr = exif_intrinsics(path, obs.size) if photo else None
+    if intr is None:
+        intr = default_intrinsics(obs.size, options.fov_deg)
+    fb = fb if fb is not None else FitBody()
+    raw = fit_observations(obs, intr, fb, options.iters, options.warm_iters, options.window, options.fit_shape,
+                           options.weights)
+    n_missing = int((~obs.found).sum())
+    if n_missing:
+        logger.warning("%s: no person in %d frame(s): their pose is interpolated (flagged in the motion file)",
+                       path, n_missing)
+    result = smooth_motion(raw, options.smooth_sigma)
+    return FitOutput(raw, result, place_in_world(result, fb, fps), fps)
+
+
+def _chunks(frames: Iterator[torch.Tensor], n: int) -> Iterator[torch.Tensor]:
+    buf = []
+    for f in frames:
+        buf.append(f)
+        if len(buf) == n:
+            yield torch.stack(buf)
+            buf = []
+    if buf:
+        yield torch.stack(buf)
+
+
+def write_preview(path: str | Path, source: str | Path, result: FitResult, fb: FitBody, fps: float) -> Path:
+    """Write the fitted mesh over the source's frames: a PNG for a photo, a video otherwise."""
+    from ..io import VideoWriter, write_image
+    from .preview import overlay_frames
+
+    path = Path(path)
+    frames, _, photo = media_frames(source)
+    if path.suffix.lower() == ".png":
+        first = next(frames)[None]
+        write_image(path, overlay_frames(first, result, fb)[0].permute(1, 2, 0), srgb=False)
+        return path
+    with VideoWriter(path, fps=fps) as w:
+        t = 0
+        for chunk in _chunks(frames, 8):
+            for img in overlay_frames(chunk, result, fb, start=t):
+                w.write((img.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy())
+            t += chunk.shape[0]
+    return path
+
+
+def write_fit_masks(path: str | Path, result: FitResult, fb: FitBody, fps: float) -> Path:
+    """Write the fitted body's silhouettes in the input's camera: a PNG (photo) or a mask video."""
+    from ..io import VideoWriter, write_image
+    from .preview import fit_silhouettes
+
+    path = Path(path)
+    masks = fit_silhouettes(result, fb)
+    rgb = (masks > 0.5).to(torch.uint8).mul(255)[..., None].expand(-1, -1, -1, 3).contiguous()
+    if path.suffix.lower() == ".png":
+        write_image(path, rgb[0], srgb=False)
+        return path
+    with VideoWriter(path, fps=fps) as w:
+        for m in rgb:
+            w.write(m.numpy())
+    return path

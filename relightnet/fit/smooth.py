@@ -1,0 +1,105 @@
+"""The final smoothing pass of a video fit, and the fit's placement in a world frame.
+
+:func:`smooth_motion` smooths rotations as matrices (a Gaussian-weighted mean over
+neighbouring frames, projected back onto rotations: no wrap-around at 180° as rotation
+vectors would have) and translations with the same weights; frames near the ends use the
+weights that fall inside the clip. :func:`place_in_world` turns the camera-space track into
+an Anny motion in a world frame: y up along the body's mean up axis, the lowest foot point
+of the clip on y = 0, the first frame's pelvis above the origin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import torch
+
+from ..body.anny_motion import AnnyMotion
+from ..body.base import matrix_to_rotvec, rotvec_to_matrix
+from ..checks import InputError, check_shape
+from .body_model import FitBody
+from .solve import FitResult
+
+__all__ = ["gaussian_weights", "smooth_rotations", "smooth_motion", "place_in_world", "FOOT_SLOTS"]
+
+#: Heels and toes among the 33 landmarks (the points that touch the ground).
+FOOT_SLOTS = (29, 30, 31, 32)
+
+
+def gaussian_weights(n: int, sigma: float) -> torch.Tensor:
+    """(n, n) row-normalised Gaussian weights over frames (rows: output frames)."""
+    if sigma < 0:
+        raise InputError(f"sigma: expected >= 0 frames, got {sigma}")
+    t = torch.arange(n, dtype=torch.float64)
+    if sigma == 0:
+        return torch.eye(n, dtype=torch.float64)
+    w = torch.exp(-0.5 * ((t[:, None] - t[None]) / sigma) ** 2)
+    w = torch.where((t[:, None] - t[None]).abs() <= 3 * sigma, w, torch.zeros_like(w))
+    return w / w.sum(1, keepdim=True)
+
+
+def smooth_rotations(R: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """(T, ..., 3, 3) rotations → the nearest rotations to their weighted means ((T, T) weights)."""
+    T = R.shape[0]
+    check_shape(weights, [T, T], name="weights")
+    M = torch.einsum("ts,s...->t...", weights.to(R.dtype), R)
+    U, _, Vh = torch.linalg.svd(M)
+    s = torch.sign(torch.linalg.det(U @ Vh))
+    D = torch.ones(*s.shape, 3, dtype=R.dtype)
+    D[..., 2] = s
+    return U @ (D[..., None] * Vh)
+
+
+def smooth_motion(result: FitResult, sigma: float = 1.5) -> FitResult:
+    """The fit with its pose and translation smoothed over frames (Gaussian, ``sigma`` frames)."""
+    T = result.pose.shape[0]
+    if T < 3 or sigma == 0:
+        return result
+    w = gaussian_weights(T, sigma)
+    R = rotvec_to_matrix(result.pose.double())
+    pose = matrix_to_rotvec(smooth_rotations(R, w)).to(result.pose.dtype)
+    trans = (w @ result.trans.double()).to(result.trans.dtype)
+    return replace(result, pose=pose, trans=trans)
+
+
+def _up_rotation(up: torch.Tensor) -> torch.Tensor:
+    """(3, 3) the smallest rotation taking unit vector ``up`` to +y."""
+    y = up.new_tensor([0.0, 1.0, 0.0])
+    v = torch.linalg.cross(up, y)
+    s, c = v.norm(), torch.dot(up, y)
+    if float(s) < 1e-9:
+        return torch.eye(3, dtype=up.dtype) if float(c) > 0 else torch.diag(up.new_tensor([1.0, -1.0, -1.0]))
+    return rotvec_to_matrix(v / s * torch.atan2(s, c))
+
+
+def place_in_world(result: FitResult, fb: FitBody, fps: float = 30.0) -> AnnyMotion:
+    """An :class:`~relightnet.body.AnnyMotion` in a world frame (module docstring) with the source camera.
+
+    The body rotates about its pelvis q (the zero-pose pelvis at zero translation), so a world
+    rotation R maps orientation G to R·G and translation t to R (q + t) − q (then shifted).
+    """
+    sub, trans = result.pose.double(), result.trans.double()
+    G = rotvec_to_matrix(sub[:, 0])
+    up = G[:, :, 1].mean(0)
+    R = _up_rotation(up / up.norm())
+    base = fb.body.phenotype_tensor(result.phenotype[None])
+    with torch.no_grad():
+        rest = fb.rest(base)
+        q = fb.body(pose=torch.zeros(1, fb.num_joints, 3), phenotype=base).joints[0, 0].double()
+        new_sub = sub.clone()
+        new_sub[:, 0] = matrix_to_rotvec(R @ G)
+        new_trans = (q + trans) @ R.T - q
+        pts, _ = fb.points(new_sub.float(), new_trans.float(), rest)
+    shift = torch.zeros(3, dtype=torch.float64)
+    shift[1] = -float(pts[:, list(FOOT_SLOTS), 1].min())
+    hips = 0.5 * (pts[0, 23] + pts[0, 24]).double()
+    shift[0], shift[2] = -hips[0], -hips[2]
+    new_trans = new_trans + shift
+    view = torch.eye(4, dtype=torch.float64)
+    view[:3, :3] = R.T
+    view[:3, 3] = -(R.T @ shift)
+    extra = {"camera_view": view.float(), "camera_intrinsics": torch.tensor(result.intrinsics, dtype=torch.float32),
+             "camera_size": torch.tensor(result.size, dtype=torch.float32),
+             "residual_2d": result.residual_2d.float(), "interpolated": result.interpolated.float()}
+    return AnnyMotion(fb.full_pose(new_sub.float()), new_trans.float(), result.phenotype.float(),
+                      tuple(fb.body.joint_names), float(fps), extra)

@@ -1,0 +1,27 @@
+"""The fit's outputs over a video: the preview and the fitted masks, frame for frame."""
+
+import numpy as np
+import torch
+
+from relightnet.fit import FIT_BONES, FitResult, default_intrinsics, write_fit_masks, write_preview
+from relightnet.io import VideoWriter, read_video, video_info
+
+
+def test_preview_and_masks_of_a_video(tmp_path, fit_body):
+    T, size = 3, (64, 48)
+    src = tmp_path / "src.mp4"
+    with VideoWriter(src, fps=10) as w:
+        for _ in range(T):
+            w.write(np.full((*size, 3), 90, np.uint8))
+    trans = torch.tensor([0.0, -0.9, -2.2]).expand(T, 3).clone()
+    res = FitResult(torch.zeros(T, len(FIT_BONES), 3), trans, fit_body.body.phenotype_tensor(None)[0],
+                    default_intrinsics(size, 60.0), size, torch.zeros(T), torch.zeros(T, dtype=torch.bool), 0.0)
+    write_preview(tmp_path / "p.mp4", src, res, fit_body, 10.0)
+    write_fit_masks(tmp_path / "m.mkv", res, fit_body, 10.0)
+    assert video_info(tmp_path / "p.mp4").n_frames == T
+    frames = np.stack(list(read_video(tmp_path / "p.mp4"))).astype(int)
+    masks = np.stack(list(read_video(tmp_path / "m.mkv")))[..., 0] > 127
+    assert masks.shape == (T, *size) and 0.03 < masks.mean() < 0.6
+    # the overlay changes the frame where the body is, and only there
+    changed = np.abs(frames - 90).max(-1) > 20
+    assert changed[masks].mean() > 0.9 and changed[~masks].mean() < 0.05
