@@ -38,6 +38,15 @@ from .presets import (
 )
 from .projection import project, project_envmap, radiance, sh_to_envmap
 from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
+from .words import (
+    camera_direction,
+    disc_band_factors,
+    disc_light,
+    is_light_words,
+    light_from_words,
+    parse_light_words,
+    words_envmap,
+)
 from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
 
 __all__ = [
@@ -53,4 +62,6 @@ __all__ = [
     "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light", "load_light_sequence", "save_light_sequence",
     "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",
     "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
+    "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
+    "parse_light_words", "words_envmap",
 ]
