@@ -230,6 +230,7 @@ def avatar(
     model_name: str = "model",
     progress: bool = True,
     mask_source: str = "segment",
+    plate_light: torch.Tensor | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -256,6 +257,8 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
+        plate_light: (K, 3) light of the background plate (:func:`relightnet.sh.plate_light`),
+            combined with the estimated lights (:func:`relightnet.sh.combine_person_plate`).
 
     Returns:
         :class:`AvatarResult`.
@@ -275,6 +278,13 @@ def avatar(
         lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
                             progress)
         n = lit.raw.shape[0]
+        if plate_light is not None:
+            import dataclasses
+
+            from ..sh.plate import combine_person_plate
+
+            both = combine_person_plate(lit.smoothed, plate_light.to(lit.smoothed))
+            lit = dataclasses.replace(lit, smoothed=both, method=f"{lit.method}+plate")
     else:
         n = count_frames(target)  # from the container, else by decoding (streaming)
         lit = _TargetLight(_given_light(light, n))
