@@ -74,8 +74,6 @@ class _Handlers:
         return str(example_person(self.workdir / "examples"))
 
     def relight(self, session, source, az, el, size, power, color, ambient, preset, hdri, plate, fov):
-        import torch
-
         from ..errors import RelightError
         from .controls import light_of, sphere_preview, words_of
 
@@ -88,9 +86,7 @@ class _Handlers:
         sphere = sphere_preview(light, SPHERE_SIZE, *marker)
         if session is None:
             return None, sphere, words, light
-        with torch.no_grad():
-            out = session.relight(light)
-        return _to_u8(out), sphere, words, light
+        return session.relight_u8(light).numpy(), sphere, words, light
 
     def download(self, session, light, source):
         from ..errors import RelightError

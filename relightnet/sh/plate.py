@@ -118,7 +118,7 @@ def plate_light(plate: torch.Tensor, lmax: int = 2, hfov_deg: float = DEFAULT_HF
     Returns:
         (K, 3) float32 linear RGB radiance, light frame (camera-relative).
     """
-    env = plate_envmap(plate, hfov_deg, h=max(32, 8 * (lmax + 1)), intrinsics=intrinsics)
+    env = plate_envmap(plate, hfov_deg, h=max(64, 16 * (lmax + 1)), intrinsics=intrinsics)
     return project_envmap(env.double(), lmax).float()
 
 
