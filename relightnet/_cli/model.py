@@ -79,11 +79,10 @@ def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
 
 
 def run_estimate_light(args: argparse.Namespace) -> int:
+    from ..checks import InputError
     from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
-
-    from ..checks import InputError
     from ..sh.plate import combine_person_plate, load_plate_light
 
     if args.image is None and args.plate is None:

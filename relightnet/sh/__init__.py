@@ -39,6 +39,7 @@ from .presets import (
 )
 from .projection import project, project_envmap, radiance, sh_to_envmap
 from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
+from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
 from .words import (
     camera_direction,
     disc_band_factors,
@@ -48,7 +49,6 @@ from .words import (
     parse_light_words,
     words_envmap,
 )
-from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
 
 __all__ = [
     "SHBasis", "sh_basis", "sh_count", "sh_degrees", "sh_index",

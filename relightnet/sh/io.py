@@ -199,9 +199,10 @@ def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
     Args:
         path_or_name: ``.npz`` / ``.json`` (ours), ``.npy`` (Kanamori–Endo,
             BGR), ``.exr`` / ``.hdr`` environment map, a preset name, a light
-            in words (:mod:`relightnet.sh.words`), or an in-memory (K, 3) / (T, K, 3) tensor or array (validated and copied).
-        lmax: SH order of the result. Environment maps and presets are
-            and lights in words are projected at this order (default 2). Stored coefficients are
+            in words (:mod:`relightnet.sh.words`), or an in-memory (K, 3) /
+            (T, K, 3) tensor or array (validated and copied).
+        lmax: SH order of the result. Environment maps, presets and lights in
+            words are projected at this order (default 2). Stored coefficients are
             returned as stored when None, else truncated or zero-padded to it.
 
     Returns:

@@ -43,7 +43,7 @@ def test_the_cnn_runs_once(session, predictor, monkeypatch):
 
 
 def test_bad_photos_are_refused_with_the_cli_message(tmp_path, monkeypatch):
-    from relightnet.io.limits import set_max_pixels, max_pixels
+    from relightnet.io.limits import max_pixels, set_max_pixels
 
     big = tmp_path / "big.png"
     write_image(big, np.zeros((64, 64, 3), np.uint8))

@@ -6,9 +6,7 @@ import time
 import urllib.request
 
 import numpy as np
-import pytest
 import torch
-
 
 
 def _wait(cond, timeout=120.0, what="condition"):
@@ -52,7 +50,6 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path):
     from selenium.webdriver.common.by import By
 
     from relightnet.app.session import load_photo
-    from relightnet.app.ui import SPHERE_SIZE
     from relightnet.cli import main
     from relightnet.io import read_image
     from relightnet.sh import load_light
@@ -72,7 +69,8 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path):
     w = sphere.size["width"]
 
     def click_sphere(fx, fy, old):
-        ActionChains(drv).move_to_element_with_offset(sphere, int((fx - 0.5) * w), int((fy - 0.5) * w)).click().perform()
+        dx, dy = int((fx - 0.5) * w), int((fy - 0.5) * w)  # offsets from the sphere's centre
+        ActionChains(drv).move_to_element_with_offset(sphere, dx, dy).click().perform()
         return _new_image(drv, "relit", old, f"the relit image after a click at {fx:.2f}")
 
     left_src = click_sphere(0.1, 0.35, first)
