@@ -15,7 +15,8 @@ the app does (:func:`relightnet.app.load_photo`: decoding and the person segment
 - ``relight-image``: the whole CLI computation for one light (:func:`relightnet.pipeline.relight_image`),
   for comparison.
 
-Medians of 9 (first pass: 3), one thread count; the machine may be shared (see BENCHMARKS.md).
+Medians of 9 (first pass: 3) of the wall time and of the process's CPU time (all threads): on a
+shared machine the wall time includes waiting for a core, the CPU time does not.
 """
 
 from __future__ import annotations
@@ -42,12 +43,14 @@ from relightnet.sh import load_light  # noqa: E402
 
 
 def _median_ms(fn, repeat):
-    times = []
+    """(median wall ms, median CPU ms of the process, all threads) of ``fn(i)`` for i < repeat."""
+    wall, cpu = [], []
     for i in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn(i)
-        times.append((time.perf_counter() - t0) * 1e3)
-    return statistics.median(times)
+        wall.append((time.perf_counter() - t0) * 1e3)
+        cpu.append((time.process_time() - c0) * 1e3)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def main() -> None:
@@ -81,11 +84,11 @@ def main() -> None:
     cli = _median_ms(lambda i: relight_image(predict, photo.image, light, photo.mask), 3)
     mp = args.side * args.side / 1e6
     print(f"{args.side}x{args.side} ({mp:.2f} MP), {args.threads} threads")
-    print(table(["step", "median ms"], [["first pass (CNN, albedo, reference)", first],
-                                        ["change of light (live view, uint8)", change],
-                                        ["change of light + PNG encoding", png],
-                                        ["change of light, exact sRGB, float (the download)", exact],
-                                        ["relight-image (whole computation)", cli]]))
+    rows = [["first pass (CNN, albedo, reference)", first], ["change of light (live view, uint8)", change],
+            ["change of light + PNG encoding", png], ["change of light, exact sRGB, float (the download)", exact],
+            ["relight-image (whole computation)", cli]]
+    print(table(["step", "median wall ms", "median CPU ms (all threads)"], [[n, *v] for n, v in rows]))
+    print(f"change of light / relight-image: {change[0] / cli[0]:.3f} (wall), {change[1] / cli[1]:.3f} (CPU)")
 
 
 if __name__ == "__main__":

@@ -132,8 +132,6 @@ def main() -> None:
     if args.make:
         _make(data)
     est, families = _estimates(data)
-    if os.environ.get("PLATE_BENCH_DUMP"):
-        torch.save({"est": est, "families": families}, os.environ["PLATE_BENCH_DUMP"])
     errors = {m: scale_invariant_light_error(est[m], est["truth"]) for m in METHODS}
     hemi = {m: scale_invariant_light_error(est[m], est["truth"], hemisphere=True) for m in METHODS}
     rows = []

@@ -31,7 +31,8 @@ def launch(port: int = 7860, predictor=None, block: bool = True, workdir: Path |
     Args:
         port: TCP port (0: any free one).
         predictor: the CNN (default: the shipped model).
-        block: serve until interrupted, then remove the temporary folder; False returns at once.
+        block: serve until interrupted (Ctrl-C or SIGTERM), then remove the temporary folder;
+            False returns at once.
         workdir: the app's folder (default: :func:`app_workdir`).
 
     Returns:
@@ -48,6 +49,12 @@ def launch(port: int = 7860, predictor=None, block: bool = True, workdir: Path |
         logger.info("relightnet app on %s (temporary files in %s); Ctrl-C stops it", url, workdir)
         if not block:
             return app, url, workdir
+        import signal
+
+        def stop(signum, frame):  # `kill` stops it like Ctrl-C: the folder is removed
+            raise KeyboardInterrupt
+
+        signal.signal(signal.SIGTERM, stop)
         app.block_thread()
     finally:
         if block:

@@ -45,7 +45,7 @@ def _sides(img: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     return float(lum[ys[xs < mid], xs[xs < mid]].mean()), float(lum[ys[xs > mid], xs[xs > mid]].mean())
 
 
-def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path):
+def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, monkeypatch):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
 
@@ -56,6 +56,9 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path):
 
     url, workdir = running_app
     assert url.startswith("http://127.0.0.1:")
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
     drv = browser
     drv.get(url)
     upload = _wait(lambda: drv.find_elements(By.CSS_SELECTOR, "#photo-upload input[type=file]"), what="the page")
@@ -115,4 +118,4 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path):
     assert float((app_img - cli_img).abs().max()) <= 1.5 / 255  # float rounding of the same computation
     torch.testing.assert_close(load_light(npz), load_light(words))
     # Everything the app wrote is in its own folder.
-    assert any(workdir.rglob("relit.png"))
+    assert any(workdir.rglob("relit.png")) and list(cwd.iterdir()) == []
