@@ -4,6 +4,7 @@ check the relit image, download it and compare it with the CLI's output for the 
 import io
 import time
 import urllib.request
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -119,3 +120,21 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, mo
     torch.testing.assert_close(load_light(npz), load_light(words))
     # Everything the app wrote is in its own folder.
     assert any(workdir.rglob("relit.png")) and list(cwd.iterdir()) == []
+
+
+def test_video_tab_relights_into_the_apps_folder(predictor, person_photo, tmp_path):
+    """The video tab's handler: relight-video on an uploaded clip, written in the app's folder."""
+    from relightnet.app.ui import _Handlers
+    from relightnet.io import VideoWriter, read_image, read_video
+
+    frame = (read_image(person_photo).numpy() * 255).round().astype(np.uint8)
+    clip = tmp_path / "clip.mkv"
+    with VideoWriter(clip, fps=10) as v:
+        for _ in range(3):
+            v.write(frame)
+    work = tmp_path / "app"
+    work.mkdir()
+    out = Path(_Handlers(work, predictor).run_video(str(clip), "key:az=-60,el=20,size=30,power=2", ""))
+    assert out.is_relative_to(work) and out.suffix == ".mp4"
+    frames = list(read_video(out))
+    assert len(frames) == 3 and np.abs(frames[0].astype(float) - frame).max() > 10  # the person was relit
