@@ -2,8 +2,8 @@
 
 Photo tab: open a photo (or make the example person) → the CNN runs once
 (:class:`~relightnet.app.session.RelightSession`) and the person's mask is shown; choose a light
-by direction (click the sphere or move the sliders: azimuth, elevation, size, power, colour,
-ambient), a preset, an HDRI file or a background plate; the relit photo is redrawn beside the
+by direction (drag it on the sphere pad, click the lit sphere, or move the sliders: azimuth,
+elevation, size, power, colour, ambient), a preset, an HDRI file or a background plate; the relit photo is redrawn beside the
 original on every change (re-shading only) with the diffuse-sphere preview and the light in
 words; download the relit PNG and the light (.npz). Video tab: ``relight-video`` with a
 progress bar.
@@ -26,6 +26,34 @@ logger = logging.getLogger("relightnet.app")
 
 #: Side of the clickable light sphere, pixels.
 SPHERE_SIZE = 192
+
+#: The drag pad: a disc (the front of the sphere) with a dot at the light's direction. Dragging
+#: on it sets ``props.value`` to "x,y" (the pointer in [0, 1]² of the pad) and fires ``input``
+#: at most every 50 ms while the pointer moves, and once more when it is released.
+_PAD_HTML = (
+    f"<div class='light-pad' style='width:{SPHERE_SIZE}px;height:{SPHERE_SIZE}px;border-radius:50%;"
+    "position:relative;touch-action:none;cursor:crosshair;"
+    "background:radial-gradient(circle at 35% 30%, #fff, #999 60%, #333)'>"
+    "<div style='position:absolute;width:12px;height:12px;border-radius:50%;background:#f53;"
+    "left:calc(${(value || \"0.5,0.5\").split(\",\")[0] * 100}% - 6px);"
+    "top:calc(${(value || \"0.5,0.5\").split(\",\")[1] * 100}% - 6px)'></div></div>"
+)
+_PAD_JS = """
+let last = 0, down = false;
+function send(ev, force) {
+  const pad = element.querySelector('.light-pad');
+  if (!pad) return;
+  const r = pad.getBoundingClientRect();
+  const x = Math.min(Math.max((ev.clientX - r.left) / r.width, 0), 1);
+  const y = Math.min(Math.max((ev.clientY - r.top) / r.height, 0), 1);
+  props.value = x.toFixed(4) + ',' + y.toFixed(4);
+  const now = Date.now();
+  if (force || now - last > 50) { last = now; trigger('input'); }
+}
+element.addEventListener('pointerdown', (ev) => { down = true; send(ev, true); });
+element.addEventListener('pointermove', (ev) => { if (down) send(ev, false); });
+window.addEventListener('pointerup', (ev) => { if (down) { down = false; send(ev, true); } });
+"""
 
 
 def _to_u8(img) -> np.ndarray:
@@ -128,8 +156,11 @@ def _photo_tab(gr) -> dict:
                                   elem_id="photo-upload")
             c["example"] = gr.Button("Example person", elem_id="example-button")
             c["source"] = gr.Radio(list(LIGHT_SOURCES), value="direction", label="Light", elem_id="light-source")
-            c["sphere"] = gr.Image(label="Light direction: click the sphere", interactive=False, height=SPHERE_SIZE,
-                                   width=SPHERE_SIZE, elem_id="light-sphere", format="png")
+            c["pad"] = gr.HTML("0.5,0.5", html_template=_PAD_HTML, js_on_load=_PAD_JS,
+                               label="Drag the light's direction", elem_id="light-pad")
+            c["sphere"] = gr.Image(label="The light on a white sphere (click it to point the light)",
+                                   interactive=False, height=SPHERE_SIZE, width=SPHERE_SIZE, elem_id="light-sphere",
+                                   format="png")
             c["az"] = gr.Slider(-180, 180, value=-40, step=1, label="Azimuth (° from the camera; − = left)",
                                 elem_id="az")
             c["el"] = gr.Slider(-90, 90, value=30, step=1, label="Elevation (°; + = from above)", elem_id="el")
@@ -175,6 +206,13 @@ def build_app(workdir, predictor=None):
         az, el = sphere_point_to_direction(evt.index[0] + 0.5, evt.index[1] + 0.5, SPHERE_SIZE)
         return round(az), round(el), "direction"
 
+    def drag_pad(value):
+        from .controls import sphere_point_to_direction
+
+        x, y = (float(v) for v in str(value).split(","))
+        az, el = sphere_point_to_direction(x * SPHERE_SIZE, y * SPHERE_SIZE, SPHERE_SIZE)
+        return round(az), round(el), "direction"
+
     def run_video(video, words, preset, progress=gr.Progress(track_tqdm=True)):
         return h.run_video(video, words, preset, progress)
 
@@ -199,6 +237,8 @@ def build_app(workdir, predictor=None):
         for k in ("az", "el", "size", "power", "ambient", "source", "color", "preset", "hdri", "plate", "fov"):
             c[k].change(h.relight, controls, shown, **opts)
         c["sphere"].select(click_sphere, None, [c["az"], c["el"], c["source"]])
+        c["pad"].input(drag_pad, c["pad"], [c["az"], c["el"], c["source"]], trigger_mode="always_last",
+                       show_progress="hidden")
         c["save"].click(h.download, [session, light, c["source"]], c["files"])
         go.click(run_video, [video, vwords, vpreset], vout)
         app.load(h.relight, controls, shown)

@@ -99,6 +99,18 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, mo
     dragged = _new_image(drv, "relit", right_src, "the relit image after dragging the azimuth")
     assert np.abs(_fetch_png(dragged) - right).max() > 5
 
+    # Drag the light on the pad: pressed on the left, moved across, released on the right.
+    pad = drv.find_element(By.CSS_SELECTOR, "#light-pad .light-pad")
+    pw = pad.size["width"]
+    before = _img_src(drv, "relit")
+    ActionChains(drv).move_to_element_with_offset(pad, -pw // 3, -pw // 8).click_and_hold() \
+        .move_by_offset(pw // 4, 0).move_by_offset(pw // 4, 0).move_by_offset(pw // 6, 0).release().perform()
+    _wait(lambda: "az=" in (w := drv.find_element(By.CSS_SELECTOR, "#light-words textarea").get_attribute("value"))
+          and not w.startswith("key:az=-"), what="a light from the right after the drag")
+    dragged_pad = _fetch_png(_new_image(drv, "relit", before, "the relit image after the drag on the pad"))
+    l_pad, r_pad = _sides(dragged_pad, mask)
+    assert r_pad > l_pad  # now lit from the right
+
     # Download the relit photo and the light; compare with the CLI for the same light.
     words = drv.find_element(By.CSS_SELECTOR, "#light-words textarea").get_attribute("value")
     drv.find_element(By.CSS_SELECTOR, "#download-button").click()
