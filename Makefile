@@ -20,7 +20,7 @@ PYTEST_ARGS ?= $$($(PY) -c "import torch; print('--device cuda' if torch.cuda.is
 
 .PHONY: demo test lint bench bench-deps setup clean-venv system-deps
 
-setup: $(CACHE_DIR)/.sysdeps $(VENV)/.installed $(ANNY_CACHE_DIR)/.filled
+setup: $(CACHE_DIR)/.sysdeps $(CACHE_DIR)/.sysdeps-browser $(VENV)/.installed $(ANNY_CACHE_DIR)/.filled
 
 demo: setup
 	$(VENV)/bin/relightnet demo --out out/demo
@@ -39,13 +39,22 @@ bench: setup bench-deps
 # optional ray engine) needs LLVM 19 (with LLVM 15 it crashes). Installed once, with apt.
 LLVM_LIB := /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 export DRJIT_LIBLLVM_PATH ?= $(LLVM_LIB)
-system-deps: $(CACHE_DIR)/.sysdeps
+system-deps: $(CACHE_DIR)/.sysdeps $(CACHE_DIR)/.sysdeps-browser
 
 $(CACHE_DIR)/.sysdeps:
 	mkdir -p $(CACHE_DIR)
 	if [ ! -e $(LLVM_LIB) ]; then \
 	  SUDO=$$( [ "$$(id -u)" -eq 0 ] || echo sudo ); \
 	  $$SUDO apt-get update -q && $$SUDO apt-get install -y -q libllvm19; \
+	fi
+	touch $@
+
+# The app's browser test (tests/app/test_ui.py) drives Debian's headless Chromium through Selenium.
+$(CACHE_DIR)/.sysdeps-browser:
+	mkdir -p $(CACHE_DIR)
+	if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then \
+	  SUDO=$$( [ "$$(id -u)" -eq 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -q && $$SUDO apt-get install -y -q chromium chromium-driver; \
 	fi
 	touch $@
 

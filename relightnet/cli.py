@@ -30,7 +30,7 @@ logger = logging.getLogger("relightnet")
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
     "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "relight", "avatar", "compare",
-    "blender", "demo", "batch",
+    "blender", "demo", "batch", "app",
 ]
 
 

@@ -15,6 +15,8 @@ __all__ = [
     "MASK_SOURCES",
     "MOTION_KINDS",
     "OFFLINE_METHODS",
+    "LIGHT_FROM",
+    "LIGHT_WORD_KINDS",
     "ONNX_SMOOTHERS",
     "POSE_PRESETS",
     "SEQUENCE_SMOOTHING",
@@ -40,6 +42,12 @@ ONNX_SMOOTHERS = ("none", *CAUSAL_METHODS, "gated-one-euro", "pooled")
 STREAMING_SMOOTHING = ("auto", *ONNX_SMOOTHERS)
 #: Light smoothing of a recorded light file (smooth-light): every method that needs no evidence.
 SEQUENCE_SMOOTHING = tuple(n for n in VIDEO_SMOOTHING if n not in ("auto", "pooled"))
+
+#: The terms of a light written in words (:mod:`relightnet.sh.words`): disc lights under a name
+#: that says their role (all behave alike) and a constant ``ambient``.
+LIGHT_WORD_KINDS = ("key", "fill", "rim", "light", "ambient")
+#: Where the avatar's light comes from: the background plate, the person in the target, or both.
+LIGHT_FROM = ("person", "plate", "both")
 
 #: Where a person's mask comes from when none is given: the shipped segmentation or the CNN's mask head.
 MASK_SOURCES = ("segment", "head")

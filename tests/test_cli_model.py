@@ -74,3 +74,34 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
             main(["estimate-light", str(tmp_path / "p.png"), "--size", size, "--out", str(tmp_path / "l.npz")])
         assert "multiple of 16 from 16 to 2048" in capsys.readouterr().err
     assert not (tmp_path / "l.npz").exists()
+
+
+def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
+    from relightnet.sh import combine_person_plate, load_plate_light
+
+    g = np.random.default_rng(0)
+    plate = np.concatenate([np.full((30, 80, 3), 220), np.full((30, 80, 3), 40)]).astype(np.uint8)
+    plate = (plate + g.integers(0, 20, plate.shape)).astype(np.uint8)  # a bright sky over a dark ground
+    write_image(tmp_path / "plate.png", plate)
+    assert main(["-q", "estimate-light", "--plate", str(tmp_path / "plate.png"), "--fov", "50",
+                 "--out", str(tmp_path / "plate.npz")]) == 0
+    on_plate = load_light(tmp_path / "plate.npz")
+    torch.testing.assert_close(on_plate, load_plate_light(tmp_path / "plate.png", hfov_deg=50.0))
+    assert float(on_plate[2, 0]) > 0  # more light from above
+    img = np.full((90, 70, 3), 60, np.uint8)
+    img[10:80, 20:50] = 180
+    mask = np.zeros((90, 70, 3), np.uint8)
+    mask[10:80, 20:50] = 255
+    write_image(tmp_path / "p.png", img)
+    write_image(tmp_path / "m.png", mask)
+    photo = ["-q", "estimate-light", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png")]
+    assert main([*photo, "--out", str(tmp_path / "person.npz")]) == 0
+    assert main([*photo, "--plate", str(tmp_path / "plate.png"), "--fov", "50", "--out", str(tmp_path / "b.npz")]) == 0
+    torch.testing.assert_close(load_light(tmp_path / "b.npz"),
+                               combine_person_plate(load_light(tmp_path / "person.npz"), on_plate))
+    capsys.readouterr()
+    assert main(["estimate-light", "--out", str(tmp_path / "x.npz")]) == 1
+    assert "give a photo of a person (IMAGE), a background plate (--plate), or both" in capsys.readouterr().err
+    assert main([*photo[1:], "--fov", "50", "--out", str(tmp_path / "x.npz")]) == 1
+    assert "--fov is the plate's field of view" in capsys.readouterr().err
+    assert not (tmp_path / "x.npz").exists()

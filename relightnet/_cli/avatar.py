@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..names import MOTION_KINDS, VIDEO_SMOOTHING
+from ..errors import InputError
+from ..names import LIGHT_FROM, MOTION_KINDS, VIDEO_SMOOTHING
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -36,17 +37,26 @@ def run(args: argparse.Namespace) -> int:
     motion = args.motion or "walk"
     if args.motion_from:
         if args.motion or args.body != "anny":
-            raise ValueError("--motion-from: the motion comes from the source video; it drives Anny "
+            raise InputError("--motion-from: the motion comes from the source video; it drives Anny "
                              "(drop --motion and --body)")
         motion = _motion_from(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
+    if args.light and args.light_from != "person":
+        raise InputError(f"--light-from {args.light_from}: give --light or --light-from, not both")
     light = load_light(args.light) if args.light else None
+    plate_light = None
+    if args.light_from in ("plate", "both"):  # the plate given, else the target's first frame
+        from ..sh.plate import load_plate_light
+
+        plate_light = load_plate_light(args.plate or args.target, hfov_deg=args.fov)
+        if args.light_from == "plate":
+            light = plate_light
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
     res = avatar(args.target, out, model=predictor, motion=motion, body=args.body, albedo=args.albedo,
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
-                 mask_source=args.mask_source)
+                 mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -83,7 +93,9 @@ def register(sub) -> None:
         "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
         "--albedo skin.png --out a.mp4\n"
         "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n"
-        "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n",
+        "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n"
+        "  relightnet avatar --target empty_room.mp4 --light-from plate --out a.mp4   # no person to read\n"
+        "  relightnet avatar --target clip.mp4 --plate room.jpg --light-from both --out a.mp4\n",
     )
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
     p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
@@ -101,6 +113,12 @@ def register(sub) -> None:
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
     p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP
                    + "; or a light sequence file with one light per frame")
+    p.add_argument("--light-from", choices=LIGHT_FROM, default="person",
+                   help="where the light comes from: person (the CNN on the person in every frame; default), plate "
+                        "(an environment map made from the background: --plate, else the target's first frame), or "
+                        "both (the person's light on the camera side, the plate's on the far side)")
+    p.add_argument("--fov", type=float, default=60.0,
+                   help="with --light-from plate/both: the plate camera's horizontal field of view (default: 60)")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
                    "(default: full body at the origin)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,

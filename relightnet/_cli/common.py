@@ -25,7 +25,8 @@ def add_command(sub, name: str, help: str, examples: str) -> argparse.ArgumentPa
 
 LIGHT_HELP = (
     "a light: .npz/.json (relightnet), .npy (Kanamori-Endo, BGR), .exr/.hdr environment map, "
-    f"or a preset name ({', '.join(light_presets())})"
+    f"a preset name ({', '.join(light_presets())}), "
+    "or words: 'key:az=-40,el=30,size=20,color=1/0.9/0.8,power=3 + fill:az=60,power=0.5 + ambient:0.2'"
 )
 
 

@@ -14,7 +14,10 @@ def _envmap_of(light: str):
     """The original environment map behind a light argument, if it has one."""
     from ..io.envmap import ENVMAP_SUFFIXES, read_envmap
     from ..sh.presets import preset_envmap, preset_names
+    from ..sh.words import is_light_words, words_envmap
 
+    if is_light_words(light) and not Path(light).exists():
+        return words_envmap(light)
     p = Path(light)
     if p.suffix.lower() in ENVMAP_SUFFIXES and p.is_file():
         return read_envmap(p)
@@ -62,6 +65,7 @@ def register(sub) -> None:
         "light",
         "Show a spherical-harmonics light as a picture, or convert it between file formats.",
         "  relightnet light show studio --out studio.png\n"
+        "  relightnet light show 'key:az=-40,el=30,size=20,power=3 + ambient:0.2' --out key.png\n"
         "  relightnet light show my_light.npz --out my_light.png --exposure 2\n"
         "  relightnet light convert relightnet/data/envmaps/sunset.exr sunset.npz --lmax 3\n"
         "  relightnet light convert kanamori_light.npy light.json\n",
@@ -75,6 +79,8 @@ def register(sub) -> None:
         "Write a PNG preview of a light: a white diffuse sphere seen from the front and from the back, "
         "the light's lat-long reconstruction, and the original environment map when there is one.",
         "  relightnet light show sunset --out sunset.png\n"
+        "  relightnet light show 'key:az=-40,el=30,size=20,color=1/0.9/0.8,power=3 + fill:az=60,power=0.5' "
+        "--out key.png\n"
         "  relightnet light show light.npy --out light.png --size 128\n"
         "  relightnet light show lights_over_time.npz --out seq.png   # up to 8 frames as spheres\n",
     )

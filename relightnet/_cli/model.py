@@ -79,16 +79,30 @@ def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
 
 
 def run_estimate_light(args: argparse.Namespace) -> int:
+    from ..checks import InputError
     from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
+    from ..sh.plate import combine_person_plate, load_plate_light
 
+    if args.image is None and args.plate is None:
+        raise InputError("give a photo of a person (IMAGE), a background plate (--plate), or both")
+    if args.fov is not None and args.plate is None:
+        raise InputError("--fov is the plate's field of view: give --plate")
     out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
-    image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
-    predict = make_predictor(args.backend, args.checkpoint, args.device, size=args.size)
-    light = predict.light(image, mask)
-    save_light(out, light.cpu())
-    logger.info("wrote %s", out)
+    plate = None
+    if args.plate is not None:
+        plate = load_plate_light(args.plate, hfov_deg=args.fov or 60.0)
+    light = None
+    if args.image is not None:
+        image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
+        predict = make_predictor(args.backend, args.checkpoint, args.device, size=args.size)
+        light = predict.light(image, mask).cpu()
+    if plate is not None:
+        light = plate if light is None else combine_person_plate(light, plate)
+    save_light(out, light)
+    logger.info("wrote %s (light from %s)", out, " and ".join(
+        w for w, v in (("the person", args.image), ("the plate", args.plate)) if v is not None))
     return 0
 
 
@@ -128,11 +142,18 @@ def register(sub) -> None:
                    help="with --light: clip datasets (clip_lights constant/switch) for drift and lag")
     p.set_defaults(func=run_evaluate)
 
-    p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person.",
+    p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person (the CNN), of a "
+                    "background plate (an environment map made from the photo itself), or of both combined.",
                     "  relightnet estimate-light person.jpg --out light.npz        # mask: person segmentation\n"
+                    "  relightnet estimate-light --plate background.jpg --out plate_light.npz\n"
+                    "  relightnet estimate-light person.jpg --plate background.jpg --fov 50 --out both.npz\n"
                     "  relightnet estimate-light person.jpg --mask person_mask.png --out light.npz\n"
                     "  relightnet estimate-light person.png --out light_ke18.npy    # Kanamori-Endo format (BGR)\n")
-    p.add_argument("image", help="image file (PNG/JPEG)")
+    p.add_argument("image", nargs="?", help="image file (PNG/JPEG) of a person")
+    p.add_argument("--plate", help="background plate (image, or a video's first frame): its light, read from the "
+                   "picture itself (the person's estimate, with IMAGE, is used on the camera side)")
+    p.add_argument("--fov", type=float, default=None, help="the plate's horizontal field of view in degrees "
+                   "(default: 60)")
     p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "
                    "if it has one, else the person segmentation (--mask-source)")
     add_mask_source_arg(p)

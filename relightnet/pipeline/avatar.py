@@ -140,9 +140,10 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
 
 
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
-                  fps: float, progress: bool) -> _TargetLight:
+                  fps: float, progress: bool, plate_light: torch.Tensor | None = None) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
-    ``lights_file`` when its fingerprint matches), smoothed over time."""
+    ``lights_file`` when its fingerprint matches), smoothed over time; with ``plate_light``, each
+    smoothed light combined with it (:func:`relightnet.sh.combine_person_plate`)."""
     if model is None:
         raise InputError("model: give a model (or predictor) to estimate the light, or a light")
     predict = as_predictor(model)
@@ -154,6 +155,10 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
                                                                                progress, mask_source)
     method = resolve_smoothing(smoothing, ev is not None)  # resolved once: smoothed with it, recorded as used
     smoothed, outliers, switches = smooth_video_lights(raw, method, ev, prior, predict.solve_reg, fps)
+    if plate_light is not None:
+        from ..sh.plate import combine_person_plate
+
+        smoothed, method = combine_person_plate(smoothed, plate_light.to(smoothed)), f"{method}+plate"
     return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None, method)
 
 
@@ -229,7 +234,7 @@ def avatar(
     antialias: bool = False,
     model_name: str = "model",
     progress: bool = True,
-    mask_source: str = "segment",
+    mask_source: str = "segment", plate_light: torch.Tensor | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -256,6 +261,7 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
+        plate_light: (K, 3) the plate's light, combined with the estimates (``relightnet.sh.combine_person_plate``).
 
     Returns:
         :class:`AvatarResult`.
@@ -273,7 +279,7 @@ def avatar(
     lights_file, plot = _side_paths(out)
     if light is None:
         lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
-                            progress)
+                            progress, plate_light)
         n = lit.raw.shape[0]
     else:
         n = count_frames(target)  # from the container, else by decoding (streaming)

@@ -28,6 +28,7 @@ from .metrics import (
     irradiance_samples,
     scale_invariant_light_error,
 )
+from .plate import DEFAULT_HFOV, combine_person_plate, load_plate_light, plate_envmap, plate_light
 from .presets import (
     ambient_light,
     directional_light,
@@ -39,6 +40,15 @@ from .presets import (
 from .projection import project, project_envmap, radiance, sh_to_envmap
 from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
 from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
+from .words import (
+    camera_direction,
+    disc_band_factors,
+    disc_light,
+    is_light_words,
+    light_from_words,
+    parse_light_words,
+    words_envmap,
+)
 
 __all__ = [
     "SHBasis", "sh_basis", "sh_count", "sh_degrees", "sh_index",
@@ -53,4 +63,7 @@ __all__ = [
     "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light", "load_light_sequence", "save_light_sequence",
     "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",
     "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
+    "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
+    "parse_light_words", "words_envmap",
+    "DEFAULT_HFOV", "combine_person_plate", "load_plate_light", "plate_envmap", "plate_light",
 ]

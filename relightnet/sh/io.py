@@ -15,6 +15,7 @@ Formats, chosen by the file extension:
   converted to/from RGB here. Only single order-2 lights fit this format.
 - ``.exr`` / ``.hdr`` (load only): a lat-long environment map, projected to SH.
 - a preset name (``studio``, ``sunset``, ...; see :func:`relightnet.sh.preset_names`).
+- a light in words (``key:az=-40,el=30 + ambient:0.2``; :mod:`relightnet.sh.words`).
 
 Every loaded light is validated (finite values, K = (lmax+1)²) and returned as a
 float32 RGB tensor; errors name the file.
@@ -197,10 +198,11 @@ def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
 
     Args:
         path_or_name: ``.npz`` / ``.json`` (ours), ``.npy`` (Kanamori–Endo,
-            BGR), ``.exr`` / ``.hdr`` environment map, a preset name, or an
-            in-memory (K, 3) / (T, K, 3) tensor or array (validated and copied).
-        lmax: SH order of the result. Environment maps and presets are
-            projected at this order (default 2). Stored coefficients are
+            BGR), ``.exr`` / ``.hdr`` environment map, a preset name, a light
+            in words (:mod:`relightnet.sh.words`), or an in-memory (K, 3) /
+            (T, K, 3) tensor or array (validated and copied).
+        lmax: SH order of the result. Environment maps, presets and lights in
+            words are projected at this order (default 2). Stored coefficients are
             returned as stored when None, else truncated or zero-padded to it.
 
     Returns:
@@ -218,6 +220,10 @@ def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
         return sh if lmax is None else resize_sh(sh, lmax)
     if not isinstance(path_or_name, (str, os.PathLike)):
         raise InputError(f"light: expected a path, preset name or array, got {type(path_or_name).__name__}")
+    from .words import is_light_words, light_from_words
+
+    if is_light_words(path_or_name) and not Path(path_or_name).exists():
+        return light_from_words(path_or_name, 2 if lmax is None else lmax)
     path = Path(path_or_name)
     suffix = path.suffix.lower()
     known = LIGHT_SUFFIXES + _ENVMAP_SUFFIXES
