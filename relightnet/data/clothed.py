@@ -143,7 +143,7 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     uv_faces, fcs, fields = [body.uv_faces], [faces], [field]
     covered = torch.zeros(faces.shape[0], dtype=torch.bool)
     nv, nuv = V, sum(len(u) for u in uvs)
-    for kind, piece, region, where in frames[0]:
+    for _kind, piece, region, where in frames[0]:
         fcs.append(piece.faces + nv)
         if piece.source is not None:
             uv_faces.append(body.uv_faces[piece.source_faces] + (len(body_uv) if where == "outer" else 0))

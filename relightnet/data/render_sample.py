@@ -21,9 +21,9 @@ from ..render.frame import TexturedAlbedo, render_mesh
 from ..render.shading import composite
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
+from .clothed import hidden_body_share
 from .config import SynthConfig, sample_seed
 from .framing import camera_intrinsics, crop_camera
-from .clothed import hidden_body_share
 from .lights import LightDraw, light_at, sample_light
 from .person import PersonStage, group_seed, person_stage, person_transport, transport_to_camera
 from .poses import sample_yaw
