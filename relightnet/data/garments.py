@@ -152,8 +152,9 @@ class GarmentTables:
         return self.labels[key]
 
 
-def garment_tables(body, parts: np.ndarray) -> GarmentTables:
-    """Build the :class:`GarmentTables` of an Anny body (``parts``: its :func:`~relightnet.body.anny_part_labels`)."""
+def garment_tables(body, parts: np.ndarray, labels: dict | None = None) -> GarmentTables:
+    """Build the :class:`GarmentTables` of an Anny body (``parts``: its :func:`~relightnet.body.anny_part_labels`;
+    ``labels``: a region-label memo to share, keyed (sleeves, legs, hair))."""
     from ..body import ANNY_PARTS
 
     with torch.no_grad():
@@ -176,7 +177,7 @@ def garment_tables(body, parts: np.ndarray) -> GarmentTables:
         tt = ((rest - a) @ (b - a) / ((b - a) @ (b - a))).clamp(0, 1)
         side[leg] = k
         t[leg] = tt[leg]
-    return GarmentTables(rest, arm, head, torso_low, side, t, {})
+    return GarmentTables(rest, arm, head, torso_low, side, t, {} if labels is None else labels)
 
 
 def _fold_noise(pos: torch.Tensor, seed: int) -> torch.Tensor:

@@ -53,7 +53,7 @@ class SynthAssets:
         if "garments" not in self.tables:
             from .garments import garment_tables
 
-            self.tables["garments"] = garment_tables(self.body, self.atlas.parts)
+            self.tables["garments"] = garment_tables(self.body, self.atlas.parts, self.tables.setdefault("labels", {}))
         return self.tables["garments"]
 
     def region_field(self, sleeves: str, legs: str, hair: str) -> np.ndarray:
@@ -61,9 +61,17 @@ class SynthAssets:
         :func:`relightnet.body.region_labels` for one clothing variant."""
         key = (sleeves, legs, hair)
         if key not in self.regions:
-            ids = region_labels(self.body, sleeves, legs, hair).numpy()
+            ids = self.region_labels(sleeves, legs, hair).numpy()
             self.regions[key] = region_field(self.body.faces.cpu().numpy(), ids)
         return self.regions[key]
+
+    def region_labels(self, sleeves: str, legs: str, hair: str) -> torch.Tensor:
+        """(V,) :func:`relightnet.body.region_labels` of one clothing variant (memo shared with the garments)."""
+        labels = self.tables.setdefault("labels", {})
+        key = (sleeves, legs, hair)
+        if key not in labels:
+            labels[key] = region_labels(self.body, sleeves, legs, hair)
+        return labels[key]
 
     def envmap(self, name: str) -> torch.Tensor:
         """(He, We, 3) a shipped env map, clamped at 0."""
