@@ -14,8 +14,8 @@ from relightnet.data.person import group_seed, person_stage, person_transport, t
 from relightnet.data.render_sample import _streams, clip_geometry
 from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import vertex_transport
-from relightnet.render import light_in_world
 from relightnet.raster import perspective_camera
+from relightnet.render import light_in_world
 from relightnet.sh import cosine_lobe_per_coeff, sh_basis
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tests/data/conftest.py
