@@ -111,7 +111,10 @@ def test_person_transport_skips_only_hidden_vertices(assets):
     T, hidden = p.transport[0], p.mesh.hidden
     assert T.shape == (p.mesh.verts.shape[1], 9) and p.transport_unoccluded.shape[1:] == T.shape
     assert hidden.any() and not hidden[assets.body.num_verts:].any()
-    assert (T[hidden] == 0).all() and (T[assets.body.num_verts:, 0] > 0).float().mean() > 0.9  # cloth is lit
+    assert (T[hidden] == 0).all()
+    # Cloth is lit: its outer sides (the first half of each two-sided piece) mostly see the sky.
+    cloth = T[assets.body.num_verts:, 0]
+    assert (cloth > 0).float().mean() > 0.5 and float(cloth.max()) > 0.5
     assert (T[:, 0] <= p.transport_unoccluded[0, :, 0] + 1e-5).all()
 
 
