@@ -180,6 +180,7 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     u = (th / (2 * math.pi))[None].expand(n_rings, -1)
     v = (1 - t).expand(-1, m)
     uv = torch.stack([u, v], -1).reshape(-1, 2)
+    faces = _outward(verts, faces, c)
     if cap:
         top = c.clone()
         top[1] = float(y_top) + 0.3 * float(r[0].mean())  # a low dome over the first ring
@@ -187,8 +188,8 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
                           -1)
         verts = torch.cat([verts, top[None]])
         uv = torch.cat([uv, torch.tensor([[0.5, 1.0]], dtype=torch.float64)])
-        faces = torch.cat([faces, fan])
-    faces = _outward(verts, faces, c)
+        e1_, e2_ = verts[fan[0, 1]] - verts[fan[0, 0]], verts[fan[0, 2]] - verts[fan[0, 0]]
+        faces = torch.cat([faces, fan if float(torch.linalg.cross(e1_, e2_)[1]) > 0 else fan[:, [0, 2, 1]]])
     # Normals as if the seam were joined: duplicated seam vertices take the same normal.
     join = torch.arange(verts.shape[0])
     seam = torch.arange(n_rings) * m + n_theta

@@ -97,7 +97,11 @@ def test_ring_surface_opening_and_cap(anny_body, posed):
     low = cen[:, 1] + float(head[1]) < top + 0.02 - 4.5 * (0.42 / 11)
     ang = torch.atan2(cen[:, 0], cen[:, 2]).abs()
     assert not bool((low & (ang < math.radians(50))).any())
-    # The cap closes the top above the first ring.
+    # The cap closes the top above the first ring, facing up (its normal and its winding).
     assert float(closed.verts[:, 1].max()) > top + 0.02
+    cap = closed.faces[-40:]
+    v = closed.verts
+    assert (torch.linalg.cross(v[cap[:, 1]] - v[cap[:, 0]], v[cap[:, 2]] - v[cap[:, 0]])[:, 1] > 0).all()
+    assert float(closed.normals[-1, 1]) > 0.99
     with pytest.raises(InputError, match="ring_surface"):
         ring_surface(verts, head, front, 1.0, 1.2, 12, 40, 0.02)
