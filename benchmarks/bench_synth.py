@@ -11,6 +11,17 @@ Run: ``.venv/bin/python benchmarks/bench_synth.py [--n 16] [--res 256]`` (ANNY_C
    steady state from the moment every worker has made its first sample to the last shard
    written, W = 1 and 2 side by side, and the ratio. Goal: ≥ 2 samples/s with 2 workers on 2 cores.
 3. One whole ``run_synth`` call with 2 workers (pool start-up, manifest, checksums included).
+
+``--clothes`` runs instead, side by side in one run (interleaved repeats, 128² and 256²): the
+painted generator without PRT reuse (what version 1 made: every garment painted on the body,
+one PRT per sample), clothed without reuse, and clothed with ``prt_reuse`` 4 and 8 (one posed,
+clothed body's PRT turned into 4 or 8 cameras' light frames). It measures *CPU* seconds per
+sample of one single-threaded process generating and writing a shard, as a pool worker does:
+on a loaded machine wall-clock rates say more about the neighbours than about the generator,
+while the workers share nothing, so 2 workers on 2 free cores make 2 / (CPU s per sample)
+samples/s (pool start-up aside). Then, over ``--n`` stills at 64², the garment types worn
+and, per type, the share of samples where body shows through cloth (``hidden_body_share`` >
+1 % of the cloth's pixels) and its mean.
 """
 
 from __future__ import annotations
@@ -98,8 +109,61 @@ def bench_pool(cfg: SynthConfig, workers: int, n: int) -> tuple[float, float]:
         t_start = time.perf_counter()
         pool.run_pool(tasks, workers, on_result=lambda r: None, on_tick=lambda n: stamps.append(time.perf_counter()))
         t_end = time.perf_counter()
-    first = sorted(stamps)[workers - 1]  # every worker has made its first sample
-    return (len(stamps) - workers) / (t_end - first), first - t_start
+    # Every worker has made its first sample (its first group of cfg.prt_reuse stills: a shard's
+    # samples are reported group by group, so the steady state starts after those).
+    skip = workers * min(cfg.prt_reuse, cfg.shard_size)
+    first = sorted(stamps)[skip - 1]
+    return (len(stamps) - skip) / (t_end - first), first - t_start
+
+
+_PAINTED = {"upper": {"none": 1}, "lower": {"none": 1}, "head": {"none": 1}, "hair": {"painted": 1}}
+
+
+def _cpu_per_sample(cfg: SynthConfig, start: int, n: int, assets) -> float:
+    """CPU seconds per sample of this process generating stills start … start + n − 1 group by group (as a
+    worker does) and writing them as one shard (stack + deflate + sha256)."""
+    from relightnet.data.generate import generate_samples
+
+    t0 = time.process_time()
+    samples = generate_samples(cfg, "train", range(start, start + n), assets)
+    with tempfile.TemporaryDirectory() as d:
+        write_shard(Path(d) / "train-00000.npz", stack_samples(samples))
+    return (time.process_time() - t0) / n
+
+
+def bench_clothes(args) -> None:
+    """Painted vs clothed, PRT reuse 1 / 4 / 8: CPU s per sample side by side, then body-through-cloth per type."""
+    torch.set_num_threads(1)
+    assets = prepare_assets()
+    setups = [("painted, no reuse (v1)", dict(garment_probs=_PAINTED, prt_reuse=1)),
+              ("clothed, no reuse", dict(prt_reuse=1)), ("clothed, reuse 4", dict(prt_reuse=4)),
+              ("clothed, reuse 8", dict(prt_reuse=8))]
+    for res in (128, 256):
+        for _, kw in setups:  # warm-up: env maps, region labels of common variants
+            _cpu_per_sample(SynthConfig(res=res, **kw), 10**6, 8, assets)
+        runs = {name: [] for name, _ in setups}
+        for rep in range(args.repeat):  # interleaved, so every setup sees the same machine noise
+            for name, kw in setups:
+                runs[name].append(_cpu_per_sample(SynthConfig(res=res, **kw), 1000 * (rep + 1), args.n, assets))
+        med = {k: statistics.median(v) for k, v in runs.items()}
+        base = med[setups[0][0]]
+        print(f"\n### {res}², one process, one thread, {args.n} samples per run, median of {args.repeat}\n")
+        print(table(["generator", "CPU ms / sample", "samples per CPU-s", "2 workers on 2 free cores, samples/s",
+                     "vs painted v1", "vs goal 10/s"],
+                    [[k, 1e3 * v, 1 / v, 2 / v, f"{base / v:.2f}x", f"{2 / v / 10:.2f}x"] for k, v in med.items()]))
+    from relightnet.data.garments import GARMENT_TYPES
+    from relightnet.data.generate import generate_samples
+
+    metas = [s.meta for s in generate_samples(SynthConfig(res=64, prt_reuse=1), "train", range(args.n_quality),
+                                              assets)]
+    rows = []
+    for t in GARMENT_TYPES:
+        share = [m["garments"]["hidden_body_share"] for m in metas if t in m["garments"]["types"]]
+        rows.append([t, len(share), f"{100 * len(share) / len(metas):.0f}%",
+                     f"{100 * sum(x > 0.01 for x in share) / max(len(share), 1):.1f}%",
+                     f"{100 * statistics.mean(share) if share else 0:.2f}%"])
+    print(f"\n### Garments in {len(metas)} default stills (64², one person each)\n")
+    print(table(["type", "samples", "share of samples", "body through cloth > 1 %", "mean through-share"], rows))
 
 
 def main() -> None:
@@ -107,7 +171,12 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=16, help="samples per measurement (default: 16)")
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--repeat", type=int, default=3, help="pool runs per worker count (default: 3)")
+    ap.add_argument("--clothes", action="store_true", help="painted vs clothed, PRT reuse 1/4/8 (see above)")
+    ap.add_argument("--n-quality", type=int, default=96, help="stills for the garment table of --clothes")
     args = ap.parse_args()
+    if args.clothes:
+        print(f"## Synthetic data with clothes: {os.cpu_count()} CPUs, torch {torch.__version__}")
+        return bench_clothes(args)
     cfg = SynthConfig(res=args.res, shard_size=8)
     print(f"## Synthetic data: {args.res}², K = {cfg.n_coeffs}, {cfg.n_dirs} PRT directions, "
           f"{os.cpu_count()} CPUs, torch {torch.__version__}\n")

@@ -60,6 +60,13 @@ class SynthConfig:
         clip_lights: how a clip's light changes: ``random`` (turning, changing level, sometimes a
             switch), ``constant`` (one fixed light) or ``switch`` (fixed lights, one switch half-way);
             the last two make the clips that measure drift and lag.
+        garment_probs: clothes and hair as geometry: per slot (``upper``, ``lower``, ``head``, ``hair``)
+            the weights of its choices (:data:`relightnet.data.garments.GARMENT_SLOTS`); slots not
+            given keep :data:`~relightnet.data.garments.DEFAULT_GARMENT_PROBS`. ``{"upper": {"none": 1},
+            "lower": {"none": 1}, "head": {"none": 1}, "hair": {"painted": 1}}`` paints everything.
+        prt_reuse: stills per person and pose: G consecutive samples share one posed, clothed body
+            and its PRT (turned into each one's camera frame), each with its own view, light,
+            background and noise (:mod:`relightnet.data.person`). 1: every sample its own person.
     """
 
     seed: int = 0
@@ -80,6 +87,8 @@ class SynthConfig:
     sequence_frames: int = 0
     light_mix: dict = field(default_factory=dict)
     clip_lights: str = "random"
+    garment_probs: dict = field(default_factory=dict)
+    prt_reuse: int = 4
 
     def __post_init__(self) -> None:
         try:
@@ -131,7 +140,12 @@ class SynthConfig:
             bad("sequence_frames", "an integer from 0 to 10000")
         if self.clip_lights not in ("random", "constant", "switch"):
             bad("clip_lights", "'random', 'constant' or 'switch'")
+        if isinstance(self.prt_reuse, bool) or not isinstance(self.prt_reuse, int) or not 1 <= self.prt_reuse <= 64:
+            bad("prt_reuse", "an integer from 1 to 64")
+        from .garments import garment_probs
         from .lights import LIGHT_SOURCES
+
+        garment_probs(self.garment_probs)
 
         mix = self.light_mix
         if not isinstance(mix, dict) or set(mix) - set(LIGHT_SOURCES) or any(

@@ -53,11 +53,11 @@ import numpy as np
 
 from ..checks import InputError
 from .config import SynthConfig, sample_seed
-from .render_sample import CLIP_KEY, render_clip
+from .render_sample import CLIP_KEY, render_clip, render_group
 from .sample import GENERATOR_VERSION, TEXTURE_SIZE, Sample, SynthAssets, assets_for, prepare_assets
 
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets",
-           "generate_sample", "generate_sequence"]
+           "generate_sample", "generate_samples", "generate_sequence"]
 
 
 def generate_sample(cfg: SynthConfig, split: str, index: int, body=None) -> Sample:
@@ -74,6 +74,26 @@ def generate_sample(cfg: SynthConfig, split: str, index: int, body=None) -> Samp
     """
     ss = sample_seed(cfg, split, index)
     return render_clip(cfg, split, int(index), ss, assets_for(body), n_frames=None)
+
+
+def generate_samples(cfg: SynthConfig, split: str, indices, body=None) -> list[Sample]:
+    """Generate several stills, each group's person and PRT computed once (``cfg.prt_reuse``).
+
+    The same samples as :func:`generate_sample` of each index, faster when ``indices`` hold
+    whole groups (consecutive indices g·G … g·G + G − 1).
+
+    Args:
+        cfg, split, body: as :func:`generate_sample`. indices: ascending sample indices ≥ 0.
+
+    Returns:
+        A list of :class:`Sample`, one per index.
+    """
+    idx = [int(i) for i in indices]
+    for i in idx:
+        sample_seed(cfg, split, i)  # validates
+    if any(b < a for a, b in zip(idx, idx[1:], strict=False)):
+        raise InputError(f"indices: expected ascending sample indices, got {idx}")
+    return render_group(cfg, split, idx, assets_for(body))
 
 
 def generate_sequence(cfg: SynthConfig, split: str, index: int, n_frames: int, body=None) -> Sample:

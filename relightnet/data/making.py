@@ -53,6 +53,10 @@ def make_items(cfg: SynthConfig, split: str, indices, body=None) -> list:
 
     body = body if body is not None else prepare_assets()
     with _one_thread():
+        if not cfg.sequence_frames:
+            from .generate import generate_samples
+
+            return generate_samples(cfg, split, [int(i) for i in indices], body)
         return [_generate(cfg, split, int(i), body) for i in indices]
 
 
@@ -81,10 +85,23 @@ def make_and_write_shard(cfg: SynthConfig, split: str, index: int, out_dir, comp
     body = body if body is not None else prepare_assets()
     samples = []
     with _one_thread():
-        for j in range(count):
-            samples.append(_generate(cfg, split, start + j, body))
-            if tick is not None:
-                tick()
+        if cfg.sequence_frames:
+            for j in range(count):
+                samples.append(_generate(cfg, split, start + j, body))
+                if tick is not None:
+                    tick()
+        else:  # group by group: each person's PRT is computed once (cfg.prt_reuse)
+            from .generate import generate_samples
+
+            G = cfg.prt_reuse
+            j = start
+            while j < start + count:
+                end = min((j // G + 1) * G, start + count)
+                samples += generate_samples(cfg, split, range(j, end), body)
+                for _ in range(end - j):
+                    if tick is not None:
+                        tick()
+                j = end
     arrays = stack_samples(samples)
     del samples
     info = write_shard(Path(out_dir) / shard_name(split, index), arrays, compression=compression)

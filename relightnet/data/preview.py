@@ -13,7 +13,8 @@ Columns (each ``res`` × ``res``; maps the dataset lacks are skipped):
 9. ``T l=2`` — transport (xy, yz, xz) = (k 4, 5, 7) as RGB, same mapping
 10. ``occlusion`` — T₀ / T₀ unoccluded (ambient occlusion), grey
 
-Clips contribute their first frame.
+Clips contribute their first frame. The log names, row by row, the garment and hair meshes
+each person wears (``meta["garments"]["types"]``; "painted" when none).
 """
 
 from __future__ import annotations
@@ -120,11 +121,15 @@ def preview(root, out_png=None, n: int = 8, split: str | None = None) -> Path:
     if not splits or split is not None and not manifest["splits"].get(split, {}).get("shards"):
         raise InputError(f"{root}: no finished shards{'' if split is None else f' in split {split!r}'} to preview")
     samples: list[dict] = []
+    worn: list[str] = []
     for e in manifest["splits"][splits[0]]["shards"]:
         fields = [f for f in _FIELDS if f in manifest.get("fields", {})]
-        arrays = read_shard(root / e["file"], fields)
+        arrays = read_shard(root / e["file"], [*fields, "meta"])
+        metas = arrays.pop("meta")
         for j in range(len(next(iter(arrays.values())))):
             s = {k: v[j] for k, v in arrays.items()}
+            m = metas[j] if j < len(metas) and isinstance(metas[j], dict) else {}
+            worn.append(", ".join(m.get("garments", {}).get("types", [])) or "painted")
             if cfg.sequence_frames:
                 s = {k: v[0] for k, v in s.items()}
             samples.append(s)
@@ -135,4 +140,6 @@ def preview(root, out_png=None, n: int = 8, split: str | None = None) -> Path:
     sheet, names = contact_sheet(samples)
     write_image(out_png, sheet, srgb=False)
     logger.info("wrote %s: %d samples of %s; columns: %s", out_png, len(samples), splits[0], ", ".join(names))
+    for i, w in enumerate(worn[:len(samples)]):
+        logger.info("row %d wears: %s", i, w)
     return out_png

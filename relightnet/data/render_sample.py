@@ -16,23 +16,24 @@ import torch
 from ..checks import InputError
 from ..color import luminance
 from ..io.image import to_uint8
-from ..prt import vertex_transport
 from ..raster import antialias, interpolate, perspective_camera, silhouette_pixels
 from ..render.frame import TexturedAlbedo, render_mesh
 from ..render.shading import composite
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
+from .clothed import hidden_body_share
 from .config import SynthConfig, sample_seed
 from .framing import camera_intrinsics, crop_camera
 from .lights import LightDraw, light_at, sample_light
-from .poses import sample_phenotype, sample_pose, sample_yaw
+from .person import PersonStage, group_seed, person_stage, person_transport, transport_to_camera
+from .poses import sample_yaw
 from .sample import GENERATOR_VERSION, Sample, SynthAssets, assets_for
-from .textures import paint_albedo, sample_outfit, vertex_albedo
 
-__all__ = ["CLIP_KEY", "STREAMS", "ClipGeometry", "clip_geometry", "render_clip"]
+__all__ = ["CLIP_KEY", "STREAMS", "ClipGeometry", "clip_geometry", "render_clip", "render_group"]
 
-#: Random streams, one child of the sample's seed sequence each (in this order).
-STREAMS = ("body", "pose", "view", "albedo", "light", "background", "prt", "noise")
+#: Random streams, one child of the sample's seed sequence each (in this order). A still draws
+#: body, pose, albedo, garments and prt from its group's sequence (:mod:`relightnet.data.person`).
+STREAMS = ("body", "pose", "view", "albedo", "light", "background", "prt", "noise", "garments")
 #: Clips draw from child ``CLIP_KEY`` of the sample's seed sequence.
 CLIP_KEY = 100
 _SWITCH_PROB = 0.3
@@ -169,8 +170,10 @@ class ClipGeometry:
         box: the :class:`~relightnet.data.framing.CropBox` in base-camera pixels.
         pitch: camera pitch (radians); ``R``: (3, 3) float64 the pitch rotation.
         world_to_camera: (4, 4) float64, the world (before yaw) → camera transform.
-        phenotype, pose, yaw, view, outfit: what was drawn (pose: the pose description).
-        regions: (V, R) the smoothed clothing-region field of the outfit.
+        phenotype, pose, yaw, view, outfit, garments: what was drawn (pose: the pose description).
+        regions: (V, R) the smoothed clothing-region field of the outfit (garment vertices one-hot).
+        covered: (F,) bool body faces hidden under garments; n_body_faces: the body's face count
+            (the body's faces come first, then the garments').
     """
 
     verts: torch.Tensor
@@ -188,27 +191,28 @@ class ClipGeometry:
     view: dict
     outfit: dict
     regions: np.ndarray
+    garments: dict
+    covered: torch.Tensor
+    n_body_faces: int
 
 
-def _geometry(cfg: SynthConfig, r: dict, assets: SynthAssets, T: int) -> ClipGeometry:
-    """Draw the body, pose, view and albedo streams (in that order) and build the geometry."""
-    body = assets.body
-    phen = sample_phenotype(r["body"], cfg.ages)
-    params, pose_desc = sample_pose(r["pose"], n_frames=T)
-    yaw = sample_yaw(r["pose"])
-    view = _view(r["view"], cfg)
-    outfit = sample_outfit(r["albedo"])
-    with torch.no_grad():
-        out = body(pose=params["pose"], trans=params["trans"], phenotype=phen)
-    v_cam, n_cam, R, pitch, w2c = _place(out.verts, out.normals, out.joints, view, yaw)
-    cam, box = crop_camera(v_cam.reshape(-1, 3), _base_camera(), cfg.res, cfg.pad, cfg.jitter, r["view"],
-                           view["mode"])
-    regions = assets.region_field(outfit["sleeves"], outfit["legs"], "none" if outfit["hair"] is None else "short")
-    tex = paint_albedo(assets.atlas, regions, outfit)
-    return ClipGeometry(verts=v_cam, normals=n_cam, faces=body.faces, camera=cam,
-                        albedo=TexturedAlbedo(tex, body.uv, body.uv_faces), box=box, pitch=pitch, R=R,
-                        world_to_camera=w2c, phenotype=phen, pose=pose_desc, yaw=yaw, view=view, outfit=outfit,
-                        regions=regions)
+def _geometry(cfg: SynthConfig, person: PersonStage, rv: np.random.Generator) -> ClipGeometry:
+    """Draw the view stream (yaw, then the camera) and place the person in front of the camera."""
+    m = person.mesh
+    yaw = sample_yaw(rv)
+    view = _view(rv, cfg)
+    v_cam, n_cam, R, pitch, w2c = _place(m.verts, m.normals, person.joints, view, yaw)
+    cam, box = crop_camera(v_cam.reshape(-1, 3), _base_camera(), cfg.res, cfg.pad, cfg.jitter, rv, view["mode"])
+    return ClipGeometry(verts=v_cam, normals=n_cam, faces=m.faces, camera=cam,
+                        albedo=TexturedAlbedo(m.tex, m.uv, m.uv_faces), box=box, pitch=pitch, R=R,
+                        world_to_camera=w2c, phenotype=person.phenotype, pose=person.pose, yaw=yaw, view=view,
+                        outfit=person.outfit, regions=m.field, garments=person.garments, covered=m.covered,
+                        n_body_faces=m.n_body_faces)
+
+
+def _person_streams(cfg: SynthConfig, split: str, index: int, ss, n_frames: int | None) -> dict:
+    """The streams the person stage draws from: the group's (stills) or the clip's own."""
+    return _streams(ss if n_frames is not None else group_seed(cfg, split, index)[0])
 
 
 def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None, body=None) -> ClipGeometry:
@@ -232,28 +236,32 @@ def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None
         if isinstance(n_frames, bool) or not isinstance(n_frames, int | np.integer) or n_frames < 1:
             raise InputError(f"n_frames: expected None or an integer >= 1, got {n_frames!r}")
         ss = np.random.SeedSequence(ss.entropy, spawn_key=(CLIP_KEY,))
-    return _geometry(cfg, _streams(ss), assets_for(body), 1 if n_frames is None else int(n_frames))
+        n_frames = int(n_frames)
+    assets = assets_for(body)
+    person = person_stage(cfg, _person_streams(cfg, split, int(index), ss, n_frames), assets,
+                          1 if n_frames is None else n_frames)
+    return _geometry(cfg, person, _streams(ss)["view"])
 
 
-def _render_frames(cfg: SynthConfig, geo: ClipGeometry, assets: SynthAssets, draws, frames, tilt, dir_seed: int,
-                   bounce: bool):
-    """Stage render: PRT and the maps of every frame under its light → (per-field lists, fragments,
-    clip-space vertices) for the composite stage."""
+def _render_frames(cfg: SynthConfig, geo: ClipGeometry, person: PersonStage, draws, frames, tilt):
+    """Stage render: the person's PRT turned into the camera's light frame and the maps of every
+    frame under its light → (per-field lists, fragments, clip-space vertices, body-through-cloth
+    shares) for the composite stage."""
     faces, cam, talb = geo.faces, geo.camera, geo.albedo
-    grey = vertex_albedo(assets.atlas, talb.tex).mean(1) if bounce else None
     field = torch.as_tensor(geo.regions)
-    kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=dir_seed, threads=torch.get_num_threads())
+    Q = geo.world_to_camera[:3, :3]
     keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")
     acc = {k: [] for k in keys}
-    clips, frs = [], []
+    clips, frs, through = [], [], []
     for t in range(len(frames)):
         i, angle, level = frames[t]
         light = light_at(draws[i], angle, level, tilt)
         v, n = geo.verts[t], geo.normals[t]
-        Tv = vertex_transport(v, faces, n, occlusion=True, bounces=int(bounce), albedo=grey, **kw)
-        Tu = vertex_transport(v, faces, n, occlusion=False, **kw)
+        Tv = transport_to_camera(person.transport[t], Q, cfg.lmax)
+        Tu = transport_to_camera(person.transport_unoccluded[t], Q, cfg.lmax)
         rend = render_mesh(v, faces, Tv, talb, light, cam, normals=n, maps=True)
         fr = rend.frags
+        through.append(hidden_body_share(fr.pix_face, geo.covered, geo.n_body_faces))
         reg = torch.einsum("nk,nkr->nr", fr.pix_bary.float(), field[faces[fr.pix_face]]).argmax(1)
         parts = torch.zeros(cfg.res * cfg.res, dtype=torch.uint8)
         parts.index_copy_(0, fr.pix, (reg + 1).to(torch.uint8))
@@ -264,7 +272,7 @@ def _render_frames(cfg: SynthConfig, geo: ClipGeometry, assets: SynthAssets, dra
             acc[k].append(x)
         clips.append(cam.transform(v))
         frs.append(fr)
-    return acc, frs, clips
+    return acc, frs, clips, through
 
 
 def _composite_frames(cfg: SynthConfig, noise_rng, acc: dict, bg: torch.Tensor, frs, clips, faces):
@@ -288,9 +296,12 @@ def _composite_frames(cfg: SynthConfig, noise_rng, acc: dict, bg: torch.Tensor, 
 
 
 def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draws, frames, switches, bg_desc,
-               bounce: bool, dir_seed: int, n_frames: int | None) -> dict:
+               person: PersonStage, through: list, n_frames: int | None) -> dict:
     """Stage write: the sample's JSON metadata (what was drawn)."""
     outfit, view, box, pitch = geo.outfit, geo.view, geo.box, geo.pitch
+    bounce, dir_seed = person.bounce, person.dir_seed
+    _, group, member = group_seed(cfg, split, index)
+    reuse = {"group": group, "member": member, "size": cfg.prt_reuse} if n_frames is None else None
     intr = camera_intrinsics(geo.camera)
     meta = {
         "generator_version": GENERATOR_VERSION,
@@ -307,7 +318,8 @@ def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draw
         "light": {**_light_meta(draws[0]), "tilt_deg": math.degrees(pitch)},
         "background": bg_desc,
         "flags": {"bounce": bounce, "noise_std": float(cfg.noise_std)},
-        "prt": {"lmax": cfg.lmax, "n_dirs": cfg.n_dirs, "direction_seed": dir_seed},
+        "prt": {"lmax": cfg.lmax, "n_dirs": cfg.n_dirs, "direction_seed": dir_seed, "reuse": reuse},
+        "garments": {**geo.garments, "hidden_body_share": through if n_frames is not None else through[0]},
     }
     if n_frames is not None:
         meta["lights"] = [_light_meta(d) for d in draws]
@@ -319,20 +331,22 @@ def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draw
 
 
 def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
-                n_frames: int | None) -> Sample:
+                n_frames: int | None, person: PersonStage | None = None) -> Sample:
     """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames.
 
-    Stages: draw the geometry and lights (the random streams in a fixed order) → render every
-    frame's maps → composite over the drawn background → the arrays and metadata.
+    Stages: the person (body, pose, look, garments, PRT: from the group's streams for a still,
+    :mod:`relightnet.data.person`; pass ``person`` — with its transport — to reuse it across the
+    group) → draw the view and lights (the sample's streams) → render every frame's maps →
+    composite over the drawn background → the arrays and metadata.
     """
     T = 1 if n_frames is None else n_frames
     r = _streams(ss)
-    geo = _geometry(cfg, r, assets, T)  # body, pose, view and albedo streams
+    if person is None:
+        person = person_transport(cfg, person_stage(cfg, _person_streams(cfg, split, index, ss, n_frames), assets, T))
+    geo = _geometry(cfg, person, r["view"])
     draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
-    dir_seed = int(r["prt"].integers(2**31 - 1))
-    bounce = bool(r["prt"].uniform() < cfg.bounce_prob)
     tilt = rotation_world_to_light(geo.R).float()
-    acc, frs, clips = _render_frames(cfg, geo, assets, draws, frames, tilt, dir_seed, bounce)
+    acc, frs, clips, through = _render_frames(cfg, geo, person, draws, frames, tilt)
 
     m0 = acc["mask"][0] > 0
     lum0 = luminance(acc["image"][0])
@@ -351,5 +365,21 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
         a = v.detach().cpu().numpy()
         a = a if a.dtype in (np.uint8,) else a.astype(np.float32)
         out_arrays[k] = np.ascontiguousarray(a[0] if n_frames is None else a)
-    return Sample(out_arrays, _clip_meta(cfg, split, index, geo, draws, frames, switches, bg_desc, bounce, dir_seed,
+    return Sample(out_arrays, _clip_meta(cfg, split, index, geo, draws, frames, switches, bg_desc, person, through,
                                          n_frames))
+
+
+def render_group(cfg: SynthConfig, split: str, indices, assets: SynthAssets) -> list[Sample]:
+    """Make the stills ``indices`` (ascending), computing each group's person stage and PRT once.
+
+    Every sample equals :func:`render_clip` of it alone (bit for bit at the same thread count).
+    """
+    out, person, key = [], None, None
+    for i in indices:
+        i = int(i)
+        gss, group, _ = group_seed(cfg, split, i)
+        if key != group:
+            person = person_transport(cfg, person_stage(cfg, _streams(gss), assets, 1))
+            key = group
+        out.append(render_clip(cfg, split, i, sample_seed(cfg, split, i), assets, None, person))
+    return out

@@ -16,7 +16,7 @@ from .textures import UVAtlas, region_field, uv_atlas
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets", "assets_for"]
 
 #: Bumped whenever the output of the generator changes for a given config.
-GENERATOR_VERSION = "1"
+GENERATOR_VERSION = "2"
 #: Side of the UV albedo texture.
 TEXTURE_SIZE = 512
 
@@ -39,21 +39,39 @@ class SynthAssets:
         atlas: its :class:`~relightnet.data.textures.UVAtlas`.
         regions: memo of region fields per (sleeves, legs, hair) variant, filled on use.
         envmaps: memo of the shipped env maps, filled on use.
+        tables: memo of the garment tables, filled on use.
     """
 
     body: AnnyBody
     atlas: UVAtlas
     regions: dict = field(default_factory=dict)
     envmaps: dict = field(default_factory=dict)
+    tables: dict = field(default_factory=dict)
+
+    def garment_tables(self):
+        """The body's :class:`~relightnet.data.garments.GarmentTables` (built on first use)."""
+        if "garments" not in self.tables:
+            from .garments import garment_tables
+
+            self.tables["garments"] = garment_tables(self.body, self.atlas.parts, self.tables.setdefault("labels", {}))
+        return self.tables["garments"]
 
     def region_field(self, sleeves: str, legs: str, hair: str) -> np.ndarray:
         """(V, R) smoothed region field (:func:`~relightnet.data.textures.region_field`) of
         :func:`relightnet.body.region_labels` for one clothing variant."""
         key = (sleeves, legs, hair)
         if key not in self.regions:
-            ids = region_labels(self.body, sleeves, legs, hair).numpy()
+            ids = self.region_labels(sleeves, legs, hair).numpy()
             self.regions[key] = region_field(self.body.faces.cpu().numpy(), ids)
         return self.regions[key]
+
+    def region_labels(self, sleeves: str, legs: str, hair: str) -> torch.Tensor:
+        """(V,) :func:`relightnet.body.region_labels` of one clothing variant (memo shared with the garments)."""
+        labels = self.tables.setdefault("labels", {})
+        key = (sleeves, legs, hair)
+        if key not in labels:
+            labels[key] = region_labels(self.body, sleeves, legs, hair)
+        return labels[key]
 
     def envmap(self, name: str) -> torch.Tensor:
         """(He, We, 3) a shipped env map, clamped at 0."""

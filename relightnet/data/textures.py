@@ -42,7 +42,7 @@ from ..color import srgb_to_linear_np
 from ..raster import rasterize
 
 __all__ = ["ALBEDO_MIN", "ALBEDO_MAX", "PATTERNS", "UVAtlas", "uv_atlas", "region_field", "texel_regions",
-           "sample_outfit", "paint_albedo", "vertex_albedo"]
+           "sample_outfit", "paint_albedo", "garment_texels", "hair_texels", "vertex_albedo"]
 
 ALBEDO_MIN, ALBEDO_MAX = 0.02, 0.9
 PATTERNS = ("plain", "stripes", "checks", "noise", "blobs")
@@ -285,23 +285,14 @@ def paint_albedo(atlas: UVAtlas, regions, outfit: dict) -> torch.Tensor:
     # Hair: colour with streaks along y.
     sel = reg == ids["hair"]
     if outfit["hair"] is not None and bool(sel.any()):
-        streak = _noise3d(pos[sel] * torch.tensor([1.0, 0.25, 1.0]), 0.01, rng, octaves=2)
-        tex[sel] = torch.tensor(outfit["hair"], dtype=torch.float32) * (1 + 0.25 * streak)
+        tex[sel] = hair_texels(outfit["hair"], pos[sel], rng)
     elif bool(sel.any()):
         tex[sel] = torch.tensor(outfit["skin"], dtype=torch.float32)
     for region in ("top", "bottom", "shoes"):
         sel = reg == ids[region]
         if not bool(sel.any()):
             continue
-        g = outfit[region]
-        grng = np.random.default_rng(g["seed"])
-        p = pos[sel]
-        m = _pattern_mask(g, p, grng)[:, None]
-        c1 = torch.tensor(g["color"], dtype=torch.float32)
-        c2 = torch.tensor(g["color2"], dtype=torch.float32)
-        fabric = 1 + g["fabric"] * _noise3d(p, 0.15, grng, octaves=2)
-        grain = 1 + 0.03 * torch.from_numpy(grng.standard_normal((p.shape[0], 1)).astype(np.float32))
-        tex[sel] = (c1 * (1 - m) + c2 * m) * fabric * grain
+        tex[sel] = garment_texels(outfit[region], pos[sel])
     # Eyes and mouth.
     pid = {p: i for i, p in enumerate(ANNY_PARTS)}
     for names, col in ((("eye_front.L", "eye_front.R"), outfit["iris"]),
@@ -310,6 +301,24 @@ def paint_albedo(atlas: UVAtlas, regions, outfit: dict) -> torch.Tensor:
         sel = torch.as_tensor(np.isin(part, [pid[n] for n in names]))
         tex[sel] = torch.tensor(col, dtype=torch.float32)
     return tex.clamp(ALBEDO_MIN, ALBEDO_MAX).reshape(S, S, 3).contiguous()
+
+
+def garment_texels(g: dict, pos: torch.Tensor) -> torch.Tensor:
+    """(N, 3) colours of garment ``g`` (a region dict of :func:`sample_outfit`) at 3D points (N, 3) metres:
+    its two colours mixed by its pattern, times the fabric variation and grain (not yet clamped)."""
+    grng = np.random.default_rng(g["seed"])
+    m = _pattern_mask(g, pos, grng)[:, None]
+    c1 = torch.tensor(g["color"], dtype=torch.float32)
+    c2 = torch.tensor(g["color2"], dtype=torch.float32)
+    fabric = 1 + g["fabric"] * _noise3d(pos, 0.15, grng, octaves=2)
+    grain = 1 + 0.03 * torch.from_numpy(grng.standard_normal((pos.shape[0], 1)).astype(np.float32))
+    return (c1 * (1 - m) + c2 * m) * fabric * grain
+
+
+def hair_texels(color, pos: torch.Tensor, rng: np.random.Generator) -> torch.Tensor:
+    """(N, 3) hair colour ``color`` (3,) with streaks along y at 3D points (N, 3) metres (not yet clamped)."""
+    streak = _noise3d(pos * torch.tensor([1.0, 0.25, 1.0]), 0.01, rng, octaves=2)
+    return torch.tensor(color, dtype=torch.float32) * (1 + 0.25 * streak)
 
 
 def vertex_albedo(atlas: UVAtlas, tex: torch.Tensor) -> torch.Tensor:

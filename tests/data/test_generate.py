@@ -158,7 +158,17 @@ def test_partial_crops_and_views(assets):
 def test_variety_of_bodies_poses_lights_and_views(samples, assets):
     metas = [s.meta for s in samples] + [generate_sample(CFG.replace(res=16, n_dirs=8), "train", i, assets).meta
                                          for i in range(N, 3 * N)]
-    assert len({round(m["phenotype"]["gender"], 3) for m in metas}) == len(metas)
+    # prt_reuse = 4: four consecutive stills share a person and pose (and its PRT), nothing else.
+    groups = {}
+    for i, m in enumerate(metas):
+        assert m["prt"]["reuse"] == {"group": i // 4, "member": i % 4, "size": 4}
+        groups.setdefault(i // 4, []).append(m)
+    assert len({round(m["phenotype"]["gender"], 3) for m in metas}) == len(groups)
+    for g in groups.values():
+        assert len({json.dumps([m["phenotype"], m["pose"]["name"], m["garments"]]) for m in g}) == 1
+        assert len({m["pose"]["yaw_deg"] for m in g}) == len(g)
+        assert len({m["light"]["rotation_deg"] for m in g}) == len(g)
+        assert len({m["camera"]["distance"] for m in g}) == len(g)
     assert len({m["pose"]["name"] for m in metas}) >= 4
     assert len({m["light"]["source"] for m in metas}) >= 2
     yaws = np.array([m["pose"]["yaw_deg"] for m in metas])

@@ -32,7 +32,7 @@ def test_render_clip_is_the_generated_still_and_clip(assets):
     seq = generate_sequence(CFG, "train", 1, T, assets)
     assert clip.meta == seq.meta and clip.arrays["image"].shape == (T, 32, 32, 3) and clip.meta["n_frames"] == T
     assert all(clip.arrays[k].tobytes() == v.tobytes() for k, v in seq.arrays.items())
-    assert len(STREAMS) == 8 and STREAMS[0] == "body"
+    assert len(STREAMS) == 9 and STREAMS[0] == "body" and STREAMS[-1] == "garments"
 
 
 def test_evaluation_clips_switch_half_way(assets):

@@ -1,0 +1,225 @@
+"""Garment and hair geometry around a posed body: offset shells and hanging ring surfaces.
+
+Two primitives build every garment the generator (and later the avatar) dresses a body in;
+both are pure functions of one posed frame, so a clip calls them per frame and the pieces
+move with the body:
+
+- :func:`shell_surface`: a copy of some of the body's faces pushed out along a direction
+  (the vertex normals, or a blend with a radial direction) by a per-vertex offset, with an
+  optional gravity sag of the parts whose normals point down. Each shell vertex follows
+  its source body vertex, so the shell is skinned with the body's own weights (linear
+  blend skinning through the joints): tops, jackets, open coats (faces removed in a
+  front strip), trousers from tight to wide, volume hair over the scalp. The source
+  vertex indices come back so that the caller can reuse the body's UVs.
+- :func:`ring_surface`: a surface of horizontal rings around a vertical axis through a
+  joint, from ``y_top`` down to ``y_bottom``, whose radius at every ring and angle is at
+  least the body's horizontal extent there plus a clearance (so the body cannot show
+  through at the sampled heights), made to *hang* (the radius never shrinks going down,
+  as cloth or hair falls under gravity) and optionally opened at the front below a
+  height (a face opening). Skirts and dresses (not following the legs), hoods, hats and
+  long hair falling over the shoulders. It carries its own (u, v) grid coordinates.
+
+Shapes: V body vertices, F body faces, N points; a piece has Vg vertices and Fg faces.
+World frame: y up (docs/design.md, "Frames").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+
+from ..checks import InputError, check_shape
+from .base import vertex_normals
+
+__all__ = ["GarmentPiece", "shell_surface", "ring_surface", "radial_directions"]
+
+
+@dataclass(frozen=True, eq=False)
+class GarmentPiece:
+    """One garment or hair mesh of one frame.
+
+    Attributes:
+        verts: (Vg, 3) float32 positions. normals: (Vg, 3) float32 unit vertex normals.
+        faces: (Fg, 3) int64 triangles into ``verts``, counter-clockwise seen from outside.
+        source: (Vg,) int64 body vertex each shell vertex follows (shells), or None (rings).
+        source_faces: (Fg,) int64 body face each shell face copies (shells), or None.
+        uv: (Vg, 2) float32 grid coordinates in [0, 1]² (rings: u around, v = 1 at the top), or None.
+    """
+
+    verts: torch.Tensor
+    normals: torch.Tensor
+    faces: torch.Tensor
+    source: torch.Tensor | None = None
+    source_faces: torch.Tensor | None = None
+    uv: torch.Tensor | None = None
+
+
+def radial_directions(verts: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """(N, 3) unit directions from the segment a → b (an axis such as hip → ankle) to the points (N, 3)."""
+    check_shape(verts, ["N", 3], name="verts")
+    d = (b - a).to(verts)
+    t = ((verts - a.to(verts)) @ d / (d @ d).clamp_min(1e-12)).clamp(0.0, 1.0)
+    r = verts - (a.to(verts) + t[:, None] * d)
+    return r / r.norm(dim=1, keepdim=True).clamp_min(1e-9)
+
+
+def shell_surface(verts: torch.Tensor, normals: torch.Tensor, faces: torch.Tensor, face_sel: torch.Tensor,
+                  offset: torch.Tensor, direction: torch.Tensor | None = None, sag: torch.Tensor | float = 0.0
+                  ) -> GarmentPiece:
+    """An offset copy of the selected body faces.
+
+    Vertex i moves to ``p_i + offset_i · d_i`` (``d`` = ``direction`` or the normals), then
+    down by ``sag_i · max(−n_y, 0)`` (cloth under an arm or a belly hangs away from it).
+
+    Args:
+        verts: (V, 3) posed body positions. normals: (V, 3) unit body normals.
+        faces: (F, 3) body faces. face_sel: (F,) bool, the faces the garment covers.
+        offset: (V,) distance (metres) along ``direction``; only the selected faces' vertices are used.
+        direction: (V, 3) unit push directions, default the normals.
+        sag: float or (V,) gravity sag (metres).
+
+    Returns:
+        :class:`GarmentPiece` with ``source`` and ``source_faces`` set.
+    """
+    check_shape(verts, ["V", 3], name="verts")
+    nv = verts.shape[0]
+    check_shape(normals, [nv, 3], name="normals")
+    check_shape(faces, ["F", 3], name="faces")
+    check_shape(face_sel, [faces.shape[0]], name="face_sel")
+    check_shape(offset, [nv], name="offset")
+    fidx = torch.nonzero(face_sel.bool()).flatten()
+    if fidx.numel() == 0:
+        raise InputError("face_sel: selects no face")
+    sub = faces[fidx]
+    src, local = torch.unique(sub, return_inverse=True)
+    p, n = verts[src].double(), normals[src].double()
+    d = n if direction is None else direction[src].double()
+    sag = torch.as_tensor(sag, dtype=torch.float64)
+    sag_v = sag.expand(nv)[src] if sag.dim() else sag
+    q = p + offset[src].double()[:, None] * d
+    q[:, 1] -= sag_v * (-n[:, 1]).clamp_min(0.0)
+    q = q.float()
+    f = local.reshape(-1, 3)
+    return GarmentPiece(q, vertex_normals(q, f), f, source=src, source_faces=fidx)
+
+
+def _ring_radii(points: torch.Tensor, centre: torch.Tensor, e1: torch.Tensor, e2: torch.Tensor, ys: torch.Tensor,
+                n_theta: int) -> torch.Tensor:
+    """(R, nθ) largest horizontal distance from the axis of the points near each ring, per angle bin
+    (each bin also sees its two neighbours), 0 where no point is near."""
+    rel = points.double() - centre
+    a, b = rel @ e1, rel @ e2
+    r = torch.sqrt(a * a + b * b)
+    step = 2 * math.pi / n_theta
+    bins = torch.remainder(torch.round(torch.atan2(b, a) / step).long(), n_theta)
+    spacing = float((ys[0] - ys[-1]).abs()) / max(len(ys) - 1, 1)
+    out = torch.zeros(len(ys), n_theta, dtype=torch.float64)
+    for i, y in enumerate(ys.tolist()):
+        near = (points[:, 1].double() - y).abs() <= spacing
+        if bool(near.any()):
+            out[i].scatter_reduce_(0, bins[near], r[near], "amax")
+    return torch.maximum(out, torch.maximum(out.roll(1, 1), out.roll(-1, 1)))
+
+
+def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor, y_top: float, y_bottom: float,
+                 n_rings: int, n_theta: int, clearance: float, min_radius: float = 0.0, flare: float = 0.0,
+                 folds: tuple = (), open_rows: int | None = None, open_halfwidth: float = 0.0,
+                 cap: bool = False) -> GarmentPiece:
+    """A hanging surface of rings around the vertical axis through ``centre``.
+
+    Ring i (of ``n_rings``, from ``y_top`` down to ``y_bottom``) has, at angle θ (0 at
+    ``front``, 90° at front × up, the body's right when it faces ``front``),
+    the radius ``max(r_body + clearance, min_radius + flare · t)`` (t: 0 at the top, 1 at
+    the bottom; r_body the points' extent near the ring, :func:`_ring_radii`), then the
+    running maximum down the rings (hanging), then folds ``Σ a·t·r·(½ + ½ sin(kθ + φ))``
+    for ``folds = ((k, a, φ), ...)``, which only push outward.
+
+    Args:
+        points: (N, 3) posed body points the surface must enclose (e.g. without the arms).
+        centre: (3,) a point of the axis. front: (3,) horizontal direction the body faces.
+        y_top, y_bottom: heights of the first and last rings (y_top > y_bottom).
+        n_rings, n_theta: grid size (R ≥ 2, nθ ≥ 8).
+        clearance: gap to the body (metres). min_radius, flare: radius profile (metres).
+        folds: ((k, amplitude, phase), ...) vertical folds.
+        open_rows: faces between rings ``open_rows`` and below within ``open_halfwidth`` radians of
+            the front are left out (a face opening); None: closed. (A ring index, not a height,
+            so that every frame of a clip has the same faces.)
+        cap: close the top with a fan around one vertex above the first ring.
+
+    Returns:
+        :class:`GarmentPiece` with ``uv`` set; the seam column is duplicated (u = 0 and 1).
+    """
+    check_shape(points, ["N", 3], name="points")
+    if not y_top > y_bottom or n_rings < 2 or n_theta < 8:
+        raise InputError(f"ring_surface: expected y_top > y_bottom, n_rings >= 2, n_theta >= 8; got {y_top}, "
+                         f"{y_bottom}, {n_rings}, {n_theta}")
+    up = torch.tensor([0.0, 1.0, 0.0], dtype=torch.float64)
+    e1 = front.double() - (front.double() @ up) * up
+    e1 = e1 / e1.norm().clamp_min(1e-9)
+    e2 = torch.linalg.cross(e1, up)  # θ = 90°: the body's right
+    c = centre.double().clone()
+    ys = torch.linspace(float(y_top), float(y_bottom), int(n_rings), dtype=torch.float64)
+    t = torch.linspace(0.0, 1.0, int(n_rings), dtype=torch.float64)[:, None]
+    rb = _ring_radii(points, c, e1, e2, ys, n_theta)
+    r = torch.maximum(torch.where(rb > 0, rb + clearance, torch.zeros_like(rb)), min_radius + flare * t)
+    r = torch.cummax(r, dim=0).values
+    theta = torch.arange(n_theta, dtype=torch.float64) * (2 * math.pi / n_theta)
+    for k, amp, phase in folds:
+        r = r * (1 + amp * t * (0.5 + 0.5 * torch.sin(k * theta + phase)))
+    # Vertices: R rings of nθ + 1 (the seam duplicated), (R, nθ+1, 3).
+    th = torch.cat([theta, theta[:1] + 2 * math.pi])
+    rr = torch.cat([r, r[:, :1]], dim=1)
+    dirs = torch.cos(th)[:, None] * e1 + torch.sin(th)[:, None] * e2  # (nθ+1, 3)
+    pos = c[None, None] * torch.tensor([1.0, 0.0, 1.0], dtype=torch.float64) + rr[..., None] * dirs[None]
+    pos[..., 1] = ys[:, None]
+    m = n_theta + 1
+    faces = _grid_faces(n_rings, n_theta, open_rows, open_halfwidth)
+    verts = pos.reshape(-1, 3)
+    u = (th / (2 * math.pi))[None].expand(n_rings, -1)
+    v = (1 - t).expand(-1, m)
+    uv = torch.stack([u, v], -1).reshape(-1, 2)
+    faces = _outward(verts, faces, c)
+    if cap:
+        top = c.clone()
+        top[1] = float(y_top) + 0.3 * float(r[0].mean())  # a low dome over the first ring
+        fan = torch.stack([torch.full((n_theta,), verts.shape[0]), torch.arange(n_theta) + 1, torch.arange(n_theta)],
+                          -1)
+        verts = torch.cat([verts, top[None]])
+        uv = torch.cat([uv, torch.tensor([[0.5, 1.0]], dtype=torch.float64)])
+        e1_, e2_ = verts[fan[0, 1]] - verts[fan[0, 0]], verts[fan[0, 2]] - verts[fan[0, 0]]
+        faces = torch.cat([faces, fan if float(torch.linalg.cross(e1_, e2_)[1]) > 0 else fan[:, [0, 2, 1]]])
+    # Normals as if the seam were joined: duplicated seam vertices take the same normal.
+    join = torch.arange(verts.shape[0])
+    seam = torch.arange(n_rings) * m + n_theta
+    join[seam] = seam - n_theta
+    nrm = vertex_normals(verts.float(), join[faces])
+    nrm = nrm[join]
+    used, faces = torch.unique(faces, return_inverse=True)  # drop the vertices an opening left unused
+    return GarmentPiece(verts[used].float(), nrm[used], faces.reshape(-1, 3), uv=uv[used].float())
+
+
+def _grid_faces(n_rings: int, n_theta: int, open_rows: int | None, open_halfwidth: float) -> torch.Tensor:
+    """(Fg, 3) two triangles per quad of an (R, nθ + 1) ring grid, less the front opening's quads."""
+    m = n_theta + 1
+    ii, jj = torch.meshgrid(torch.arange(n_rings - 1), torch.arange(n_theta), indexing="ij")
+    a0, a1 = ii * m + jj, ii * m + jj + 1
+    b0, b1 = a0 + m, a1 + m
+    keep = torch.ones_like(ii, dtype=torch.bool)
+    if open_rows is not None:
+        theta = torch.arange(n_theta, dtype=torch.float64) * (2 * math.pi / n_theta)
+        mid = torch.remainder(theta + math.pi / n_theta + math.pi, 2 * math.pi) - math.pi  # face centre angle
+        below = torch.arange(n_rings - 1) >= int(open_rows)
+        keep = ~(below[:, None] & (mid.abs() < open_halfwidth)[None])
+    quads = torch.stack([a0, a1, b0, b1], -1)[keep]  # (Q, 4)
+    return torch.cat([quads[:, [0, 2, 1]], quads[:, [1, 2, 3]]])
+
+
+def _outward(verts: torch.Tensor, faces: torch.Tensor, centre: torch.Tensor) -> torch.Tensor:
+    """Flip the winding if the faces' normals point toward the axis on the whole."""
+    v0, v1, v2 = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    fn = torch.linalg.cross(v1 - v0, v2 - v0)
+    out = (v0 + v1 + v2) / 3 - centre
+    out[:, 1] = 0.0
+    return faces if float((fn * out).sum()) >= 0 else faces[:, [0, 2, 1]]
