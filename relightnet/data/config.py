@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..checks import InputError
-from ..io.documents import short
+from ..io.documents import clip, short
 
 __all__ = ["SPLITS", "HDRI_NAMES", "SynthConfig", "load_config", "sample_seed"]
 
@@ -87,7 +87,7 @@ class SynthConfig:
         except InputError:
             raise
         except (TypeError, ValueError, OverflowError) as e:  # a value of the wrong type (a list for a number, ...)
-            raise InputError(f"config: a value has the wrong type ({short(str(e), 160)})") from None
+            raise InputError(f"config: a value has the wrong type ({clip(str(e), 160)})") from None
 
     def _validate(self) -> None:
         def bad(name, expected):

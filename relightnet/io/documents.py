@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["MAX_DOCUMENT_BYTES", "MAX_DEPTH", "read_document", "parse_document", "short", "check_regular_file"]
+__all__ = ["MAX_DOCUMENT_BYTES", "MAX_DEPTH", "read_document", "parse_document", "short", "clip", "check_regular_file"]
 
 #: Largest YAML/JSON document read (bytes).
 MAX_DOCUMENT_BYTES = 16 << 20
@@ -48,6 +48,12 @@ def short(value, limit: int = _SHORT) -> str:
     except Exception:  # noqa: BLE001 - a value whose repr fails is shown by its type
         text = f"<{type(value).__name__}>"
     text = text.replace("\n", "\\n")
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def clip(text: str, limit: int = _SHORT) -> str:
+    """A message's text on one line, cut to ``limit`` characters (e.g. a parser's complaint)."""
+    text = " ".join(str(text).split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
@@ -134,14 +140,13 @@ def parse_document(text: str, where: str, what: str = "document", yaml_ok: bool 
         try:
             return json.loads(text)
         except (ValueError, RecursionError) as e:  # also numbers over Python's digit limit
-            raise InputError(f"{where}: unreadable {what} (JSON {type(e).__name__}: {short(str(e), 160)})") from None
+            raise InputError(f"{where}: unreadable {what} (JSON {type(e).__name__}: {clip(str(e), 160)})") from None
     import yaml
 
     try:
         return yaml.load(text, Loader=_loader())  # noqa: S506 - a SafeLoader subclass
     except (yaml.YAMLError, ValueError, TypeError, OverflowError, RecursionError) as e:
-        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise InputError(f"{where}: unreadable {what} (YAML {type(e).__name__}: {short(first, 160)})") from None
+        raise InputError(f"{where}: unreadable {what} (YAML {type(e).__name__}: {clip(str(e), 160)})") from None
 
 
 def read_document(path: str | os.PathLike, what: str, yaml_ok: bool = True):

@@ -24,7 +24,7 @@ import torch
 
 from ..checks import InputError, check_device
 from ..io import atomic_write
-from ..io.documents import short
+from ..io.documents import clip, short
 from .network import NetConfig, RelightNet
 
 __all__ = ["FORMAT", "SHIPPED", "MAX_PARAMETERS", "MAX_ACTIVATION", "save_checkpoint", "load_checkpoint",
@@ -174,7 +174,7 @@ def _net_config(state: dict, path: Path) -> NetConfig:
     try:
         return NetConfig(**state["net_config"])
     except (TypeError, ValueError) as e:
-        raise InputError(f"{path}: unknown network configuration ({short(str(e), 160)})") from None
+        raise InputError(f"{path}: unknown network configuration ({clip(str(e), 160)})") from None
 
 
 def _network(cfg: NetConfig, weights: dict, path: Path) -> RelightNet:
@@ -184,7 +184,7 @@ def _network(cfg: NetConfig, weights: dict, path: Path) -> RelightNet:
         with torch.device("meta"):
             shapes = {k: tuple(v.shape) for k, v in RelightNet(cfg).state_dict().items()}
     except (TypeError, ValueError, RuntimeError, InputError) as e:
-        raise InputError(f"{path}: unusable network configuration ({type(e).__name__}: {short(str(e), 160)})") \
+        raise InputError(f"{path}: unusable network configuration ({type(e).__name__}: {clip(str(e), 160)})") \
             from None
     count = sum(math.prod(s) for s in shapes.values())
     if count > MAX_PARAMETERS:

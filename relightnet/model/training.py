@@ -25,7 +25,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb
-from ..io.documents import short
+from ..io.documents import clip, short
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
@@ -121,7 +121,7 @@ def load_train_config(path) -> TrainConfig:
     except InputError:
         raise
     except (TypeError, ValueError, OverflowError, AttributeError) as e:  # a value of the wrong type
-        raise InputError(f"{path}: a setting has the wrong type ({short(str(e), 160)})") from None
+        raise InputError(f"{path}: a setting has the wrong type ({clip(str(e), 160)})") from None
 
 
 class TrainData:

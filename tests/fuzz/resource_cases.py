@@ -1,0 +1,266 @@
+"""Small hostile files that ask for huge resources, and the capped child process that runs them.
+
+Each case writes its file(s) into a fresh folder and returns the ``relightnet`` command line
+that reads them. :func:`run_capped` runs that command in a child process with an address-space
+cap (``RLIMIT_AS``) and a wall-clock cap, its own ``TMPDIR``, and reports its exit status,
+stderr, peak RSS (``os.wait4``) and what it left behind. ``tests/fuzz/test_fuzz_resources.py``
+asserts on the result; ``benchmarks/bench_untrusted.py --resources`` prints the table.
+Nothing here is committed as a file: every input is generated.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import resource
+import struct
+import subprocess
+import sys
+import time
+import zipfile
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+#: The memory budget every case must stay within (peak RSS of the command's process).
+RSS_BUDGET = 2 << 30
+#: Address-space cap of the child: it cannot take the machine's memory even if a case regresses.
+AS_CAP = 4 << 30
+#: Wall-clock cap of the child (a hang, not a slow run on a loaded machine).
+WALL_CAP = 120.0
+
+
+@dataclass
+class Case:
+    """A command over generated files: ``argv`` after ``relightnet``; ``names``: the file its error must name."""
+
+    argv: list[str]
+    names: str
+    expect: str = "error"  # "error": exit 1 with one line naming ``names``; "ok": exit 0
+    outputs: tuple[str, ...] = ()  # files the command may leave (relative to the case folder)
+
+
+@dataclass
+class Result:
+    rc: int
+    stderr: str
+    rss: int  # bytes
+    wall: float
+    timed_out: bool
+    leftovers: list[str]
+
+
+def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
+    """Run ``relightnet *case.argv`` in ``folder`` capped; what it left in ``folder`` and its TMPDIR."""
+    tmp = folder / "_tmp"
+    tmp.mkdir(exist_ok=True)
+    before = {p for p in folder.rglob("*") if tmp not in p.parents}
+    env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(tmp), OMP_NUM_THREADS="1")
+
+    def cap() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (AS_CAP, AS_CAP))
+
+    with open(folder / "_stderr", "w+b") as err:
+        t = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "relightnet.cli", *case.argv], cwd=folder, env=env,
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, preexec_fn=cap)
+        timed_out = False
+        while True:
+            pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+            if pid:
+                break
+            if time.perf_counter() - t > wall:
+                timed_out = True
+                proc.kill()
+                _, status, usage = os.wait4(proc.pid, 0)
+                break
+            time.sleep(0.05)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        elapsed = time.perf_counter() - t
+        err.seek(0)
+        stderr = err.read().decode("utf-8", "replace")
+    left = sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
+                  if p not in before and p.name != "_stderr" and p != tmp
+                  and str(p.relative_to(folder)) not in case.outputs and p.is_file())
+    return Result(proc.returncode, stderr, usage.ru_maxrss * 1024, elapsed, timed_out, left)
+
+
+# ---- the files ------------------------------------------------------------------------------
+
+def _png_chunk(kind: bytes, data: bytes) -> bytes:
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def png(side: int, extra: bytes = b"", value: int = 128) -> bytes:
+    """A side × side grey RGB PNG, compressed row by row; ``extra`` chunks go before the image data."""
+    z, row, parts = zlib.compressobj(9), b"\x00" + bytes([value]) * (3 * side), []
+    for _ in range(side):
+        parts.append(z.compress(row))
+    parts.append(z.flush())
+    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", side, side, 8, 2, 0, 0, 0)) + extra
+            + _png_chunk(b"IDAT", b"".join(parts)) + _png_chunk(b"IEND", b""))
+
+
+def zeros_deflated(nbytes: int) -> bytes:
+    """A zlib stream of ``nbytes`` zero bytes (about nbytes / 1000 on disk)."""
+    z, block, parts = zlib.compressobj(9), bytes(1 << 22), []
+    for _ in range(nbytes >> 22):
+        parts.append(z.compress(block))
+    return b"".join(parts) + z.flush()
+
+
+def _photo(folder: Path) -> list[str]:
+    """A small photo and its all-person mask; the arguments that pass them to relight-image."""
+    (folder / "photo.png").write_bytes(png(64))
+    (folder / "mask.png").write_bytes(png(64, value=255))
+    return ["photo.png", "--mask", "mask.png"]
+
+
+def yaml_laughs(folder: Path) -> Case:
+    """A jobs file whose ``command`` is 9⁸ strings through 8 levels of anchors and aliases (under 1 KB)."""
+    lines = ['l0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"l{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 9)}]" for i in range(1, 9)]
+    lines += ["jobs:", "  - command: *l8", "    args: [--out, x.png]"]
+    (folder / "jobs.yaml").write_text("\n".join(lines) + "\n")
+    return Case(["batch", "jobs.yaml"], "jobs.yaml")
+
+
+def yaml_deep(folder: Path) -> Case:
+    (folder / "jobs.yaml").write_text("jobs: " + "[" * 50_000 + "]" * 50_000 + "\n")
+    return Case(["batch", "jobs.yaml"], "jobs.yaml")
+
+
+def json_deep(folder: Path) -> Case:
+    (folder / "jobs.json").write_text('{"jobs": ' + "[" * 50_000 + "]" * 50_000 + "}")
+    return Case(["batch", "jobs.json"], "jobs.json")
+
+
+def json_huge_number(folder: Path) -> Case:
+    """A light .json whose coefficients are numbers of a million digits."""
+    big = "9" * 1_000_000
+    (folder / "light.json").write_text('{"sh": [' + ", ".join([f"[{big}, 1, 1]"] * 9) + "]}")
+    return Case(["light", "convert", "light.json", "out.npz"], "light.json")
+
+
+def jobs_many_empty(folder: Path) -> Case:
+    """2,000 empty job entries: every one fails at once; the summary must not be rewritten 2,000 times."""
+    (folder / "jobs.yaml").write_text("jobs:\n" + "  - {}\n" * 2000)
+    return Case(["batch", "jobs.yaml"], "jobs.yaml", expect="failed-jobs",
+                outputs=("jobs.summary.json",))
+
+
+def synth_config_laughs(folder: Path) -> Case:
+    lines = ['l0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"l{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 9)}]" for i in range(1, 9)]
+    (folder / "config.yaml").write_text("\n".join(lines) + "\nseed: *l8\n")
+    return Case(["synth", "--config", "config.yaml", "--out", "data"], "config.yaml")
+
+
+def light_npz_inflated(folder: Path) -> Case:
+    """A light ``.npz`` whose ``sh`` member inflates to 1 GiB (about 1 MB on disk)."""
+    n = 1 << 30
+    header = io.BytesIO()
+    import numpy as np
+
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f4", "fortran_order": False,
+                                                  "shape": (n // 36, 3, 3)})
+    with zipfile.ZipFile(folder / "light.npz", "w", zipfile.ZIP_DEFLATED) as z, \
+            z.open("sh.npy", "w", force_zip64=True) as f:
+        f.write(header.getvalue())
+        block = bytes(1 << 22)
+        for _ in range((n // 36 * 36) >> 22):
+            f.write(block)
+    return Case(["light", "convert", "light.npz", "out.json"], "light.npz")
+
+
+def png_ztxt(folder: Path) -> Case:
+    """A 256² PNG with three zTXt chunks of 256 MiB each once inflated (under 1 MB on disk)."""
+    text = _png_chunk(b"zTXt", b"Comment\x00\x00" + zeros_deflated(256 << 20))
+    (folder / "photo.png").write_bytes(png(256, extra=text * 3))
+    (folder / "mask.png").write_bytes(png(256, value=255))
+    return Case(["relight-image", "photo.png", "--mask", "mask.png", "--light", "studio", "--out", "out.png"],
+                "photo.png")
+
+
+def _torch_save(obj, path: Path) -> None:
+    import torch
+
+    torch.save(obj, path)
+
+
+def _shipped_state() -> dict:
+    import torch
+
+    from relightnet.model.checkpoint import SHIPPED
+
+    return torch.load(SHIPPED, weights_only=True)
+
+
+def checkpoint_laughs(folder: Path) -> Case:
+    """A checkpoint whose ``net_config`` value is 9⁹ references to one list (pickle memo)."""
+    state = _shipped_state()
+    v: list = ["lol"] * 9
+    for _ in range(9):
+        v = [v] * 9
+    state["net_config"] = {**state["net_config"], "width": v}
+    _torch_save(state, folder / "bad.pt")
+    argv = ["relight-image", *_photo(folder), "--light", "studio", "--checkpoint", "bad.pt", "--out", "out.png"]
+    return Case(argv, "bad.pt")
+
+
+def checkpoint_stride0(folder: Path) -> Case:
+    """The shipped network's weights, each one value expanded by stride 0 (a few KB on disk)."""
+    state = _shipped_state()
+    state["model"] = {k: v.reshape(-1)[:1].clone().expand(v.shape) if v.numel() > 1 else v
+                      for k, v in state["model"].items()}
+    _torch_save(state, folder / "bad.pt")
+    argv = ["relight-image", *_photo(folder), "--light", "studio", "--checkpoint", "bad.pt", "--out", "out.png"]
+    return Case(argv, "bad.pt")
+
+
+def checkpoint_wide(folder: Path) -> Case:
+    """A width-2048 network's configuration with stride-0 weights: the architecture alone is too big."""
+    import torch
+
+    from relightnet.model.network import NetConfig, RelightNet
+
+    state = _shipped_state()
+    cfg = {**state["net_config"], "width": 2048, "max_width": 4096}
+    with torch.device("meta"):
+        shapes = {k: v.shape for k, v in RelightNet(NetConfig(**cfg)).state_dict().items()}
+    state["net_config"], state["model"] = cfg, {k: torch.zeros(1).expand(s) for k, s in shapes.items()}
+    _torch_save(state, folder / "bad.pt")
+    argv = ["relight-image", *_photo(folder), "--light", "studio", "--checkpoint", "bad.pt", "--out", "out.png"]
+    return Case(argv, "bad.pt")
+
+
+CASES = {
+    "yaml-laughs": yaml_laughs,
+    "yaml-deep": yaml_deep,
+    "json-deep": json_deep,
+    "json-huge-number": json_huge_number,
+    "jobs-2000-empty": jobs_many_empty,
+    "synth-config-laughs": synth_config_laughs,
+    "light-npz-1GiB": light_npz_inflated,
+    "png-ztxt-3x256MiB": png_ztxt,
+    "checkpoint-laughs": checkpoint_laughs,
+    "checkpoint-stride0": checkpoint_stride0,
+    "checkpoint-wide": checkpoint_wide,
+}
+
+
+def describe(name: str) -> str:
+    """The first line of a case's docstring (for the benchmark's table)."""
+    doc = CASES[name].__doc__ or name
+    return doc.strip().splitlines()[0]
+
+
+if __name__ == "__main__":  # python tests/fuzz/resource_cases.py NAME FOLDER: run one case, print the result
+    folder = Path(sys.argv[2])
+    folder.mkdir(parents=True, exist_ok=True)
+    case = CASES[sys.argv[1]](folder)
+    res = run_capped(case, folder)
+    print(json.dumps({"rc": res.rc, "rss_mb": res.rss >> 20, "wall": round(res.wall, 2), "left": res.leftovers,
+                      "stderr": res.stderr[-600:]}))
