@@ -236,7 +236,30 @@ def checkpoint_wide(folder: Path) -> Case:
     return Case(argv, "bad.pt")
 
 
+def _video(path: Path, n: int, side: int = 64) -> None:
+    import numpy as np
+
+    from relightnet.io import VideoWriter
+
+    with VideoWriter(path, fps=30) as w:
+        for i in range(n):
+            w.write(np.full((side, side, 3), 20 * i, np.uint8))
+
+
+def mp4_lying_stts(folder: Path) -> Case:
+    """An 8-frame mp4 whose ``stts`` claims 20 M frames (2 KB): the avatar is rendered for its 8 real frames."""
+    _video(folder / "target.mp4", 8)
+    data = bytearray((folder / "target.mp4").read_bytes())
+    at = data.find(b"stts")
+    data[at + 12:at + 16] = struct.pack(">I", 20_000_000)
+    (folder / "target.mp4").write_bytes(bytes(data))
+    argv = ["avatar", "--target", "target.mp4", "--light", "studio", "--no-occlusion", "--n-dirs", "16",
+            "--out", "out.mp4"]
+    return Case(argv, "target.mp4", expect="ok", outputs=("out.mp4", "out.lights.npz", "out.lights.png"))
+
+
 CASES = {
+    "mp4-stts-20M-frames": mp4_lying_stts,
     "yaml-laughs": yaml_laughs,
     "yaml-deep": yaml_deep,
     "json-deep": json_deep,
