@@ -76,8 +76,14 @@ def _is_float_format(name: str) -> bool:
 
 
 def decode_options() -> dict[str, str]:
-    """FFmpeg decoder options that refuse frames above :func:`~relightnet.io.limits.max_pixels`."""
-    return {"max_pixels": str(max_pixels())}
+    """FFmpeg decoder options that refuse frames above :func:`~relightnet.io.limits.max_pixels`.
+
+    FFmpeg counts a frame's pixels with its sides padded for alignment (a 3605² PNG is 3616 ×
+    3605 to it), so its limit gets 1/16 more: the exact limit is the header check
+    (:func:`~relightnet.io.probe.check_image_file`); this one stops frames whose size only the
+    decoder knows."""
+    limit = max_pixels()
+    return {"max_pixels": str(limit + limit // 16)}
 
 
 def limit_hint() -> str:
