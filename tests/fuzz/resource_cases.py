@@ -258,7 +258,151 @@ def mp4_lying_stts(folder: Path) -> Case:
     return Case(argv, "target.mp4", expect="ok", outputs=("out.mp4", "out.lights.npz", "out.lights.png"))
 
 
+def _relight(folder: Path, photo: bytes, suffix: str = ".png") -> Case:
+    (folder / f"photo{suffix}").write_bytes(photo)
+    (folder / "mask.png").write_bytes(png(16, value=255))
+    return Case(["relight-image", f"photo{suffix}", "--mask", "mask.png", "--light", "studio", "--out", "out.png"],
+                f"photo{suffix}")
+
+
+def png_8000(folder: Path) -> Case:
+    """A black 8000² PNG (about 270 KB): above the pixel limit, refused from its header."""
+    return _relight(folder, png(8000, value=0))
+
+
+def gif_bomb(folder: Path) -> Case:
+    """A GIF whose screen is 16² but whose one image claims 65535² (a few dozen bytes)."""
+    head = b"GIF89a" + struct.pack("<HHBBB", 16, 16, 0, 0, 0)
+    image = b"," + struct.pack("<HHHHB", 0, 0, 65535, 65535, 0) + b"\x02\x02\x44\x01\x00;"
+    return _relight(folder, head + image, ".gif")
+
+
+def webp_bomb(folder: Path) -> Case:
+    """A WebP (VP8X) canvas of 16384² (30 bytes)."""
+    body = b"WEBP" + b"VP8X" + struct.pack("<I", 10) + b"\x00" * 4 + (16383).to_bytes(3, "little") * 2
+    return _relight(folder, b"RIFF" + struct.pack("<I", len(body)) + body, ".webp")
+
+
+def tiff_bomb(folder: Path) -> Case:
+    """A TIFF whose IFD says 100000 × 100000 pixels (under 100 bytes)."""
+    entries = [(256, 4, 1, 100000), (257, 4, 1, 100000), (258, 3, 1, 8), (259, 3, 1, 1), (262, 3, 1, 1),
+               (273, 4, 1, 8), (277, 3, 1, 1), (278, 4, 1, 100000), (279, 4, 1, 10**10 % 2**32)]
+    ifd = struct.pack("<H", len(entries)) + b"".join(struct.pack("<HHII", *e) for e in entries) + b"\0" * 4
+    return _relight(folder, b"II*\x00" + struct.pack("<I", 8) + ifd, ".tif")
+
+
+def photo_12mp(folder: Path) -> Case:
+    """A valid 4000 × 3000 photo (12 MP, the largest common phone size): relit within the budget."""
+    side_w, side_h = 4000, 3000
+    z, row, parts = zlib.compressobj(6), b"\x00" + bytes([140, 120, 100]) * side_w, []
+    for _ in range(side_h):
+        parts.append(z.compress(row))
+    parts.append(z.flush())
+    data = (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", side_w, side_h, 8, 2, 0, 0, 0))
+            + _png_chunk(b"IDAT", b"".join(parts)) + _png_chunk(b"IEND", b""))
+    (folder / "photo.png").write_bytes(data)
+    import numpy as np
+
+    from relightnet.io import write_image
+
+    mask = np.zeros((side_h, side_w, 3), np.uint8)
+    mask[500:2800, 1200:2800] = 255
+    write_image(folder / "mask.png", mask, srgb=False)
+    return Case(["relight-image", "photo.png", "--mask", "mask.png", "--light", "studio", "--out", "out.png"],
+                "photo.png", expect="ok", outputs=("out.png",))
+
+
+def exr_8000(folder: Path) -> Case:
+    """An EXR environment map whose data and display windows say 8000² (a 16² file, patched)."""
+    import numpy as np
+    import torch
+
+    from relightnet.io import write_envmap
+
+    write_envmap(folder / "env.exr", torch.from_numpy(np.full((16, 16, 3), 0.5, np.float32)))
+    data = bytearray((folder / "env.exr").read_bytes())
+    for name in (b"dataWindow", b"displayWindow"):
+        at = data.find(name + b"\0box2i\0") + len(name) + 7 + 4
+        data[at:at + 16] = struct.pack("<iiii", 0, 0, 7999, 7999)
+    (folder / "env.exr").write_bytes(bytes(data))
+    return Case(["light", "convert", "env.exr", "out.npz"], "env.exr")
+
+
+def exr_at_limit(folder: Path) -> Case:
+    """A 5000 × 2500 environment map (12.5 MP, at the default limit) projected to SH within the budget."""
+    import numpy as np
+    import torch
+
+    from relightnet.io import write_envmap
+
+    y, x = np.mgrid[0:2500, 0:5000].astype(np.float32)
+    env = np.stack([x / 5000, y / 2500, np.full_like(x, 0.5)], -1)
+    write_envmap(folder / "env.exr", torch.from_numpy(env))
+    return Case(["light", "convert", "env.exr", "out.npz"], "env.exr", expect="ok", outputs=("out.npz",))
+
+
+def stl_in_zip(folder: Path) -> Case:
+    """A zip (0.5 MB) holding a binary STL with 10 M faces (477 MiB uncompressed)."""
+    n = 10_000_000
+    with zipfile.ZipFile(folder / "mesh.zip", "w", zipfile.ZIP_DEFLATED) as z, \
+            z.open("mesh.stl", "w", force_zip64=True) as f:
+        f.write(bytes(80) + struct.pack("<I", n))
+        block = bytes(50 * 100_000)
+        for _ in range(n // 100_000):
+            f.write(block)
+    return Case(["render", "mesh.zip", "--light", "studio", "--out", "out.png"], "mesh.zip")
+
+
+def nested_zip(folder: Path) -> Case:
+    """A zip holding a zip holding a mesh."""
+    inner = io.BytesIO()
+    with zipfile.ZipFile(inner, "w") as z:
+        z.writestr("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with zipfile.ZipFile(folder / "mesh.zip", "w") as z:
+        z.writestr("inner.zip", inner.getvalue())
+    return Case(["render", "mesh.zip", "--light", "studio", "--out", "out.png"], "mesh.zip")
+
+
+def stl_lying_header(folder: Path) -> Case:
+    """A binary STL whose header claims 2³² − 1 faces (84 bytes)."""
+    (folder / "mesh.stl").write_bytes(bytes(80) + struct.pack("<I", 2**32 - 1))
+    return Case(["render", "mesh.stl", "--light", "studio", "--out", "out.png"], "mesh.stl")
+
+
+def obj_fifo_mtllib(folder: Path) -> Case:
+    """An OBJ whose ``mtllib`` is a FIFO beside it: the FIFO is never opened, the mesh renders."""
+    (folder / "tri.obj").write_text("mtllib pipe.mtl\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
+    os.mkfifo(folder / "pipe.mtl")
+    return Case(["render", "tri.obj", "--light", "studio", "--res", "64", "--n-dirs", "16", "--out", "out.png"],
+                "tri.obj", expect="ok", outputs=("out.png", "pipe.mtl"))
+
+
+def gltf_fifo_buffer(folder: Path) -> Case:
+    """A glTF whose buffer ``uri`` is a FIFO beside it."""
+    doc = {"asset": {"version": "2.0"}, "buffers": [{"uri": "pipe.bin", "byteLength": 36}],
+           "bufferViews": [{"buffer": 0, "byteLength": 36}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "nodes": [{"mesh": 0}],
+           "scenes": [{"nodes": [0]}]}
+    (folder / "mesh.gltf").write_text(json.dumps(doc))
+    os.mkfifo(folder / "pipe.bin")
+    return Case(["render", "mesh.gltf", "--light", "studio", "--out", "out.png"], "mesh.gltf",
+                outputs=("pipe.bin",))
+
+
 CASES = {
+    "png-8000x8000": png_8000,
+    "gif-65535x65535-frame": gif_bomb,
+    "webp-16384x16384": webp_bomb,
+    "tiff-100000x100000": tiff_bomb,
+    "photo-12MP-relit": photo_12mp,
+    "exr-8000x8000": exr_8000,
+    "exr-12.5MP-projected": exr_at_limit,
+    "zip-stl-10M-faces": stl_in_zip,
+    "zip-in-zip": nested_zip,
+    "stl-header-4G-faces": stl_lying_header,
+    "obj-mtllib-fifo": obj_fifo_mtllib,
+    "gltf-buffer-fifo": gltf_fifo_buffer,
     "mp4-stts-20M-frames": mp4_lying_stts,
     "yaml-laughs": yaml_laughs,
     "yaml-deep": yaml_deep,
