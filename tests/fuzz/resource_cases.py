@@ -30,6 +30,9 @@ RSS_BUDGET = 2 << 30
 AS_CAP = 4 << 30
 #: Wall-clock cap of the child (a hang, not a slow run on a loaded machine).
 WALL_CAP = 120.0
+#: Files a third-party library writes in TMPDIR on import, not relightnet: onnxruntime's native
+#: library keeps a 51-byte ``$TMPDIR/.ses`` (one fixed name, rewritten, never more than one).
+THIRD_PARTY_TMP = ("_tmp/.ses",)
 
 
 @dataclass
@@ -83,7 +86,7 @@ def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
         stderr = err.read().decode("utf-8", "replace")
     left = sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
                   if p not in before and p.name != "_stderr" and p != tmp
-                  and str(p.relative_to(folder)) not in case.outputs and p.is_file())
+                  and str(p.relative_to(folder)) not in case.outputs + THIRD_PARTY_TMP and p.is_file())
     return Result(proc.returncode, stderr, usage.ru_maxrss * 1024, elapsed, timed_out, left)
 
 
@@ -390,7 +393,56 @@ def gltf_fifo_buffer(folder: Path) -> Case:
                 outputs=("pipe.bin",))
 
 
+def onnx_bytes(side: int = 30000) -> bytes:
+    """A graph with relightnet's inputs and outputs whose albedo multiplies by the sum of a
+    ConstantOfShape of side² (a few hundred bytes; ONNX Runtime would fold it when making the session)."""
+    import numpy as np
+    from onnx import TensorProto, helper, numpy_helper
+
+    f, b = TensorProto.FLOAT, TensorProto.BOOL
+    inputs = [helper.make_tensor_value_info("image", f, ["batch", 3, "h", "w"]),
+              helper.make_tensor_value_info("mask", f, ["batch", 1, "h", "w"]),
+              helper.make_tensor_value_info("light_state", f, ["batch", 1, 9, 3]),
+              helper.make_tensor_value_info("is_first", b, ["batch"])]
+    outputs = [helper.make_tensor_value_info(n, f, None) for n in
+               ("albedo", "transport", "light_raw", "light_smoothed", "light_state_out")]
+    nodes = [
+        helper.make_node("Constant", [], ["shape"], value=numpy_helper.from_array(np.array([side, side], np.int64))),
+        helper.make_node("ConstantOfShape", ["shape"], ["big"],
+                         value=numpy_helper.from_array(np.array([1.0], np.float32))),
+        helper.make_node("ReduceSum", ["big"], ["total"], keepdims=0),
+        helper.make_node("Mul", ["image", "total"], ["albedo"]),
+        helper.make_node("Concat", ["image", "image", "image"], ["transport"], axis=1),
+        helper.make_node("Constant", [], ["one"], value=numpy_helper.from_array(np.array([1], np.int64))),
+        helper.make_node("Squeeze", ["light_state", "one"], ["light_raw"]),
+        helper.make_node("Identity", ["light_raw"], ["light_smoothed"]),
+        helper.make_node("Identity", ["light_state"], ["light_state_out"]),
+    ]
+    graph = helper.make_graph(nodes, "bomb", inputs, outputs)
+    return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)]).SerializeToString()
+
+
+def onnx_constant_of_shape(folder: Path) -> Case:
+    """An ONNX graph (under 1 KB) with relightnet's inputs and outputs and a ConstantOfShape of 30000²."""
+    (folder / "model.onnx").write_bytes(onnx_bytes(30000))
+    _video(folder / "v.mp4", 2, 32)
+    return Case(["onnx-run", "model.onnx", "--video", "v.mp4", "--out-dir", "out"], "model.onnx")
+
+
+def onnx_wrong_outputs(folder: Path) -> Case:
+    """An ONNX graph with relightnet's input names only (its one output is a ConstantOfShape of 300000²)."""
+    import onnx
+
+    proto = onnx.load_from_string(onnx_bytes(300000))
+    del proto.graph.output[1:]
+    (folder / "model.onnx").write_bytes(proto.SerializeToString())
+    _video(folder / "v.mp4", 2, 32)
+    return Case(["onnx-run", "model.onnx", "--video", "v.mp4", "--out-dir", "out"], "model.onnx")
+
+
 CASES = {
+    "onnx-constant-of-shape-30000": onnx_constant_of_shape,
+    "onnx-other-outputs": onnx_wrong_outputs,
     "png-8000x8000": png_8000,
     "gif-65535x65535-frame": gif_bomb,
     "webp-16384x16384": webp_bomb,
