@@ -261,14 +261,16 @@ def frames_with_masks(video, masks, allow_empty: bool = False
 
     Returns:
         (video info, mask count, iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W))).
-        The iterator raises :class:`InputError` when the counts differ (also for containers
-        that do not store a frame count), a mask's size differs from its frame, or a mask is
-        empty (unless ``allow_empty``).
+        The counts are compared before any frame is decoded (both counted from the packets
+        really in the files, :func:`count_frames`); the iterator raises :class:`InputError`
+        when a mask's size differs from its frame, a mask is empty (unless ``allow_empty``),
+        or a damaged file decodes fewer frames than it holds.
     """
     info = video_info(video)
     n_masks, mask_iter = read_masks(masks)
-    if info.n_frames and info.n_frames != n_masks:
-        raise InputError(f"{masks}: {n_masks} masks for {info.n_frames} video frames")
+    n_frames = count_frames(video)
+    if n_frames != n_masks:
+        raise InputError(f"{masks}: {n_masks} masks for {n_frames} video frames")
 
     def pairs():
         for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
