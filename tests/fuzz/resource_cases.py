@@ -13,7 +13,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import resource
 import struct
 import subprocess
 import sys
@@ -55,20 +54,39 @@ class Result:
     leftovers: list[str]
 
 
+#: The child: caps its own address space, runs ``relightnet`` as ``python -m relightnet.cli``
+#: would, and at exit records its peak RSS (``VmHWM`` of its own memory map). ``ru_maxrss``
+#: from ``wait4`` would also count the parent's RSS at fork time (Linux carries the old memory
+#: map's high-water mark across ``exec``), which inside a test session is hundreds of MB.
+_CHILD = """
+import atexit, resource, runpy, sys
+cap, out = int(sys.argv[1]), sys.argv[2]
+resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+def _peak():
+    with open("/proc/self/status") as f:
+        kb = next(line.split()[1] for line in f if line.startswith("VmHWM:"))
+    with open(out, "w") as f:
+        f.write(kb)
+
+atexit.register(_peak)
+sys.argv = ["relightnet", *sys.argv[3:]]
+runpy.run_module("relightnet.cli", run_name="__main__", alter_sys=True)
+"""
+
+
 def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
     """Run ``relightnet *case.argv`` in ``folder`` capped; what it left in ``folder`` and its TMPDIR."""
     tmp = folder / "_tmp"
     tmp.mkdir(exist_ok=True)
     before = {p for p in folder.rglob("*") if tmp not in p.parents}
     env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(tmp), OMP_NUM_THREADS="1")
-
-    def cap() -> None:
-        resource.setrlimit(resource.RLIMIT_AS, (AS_CAP, AS_CAP))
+    peak_file = folder / "_peak"
 
     with open(folder / "_stderr", "w+b") as err:
         t = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-m", "relightnet.cli", *case.argv], cwd=folder, env=env,
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, preexec_fn=cap)
+        proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(AS_CAP), str(peak_file), *case.argv], cwd=folder,
+                                env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err)
         timed_out = False
         while True:
             pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
@@ -84,10 +102,15 @@ def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
         elapsed = time.perf_counter() - t
         err.seek(0)
         stderr = err.read().decode("utf-8", "replace")
+    try:
+        rss = int(peak_file.read_text()) * 1024
+        peak_file.unlink()
+    except (OSError, ValueError):  # killed before its exit handler ran
+        rss = usage.ru_maxrss * 1024
     left = sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
                   if p not in before and p.name != "_stderr" and p != tmp
                   and str(p.relative_to(folder)) not in case.outputs + THIRD_PARTY_TMP and p.is_file())
-    return Result(proc.returncode, stderr, usage.ru_maxrss * 1024, elapsed, timed_out, left)
+    return Result(proc.returncode, stderr, rss, elapsed, timed_out, left)
 
 
 # ---- the files ------------------------------------------------------------------------------

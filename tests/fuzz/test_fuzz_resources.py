@@ -41,14 +41,21 @@ def test_hostile_file_is_bounded(tmp_path, name):
     assert res.leftovers == [], f"{name}: left {res.leftovers}"
 
 
-def test_an_allocation_over_the_cap_fails(tmp_path):
-    """The address-space cap the cases run under does stop a child that asks for more."""
-    import resource
+def test_the_caps_and_the_peak_are_real(tmp_path):
+    """The child the cases run in cannot allocate beyond its cap, and its peak RSS is its own: a
+    gigabyte more in this process does not change what the same command measures."""
     import subprocess
 
-    def cap():
-        resource.setrlimit(resource.RLIMIT_AS, (rc.AS_CAP, rc.AS_CAP))
-
-    proc = subprocess.run([sys.executable, "-c", f"b = bytearray({rc.AS_CAP})"], preexec_fn=cap,
+    script = rc._CHILD.replace('runpy.run_module("relightnet.cli", run_name="__main__", alter_sys=True)',
+                               f"b = bytearray({rc.AS_CAP})")
+    proc = subprocess.run([sys.executable, "-c", script, str(rc.AS_CAP), str(tmp_path / "p"), "x"],
                           capture_output=True, text=True)
     assert proc.returncode == 1 and "MemoryError" in proc.stderr
+    (tmp_path / "photo.png").write_bytes(rc.png(64))
+    case = rc.Case(["light", "show", "studio", "--out", "s.png"], "", expect="ok", outputs=("s.png",))
+    first = rc.run_capped(case, tmp_path)
+    ballast = bytearray(1 << 30)
+    ballast[:: 1 << 12] = b"\x01" * ((1 << 30) >> 12)  # touched: resident in this process
+    second = rc.run_capped(case, tmp_path)
+    assert first.rc == second.rc == 0, second.stderr
+    assert 100 << 20 < first.rss < 1 << 30 and abs(second.rss - first.rss) < 64 << 20, (first.rss, second.rss)
