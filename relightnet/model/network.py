@@ -33,7 +33,7 @@ from ..render.shading import shade, shading, to_channels_first, to_channels_last
 from .light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
-           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map"]
+           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
 
 
 #: How the network gets its light (see the module docstring).
