@@ -97,7 +97,8 @@ def check_graph(proto, path, batch: int, height: int, width: int) -> None:
             raise InputError(f"{path}: tensor {vi.name[:60]!r} would hold {dims} = {math.prod(dims):.3g} values; "
                              f"at most {MAX_ACTIVATION:.3g} (relightnet.model.checkpoint.MAX_ACTIVATION)")
     shapes = {o.name: _dims(o) for o in inferred.graph.output}
-    k = (shapes.get("light_raw") or [0, 0])[1]
+    raw = shapes.get("light_raw") or []
+    k = raw[1] if len(raw) == 3 else 0
     want = {"albedo": [batch, 3, height, width], "transport": [batch, k, height, width],
             "light_raw": [batch, k, 3], "light_smoothed": [batch, k, 3]}
     for name, shape in want.items():
