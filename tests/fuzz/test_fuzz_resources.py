@@ -18,6 +18,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import resource_cases as rc  # noqa: E402
+import resource_runner  # noqa: E402
 
 sys.path.pop(0)
 
@@ -46,7 +47,7 @@ def test_the_caps_and_the_peak_are_real(tmp_path):
     gigabyte more in this process does not change what the same command measures."""
     import subprocess
 
-    script = rc._CHILD.replace('runpy.run_module("relightnet.cli", run_name="__main__", alter_sys=True)',
+    script = resource_runner._CHILD.replace('runpy.run_module("relightnet.cli", run_name="__main__", alter_sys=True)',
                                f"b = bytearray({rc.AS_CAP})")
     proc = subprocess.run([sys.executable, "-c", script, str(rc.AS_CAP), str(tmp_path / "p"), "x"],
                           capture_output=True, text=True)
