@@ -72,7 +72,7 @@ def check_regular_file(path: str | os.PathLike, what: str) -> int:
         raise InputError(f"{path}: {what} not found") from None
     if not stat.S_ISREG(st.st_mode):
         kind = "a folder" if stat.S_ISDIR(st.st_mode) else "a FIFO" if stat.S_ISFIFO(st.st_mode) else "a special file"
-        raise InputError(f"{path}: not a regular file ({kind}); expected {what}")
+        raise InputError(f"{path}: not a regular file ({kind}); expected a {what}")
     return st.st_size
 
 
