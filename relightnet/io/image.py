@@ -56,10 +56,9 @@ def to_uint8(img, srgb: bool = True) -> torch.Tensor:
     if not img.is_floating_point():
         raise InputError(f"image: expected float (linear) or uint8 values, got {img.dtype}")
     check_finite(img, "image")
-    x = img.float()
-    if srgb:
-        x = linear_to_srgb(x)
-    return (x.clamp(0, 1) * 255).round().to(torch.uint8)
+    x = linear_to_srgb(img.float()) if srgb else img.float()
+    x = x.clamp(0, 1) if x is img else x.clamp_(0, 1)  # one temporary at most (a 12 MP frame is 144 MB)
+    return x.mul_(255).round_().to(torch.uint8)
 
 
 def _encode(codec: str, frame: av.VideoFrame) -> bytes:
