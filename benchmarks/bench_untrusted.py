@@ -1,6 +1,12 @@
 """Oversized images are refused before decoding: time and peak memory, each in a fresh process.
 
     python benchmarks/bench_untrusted.py [--side 12000] [--runs 3]
+    python benchmarks/bench_untrusted.py --resources [NAME ...]
+
+``--resources`` runs the hostile small files of ``tests/fuzz/resource_cases.py`` (issue 27's
+table and variants) as real commands, each in a child capped in address space and wall
+clock, and prints per case: the exit status, peak RSS (``os.wait4``), wall time, whether
+anything was left behind, and the error line.
 
 Writes a side × side black PNG (streamed: a few hundred KB on disk, side² × 3 bytes decoded)
 and measures, in child processes:
@@ -82,11 +88,39 @@ def child_import() -> float:
     return time.perf_counter() - t
 
 
+def resources(names: list[str]) -> None:
+    """The table of the resource cases (see the module docstring)."""
+    sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
+    import resource_cases as rc
+
+    print(f"budget: peak RSS <= {rc.RSS_BUDGET >> 20} MiB; child capped at {rc.AS_CAP >> 30} GiB address space "
+          f"and {rc.WALL_CAP:.0f} s")
+    print("| case | file | command | exit | peak RSS | wall | left behind | result |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in names or list(rc.CASES):
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            case = rc.CASES[name](folder)
+            size = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+            res = rc.run_capped(case, folder)
+        lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+        line = (lines[-1] if lines else "").replace("|", "/")
+        line = line if len(line) <= 110 else line[:107] + "..."
+        status = "timed out" if res.timed_out else str(res.rc)
+        print(f"| {name} | {size / 1e3:,.0f} KB | {case.argv[0]} | {status} | {res.rss / 2**20:,.0f} MiB | "
+              f"{res.wall:.1f} s | {', '.join(res.leftovers) or 'nothing'} | "
+              f"{line if res.rc else 'ok: ' + ', '.join(case.outputs[:1])} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--side", type=int, default=12000)
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--resources", nargs="*", default=None, metavar="NAME")
     args = ap.parse_args()
+    if args.resources is not None:
+        resources(args.resources)
+        return
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         big, small = tmp / "big.png", tmp / "small.png"

@@ -36,3 +36,21 @@ def test_relight_image_checks_before_work(tmp_path, capsys):
                                    str(tmp_path / "out" / "r.png")]))
     assert "p.jpg" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+def test_a_light_sequence_for_one_light_is_an_input_error(tmp_path, capsys):
+    """--light takes one light: a (T, K, 3) sequence is refused in one line naming the option (an
+    InputError, not a ValueError)."""
+    import numpy as np
+    import torch
+
+    from relightnet.io import write_image
+    from relightnet.sh import save_light_sequence
+
+    write_image(tmp_path / "p.png", np.full((32, 32, 3), 128, np.uint8), srgb=False)
+    write_image(tmp_path / "m.png", np.full((32, 32, 3), 255, np.uint8), srgb=False)
+    save_light_sequence(tmp_path / "seq.npz", torch.zeros(4, 9, 3))
+    line = _one_line(capsys, main(["relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"),
+                                   "--light", str(tmp_path / "seq.npz"), "--out", str(tmp_path / "r.png")]))
+    assert "InputError: --light" in line and "expected one light (K, 3), got a sequence (4, 9, 3)" in line
+    assert not (tmp_path / "r.png").exists()

@@ -213,7 +213,7 @@ def load_single_light(arg: str, lmax: int | None = None):
 
     light = load_light(arg, lmax=lmax)
     if light.dim() != 2:
-        raise ValueError(f"--light {arg}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
+        raise InputError(f"--light {arg}: expected one light (K, 3), got a sequence {tuple(light.shape)}")
     return light
 
 

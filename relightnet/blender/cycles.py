@@ -16,9 +16,11 @@ Cycles and albedo·π·c in relightnet).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import re
+import shutil
 import tempfile
 import time
 from collections.abc import Iterator
@@ -34,7 +36,12 @@ from ._bpy import import_bpy, quiet
 logger = logging.getLogger(__name__)
 
 __all__ = ["CYCLES_TO_RELIGHTNET", "CyclesFrame", "configure_cycles", "open_blend", "read_image_pixels",
-           "render_current", "render_blend"]
+           "render_current", "render_blend", "check_render_settings", "MAX_SAMPLES", "MAX_FRAMES"]
+
+#: Most Cycles samples per pixel a .blend may ask for (relightnet's references use 64-1024).
+MAX_SAMPLES = 4096
+#: Most frames rendered from one .blend (an hour at 30 fps is 108,000).
+MAX_FRAMES = 200_000
 
 #: relightnet's pixel values are π times Cycles' for the same scene (module docstring).
 CYCLES_TO_RELIGHTNET = float(np.pi)
@@ -103,6 +110,25 @@ def read_image_pixels(image) -> np.ndarray:
     buf = np.empty(w * h * c, dtype=np.float32)
     image.pixels.foreach_get(buf)
     return np.ascontiguousarray(buf.reshape(h, w, c)[::-1])
+
+
+def check_render_settings(path, width: int, height: int, percent: int, samples: int, n_frames: int) -> None:
+    """Refuse a .blend's render settings above the limits before Blender renders anything:
+    the output size (resolution × percentage) above :func:`~relightnet.io.limits.max_pixels`
+    (``--max-pixels``), more than :data:`MAX_SAMPLES` samples or :data:`MAX_FRAMES` frames.
+
+    Raises:
+        InputError: naming the file and the setting.
+    """
+    from ..io.limits import check_pixels
+
+    w, h = int(width) * int(percent) // 100, int(height) * int(percent) // 100
+    check_pixels(w, h, f"{path}: render output")
+    if not 1 <= int(samples) <= MAX_SAMPLES:
+        raise InputError(f"{path}: asks for {samples} Cycles samples per pixel; 1 to {MAX_SAMPLES} are rendered "
+                         "(--spp overrides the file)")
+    if not 1 <= int(n_frames) <= MAX_FRAMES:
+        raise InputError(f"{path}: asks for {n_frames} frames; 1 to {MAX_FRAMES} are rendered (--frames)")
 
 
 def open_blend(path) -> object:
@@ -188,6 +214,25 @@ def _frame_range(scene, frames) -> range:
     return range(a, b)
 
 
+@contextlib.contextmanager
+def _staging(out: Path | None):
+    """A folder for Blender's raw frames: in ``out``, named for this process (:func:`~relightnet.io.atomic.temp_path`)
+    so the next render into ``out`` removes it if this one is killed; removed at the end."""
+    if out is None:
+        with tempfile.TemporaryDirectory() as tmp:
+            yield tmp
+        return
+    from ..io.atomic import remove_stale, temp_path
+
+    remove_stale(out / "frames")
+    tmp = temp_path(out / "frames", "stage")
+    tmp.mkdir()
+    try:
+        yield str(tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
 def render_blend(
     path,
     out_dir=None,
@@ -227,6 +272,9 @@ def render_blend(
     scene = open_blend(path)
     configure_cycles(scene, spp, bounces, threads, denoise, filter_width, seed)
     todo = _frame_range(scene, frames)
+    r = scene.render
+    check_render_settings(path, r.resolution_x, r.resolution_y, r.resolution_percentage, scene.cycles.samples,
+                          len(todo))
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
     total = len(todo) * scene.cycles.samples
@@ -236,7 +284,7 @@ def render_blend(
 
         bar = tqdm(total=total, desc="cycles", unit="spp", leave=True)
     scale = None if exposure == "auto" else float(exposure)
-    with tempfile.TemporaryDirectory(dir=out) as tmp:
+    with _staging(out) as tmp:
         try:
             for k, t in enumerate(todo):
                 scene.frame_set(scene.frame_start + t)

@@ -9,7 +9,6 @@ process can make any sample (or shard) independently.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..checks import InputError
+from ..io.documents import clip, short
 
 __all__ = ["SPLITS", "HDRI_NAMES", "SynthConfig", "load_config", "sample_seed"]
 
@@ -96,11 +96,11 @@ class SynthConfig:
         except InputError:
             raise
         except (TypeError, ValueError, OverflowError) as e:  # a value of the wrong type (a list for a number, ...)
-            raise InputError(f"config: a value has the wrong type ({e})") from None
+            raise InputError(f"config: a value has the wrong type ({clip(str(e), 160)})") from None
 
     def _validate(self) -> None:
         def bad(name, expected):
-            raise InputError(f"config {name}: expected {expected}, got {getattr(self, name)!r}")
+            raise InputError(f"config {name}: expected {expected}, got {short(getattr(self, name))}")
 
         if not isinstance(self.seed, int) or self.seed < 0:
             bad("seed", "an integer >= 0")
@@ -174,25 +174,16 @@ class SynthConfig:
             raise InputError(f"config: expected a mapping of config keys, got {type(d).__name__}")
         unknown = set(d) - {f.name for f in dataclasses.fields(cls)}
         if unknown:
-            raise InputError(f"config: unknown keys {sorted(unknown)}")
+            raise InputError(f"config: unknown keys {short(sorted(map(str, unknown)))}")
         return cls(**d)
 
 
 def load_config(path) -> SynthConfig:
     """Read a :class:`SynthConfig` from a ``.json`` or ``.yaml``/``.yml`` file."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: config file not found")
-    try:
-        text = path.read_bytes().decode("utf-8")
-        if path.suffix.lower() in (".yaml", ".yml"):
-            import yaml
+    from ..io.documents import read_document
 
-            d = yaml.safe_load(text)
-        else:
-            d = json.loads(text)
-    except Exception as e:
-        raise InputError(f"{path}: unreadable config ({e})") from None
+    path = Path(path)
+    d = read_document(path, "config file", yaml_ok=path.suffix.lower() in (".yaml", ".yml"))
     if not isinstance(d, dict):
         raise InputError(f"{path}: expected a mapping of config keys")
     return SynthConfig.from_dict(d)
@@ -207,9 +198,9 @@ def sample_seed(cfg: SynthConfig, split: str, index: int) -> np.random.SeedSeque
     if not isinstance(cfg, SynthConfig):
         raise InputError(f"cfg: expected a SynthConfig, got {type(cfg).__name__}")
     if split not in SPLITS:
-        raise InputError(f"split: expected one of {SPLITS}, got {split!r}")
+        raise InputError(f"split: expected one of {SPLITS}, got {short(split)}")
     if isinstance(index, bool) or not isinstance(index, int | np.integer):
-        raise InputError(f"index: expected an integer, got {index!r}")
+        raise InputError(f"index: expected an integer, got {short(index)}")
     if index < 0:
         raise InputError(f"index: expected >= 0, got {index}")
     return np.random.SeedSequence([cfg.seed, SPLITS.index(split), int(index)])

@@ -203,10 +203,9 @@ def load_manifest(out_dir) -> dict:
     path = out_dir / MANIFEST_NAME
     if not path.is_file():
         raise InputError(f"{path}: no manifest (not a dataset folder made by 'relightnet synth')")
-    try:
-        m = json.loads(path.read_bytes().decode("utf-8"))
-    except (OSError, ValueError, RecursionError) as e:
-        raise InputError(f"{path}: unreadable manifest ({type(e).__name__}: {str(e)[:200]})") from None
+    from ..io.documents import read_document
+
+    m = read_document(path, "dataset manifest", yaml_ok=False)
     if not isinstance(m, dict) or m.get("format") != FORMAT:
         raise InputError(f"{path}: expected a manifest of format {FORMAT!r}")
     _check_manifest(m, path)

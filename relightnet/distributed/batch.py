@@ -7,8 +7,9 @@ semantics are the same: a bad entry fails alone with its one-line reason, a cras
 retried, a job whose output already exists complete is skipped (outputs are written
 atomically, so an existing ``--out`` file is complete; an ``--out`` folder counts as
 complete when the previous summary says that job was done), and the summary
-``JOBS.summary.json`` (beside the jobs file) is rewritten atomically after every job, so a
-killed driver resumes by running the same command again. Each job's output (stdout and
+``JOBS.summary.json`` (beside the jobs file) is rewritten atomically as jobs end (at most
+once every :data:`SUMMARY_INTERVAL` seconds, and at the end), so a killed driver resumes by
+running the same command again. Each job's output (stdout and
 stderr, the last 20,000 characters) goes to ``JOBS.logs/NNN.log``.
 """
 
@@ -18,6 +19,7 @@ import json
 import logging
 import math
 import os
+import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
@@ -29,6 +31,9 @@ __all__ = ["run_batch", "summary_path", "SUMMARY_FORMAT"]
 logger = logging.getLogger("relightnet.distributed")
 
 SUMMARY_FORMAT = "relightnet-batch/1"
+#: Least seconds between two rewrites of the summary while jobs run (thousands of jobs that
+#: end at once, e.g. bad entries, would otherwise rewrite it thousands of times).
+SUMMARY_INTERVAL = 2.0
 
 
 def summary_path(jobs_file) -> Path:
@@ -138,10 +143,15 @@ def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) 
     summary = {"format": SUMMARY_FORMAT, "jobs_file": str(jobs_file), "runner": "ray" if ray else "local",
                "counts": {}, "jobs": records}
 
-    def write() -> None:
+    last = [-math.inf]
+
+    def write(force: bool = True) -> None:
+        if not force and time.monotonic() - last[0] < SUMMARY_INTERVAL:
+            return
         summary["counts"] = _counts(records)
         with atomic_write(spath, "w") as f:
             f.write(json.dumps(summary, indent=1) + "\n")
+        last[0] = time.monotonic()
 
     bar = tqdm(total=len(jobs), unit="job", desc="batch", disable=not progress, dynamic_ncols=True)
 
@@ -156,7 +166,7 @@ def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) 
         logger.info("job %d (%s): %s%s", job.index, " ".join([job.command, *([job.out] if job.out else [])]),
                     rec["status"], f": {rec['error']}" if rec["error"] else "")
         bar.update(1)
-        write()
+        write(force=False)
 
     todo = []
     for job in jobs:

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..checks import InputError
+from ..io.documents import short
 
 __all__ = ["Job", "load_jobs", "batchable_commands", "execute_job", "NOT_BATCHABLE"]
 
@@ -94,11 +95,11 @@ def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> tuple[argparse.N
 def _resources(entry: dict) -> tuple[float, float]:
     res = entry.get("resources") or {}
     if not isinstance(res, dict):
-        raise ValueError(f"resources: expected a mapping such as {{cpus: 2, gpus: 1}}, got {res!r}")
+        raise ValueError(f"resources: expected a mapping such as {{cpus: 2, gpus: 1}}, got {short(res)}")
     cpus, gpus = res.get("cpus", 1), res.get("gpus", 0)
     for name, v, lo in (("cpus", cpus, "> 0"), ("gpus", gpus, ">= 0")):
         if isinstance(v, bool) or not isinstance(v, int | float) or not (v > 0 if name == "cpus" else v >= 0):
-            raise ValueError(f"resources.{name}: expected a number {lo}, got {v!r}")
+            raise ValueError(f"resources.{name}: expected a number {lo}, got {short(v)}")
     return float(cpus), float(gpus)
 
 
@@ -107,12 +108,14 @@ def _job(index: int, entry, parser, commands: list[str]) -> Job:
     if not isinstance(entry, dict):
         return Job(index, "?", (), error=f"expected a mapping with command and args, got {type(entry).__name__}")
     command, args = entry.get("command"), entry.get("args", [])
-    shown = str(command) if command is not None else "?"
+    shown = command[:40] if isinstance(command, str) else "?" if command is None else short(command, 40)
     if not isinstance(args, list) or any(isinstance(a, dict | list | bool) or a is None for a in args):
-        return Job(index, shown, (), error=f"args: expected a list of strings as on the command line, got {args!r}")
+        return Job(index, shown, (),
+                   error=f"args: expected a list of strings as on the command line, got {short(args)}")
     args = tuple(str(a) for a in args)
     if command not in commands:
-        return Job(index, shown, args, error=f"unknown command {command!r}: expected one of {', '.join(commands)}")
+        return Job(index, shown, args,
+                   error=f"unknown command {short(command, 40)}: expected one of {', '.join(commands)}")
     try:
         cpus, gpus = _resources(entry)
     except ValueError as e:
@@ -134,15 +137,10 @@ def load_jobs(path) -> list[Job]:
     Raises:
         InputError: the file is missing, unreadable, not YAML/JSON, or has no ``jobs`` list.
     """
-    import yaml
+    from ..io.documents import read_document
 
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: jobs file not found")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
-        raise InputError(f"{path}: unreadable jobs file ({type(e).__name__}: {str(e).splitlines()[0]})") from None
+    data = read_document(path, "jobs file")
     if not isinstance(data, dict) or not isinstance(data.get("jobs"), list):
         raise InputError(f"{path}: expected a mapping with a 'jobs' list ({{jobs: [{{command: ..., args: [...]}}]}})")
     parser = _cli_parser()

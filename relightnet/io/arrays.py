@@ -51,14 +51,27 @@ def _first_line(e: BaseException) -> str:
     return lines[0][:200] if lines else "no detail"
 
 
-def _read_data(f: IO[bytes], shape, fortran: bool, dtype: np.dtype, available: int, what: str) -> np.ndarray:
+def _limit(max_bytes: int | None) -> tuple[int, str]:
+    """(bytes, how to raise it): the global limit, or a reader's own when lower."""
+    limit = max_array_bytes()
+    if max_bytes is not None and max_bytes < limit:
+        return int(max_bytes), "this reader's limit"
+    return limit, "RELIGHTNET_MAX_ARRAY_BYTES"
+
+
+def _gib(n: int) -> str:
+    return f"{n / 2**30:.1f} GiB" if n >= 2**30 else f"{n / 2**20:.1f} MiB"
+
+
+def _read_data(f: IO[bytes], shape, fortran: bool, dtype: np.dtype, available: int, what: str,
+               max_bytes: int | None = None) -> np.ndarray:
     nbytes = math.prod(shape) * dtype.itemsize
     if nbytes > available:
         raise InputError(f"{what}: header says {shape} {dtype} ({nbytes} bytes) but the file holds {available}")
-    limit = max_array_bytes()
+    limit, how = _limit(max_bytes)
     if nbytes > limit:
-        raise InputError(f"{what}: array {shape} {dtype} needs {nbytes / 2**30:.1f} GiB, above the limit of "
-                         f"{limit / 2**30:.1f} GiB (RELIGHTNET_MAX_ARRAY_BYTES)")
+        raise InputError(f"{what}: array {shape} {dtype} needs {_gib(nbytes)}, above the limit of "
+                         f"{_gib(limit)} ({how})")
     data = f.read(nbytes)
     if len(data) != nbytes:
         raise InputError(f"{what}: truncated array data ({len(data)} of {nbytes} bytes)")
@@ -66,8 +79,10 @@ def _read_data(f: IO[bytes], shape, fortran: bool, dtype: np.dtype, available: i
     return arr.astype(dtype.newbyteorder("="))  # a native-order copy (torch reads no other)
 
 
-def read_npy(path: str | Path, what: str = "array file") -> np.ndarray:
+def read_npy(path: str | Path, what: str = "array file", max_bytes: int | None = None) -> np.ndarray:
     """Read one ``.npy`` array.
+
+    ``max_bytes``: a reader's own limit on the array's bytes, when lower than the global one.
 
     Raises:
         InputError: missing file, bad header, object dtype, size beyond the file or the limit.
@@ -78,7 +93,7 @@ def read_npy(path: str | Path, what: str = "array file") -> np.ndarray:
     size = path.stat().st_size
     with open(path, "rb") as f:
         shape, fortran, dtype = _header(f, f"{path}")
-        return _read_data(f, shape, fortran, dtype, size - f.tell(), f"{path}")
+        return _read_data(f, shape, fortran, dtype, size - f.tell(), f"{path}", max_bytes)
 
 
 def read_npz_names(path: str | Path) -> list[str]:
@@ -90,8 +105,12 @@ def read_npz_names(path: str | Path) -> list[str]:
         raise InputError(f"{path}: unreadable .npz ({type(e).__name__}: {_first_line(e)})") from None
 
 
-def read_npz(path: str | Path, what: str = "array file", names=None) -> dict[str, np.ndarray]:
+def read_npz(path: str | Path, what: str = "array file", names=None,
+             max_bytes: int | None = None) -> dict[str, np.ndarray]:
     """Read the arrays of an ``.npz`` (all, or those of ``names`` that it has).
+
+    ``max_bytes``: a reader's own limit on the arrays' bytes together (checked from the zip
+    directory and each array's header before reading), when lower than the global one.
 
     Returns:
         ``{name: array}``; a name in ``names`` that the file lacks is simply absent.
@@ -109,15 +128,16 @@ def read_npz(path: str | Path, what: str = "array file", names=None) -> dict[str
             members = {i.filename[:-4]: i for i in z.infolist() if i.filename.endswith(".npy")}
             wanted = list(members) if names is None else [n for n in names if n in members]
             total = sum(members[n].file_size for n in wanted)
-            if total > max_array_bytes():
-                raise InputError(f"{path}: its arrays expand to {total / 2**30:.1f} GiB, above the limit of "
-                                 f"{max_array_bytes() / 2**30:.1f} GiB (RELIGHTNET_MAX_ARRAY_BYTES)")
+            limit, how = _limit(max_bytes)
+            if total > limit:
+                raise InputError(f"{path}: its arrays expand to {_gib(total)}, above the limit of "
+                                 f"{_gib(limit)} ({how})")
             for name in wanted:
                 info = members[name]
                 where = f"{path}: {name!r}"
                 with z.open(info) as f:
                     shape, fortran, dtype = _header(f, where)
-                    out[name] = _read_data(f, shape, fortran, dtype, info.file_size - f.tell(), where)
+                    out[name] = _read_data(f, shape, fortran, dtype, info.file_size - f.tell(), where, limit)
     except InputError:
         raise
     except Exception as e:  # bad zip directory, CRC, deflate stream, ...

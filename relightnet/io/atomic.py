@@ -72,8 +72,25 @@ def temp_path(path: str | os.PathLike, tag: str = "") -> Path:
     if tag and not tag.isalpha():
         raise ValueError(f"tag: expected letters only, got {tag!r}")
     pid = os.getpid()
-    who = f"{_host()}.{pid}-{_start_time(pid) or 0}"
-    return path.with_name(f".{path.name}.{tag + '.' if tag else ''}{who}.{secrets.token_hex(4)}.tmp")
+    who = f"{tag + '.' if tag else ''}{_host()}.{pid}-{_start_time(pid) or 0}.{secrets.token_hex(4)}.tmp"
+    return path.with_name(f".{_stem(path.name)}.{who}")
+
+
+_NAME_MAX = 255
+_LONGEST_WHO = 8 + 48 + 1 + 10 + 1 + 20 + 1 + 8 + 4  # a tag, the host, pid-start, random, .tmp
+
+
+def _stem(name: str, reserved: int = _LONGEST_WHO) -> str:
+    """The output's name as its temporary names start (after the dot), short enough that a
+    temporary name fits in 255 bytes: a long name is cut and a hash of it added."""
+    room = _NAME_MAX - 2 - reserved
+    if len(os.fsencode(name)) <= room:
+        return name
+    import hashlib
+
+    digest = hashlib.sha1(os.fsencode(name)).hexdigest()[:10]
+    cut = os.fsencode(name)[: room - 11].decode("utf-8", "ignore")
+    return f"{cut}~{digest}"
 
 
 def remove_stale(path: str | os.PathLike) -> list[Path]:
@@ -84,7 +101,7 @@ def remove_stale(path: str | os.PathLike) -> list[Path]:
     """
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
-    prefix, host, removed = f".{path.name}.", _host(), []
+    prefix, host, removed = f".{_stem(path.name)}.", _host(), []
     try:
         entries = [p for p in parent.iterdir() if p.name.startswith(prefix) and p.name.endswith(".tmp")]
     except OSError:
@@ -152,9 +169,11 @@ def atomic_write(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
         # mkstemp creates 0600; give the file the permissions open() would have.
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(e, OSError) and e.filename is None and e.errno:  # a full disk: say which file
+            raise OSError(e.errno, e.strerror, str(path)) from None
         raise
     with contextlib.suppress(OSError):
         dfd = os.open(parent, os.O_RDONLY)

@@ -56,10 +56,9 @@ def to_uint8(img, srgb: bool = True) -> torch.Tensor:
     if not img.is_floating_point():
         raise InputError(f"image: expected float (linear) or uint8 values, got {img.dtype}")
     check_finite(img, "image")
-    x = img.float()
-    if srgb:
-        x = linear_to_srgb(x)
-    return (x.clamp(0, 1) * 255).round().to(torch.uint8)
+    x = linear_to_srgb(img.float()) if srgb else img.float()
+    x = x.clamp(0, 1) if x is img else x.clamp_(0, 1)  # one temporary at most (a 12 MP frame is 144 MB)
+    return x.mul_(255).round_().to(torch.uint8)
 
 
 def _encode(codec: str, frame: av.VideoFrame) -> bytes:
@@ -76,8 +75,14 @@ def _is_float_format(name: str) -> bool:
 
 
 def decode_options() -> dict[str, str]:
-    """FFmpeg decoder options that refuse frames above :func:`~relightnet.io.limits.max_pixels`."""
-    return {"max_pixels": str(max_pixels())}
+    """FFmpeg decoder options that refuse frames above :func:`~relightnet.io.limits.max_pixels`.
+
+    FFmpeg counts a frame's pixels with its sides padded for alignment (a 3605² PNG is 3616 ×
+    3605 to it), so its limit gets 1/16 more: the exact limit is the header check
+    (:func:`~relightnet.io.probe.check_image_file`); this one stops frames whose size only the
+    decoder knows."""
+    limit = max_pixels()
+    return {"max_pixels": str(limit + limit // 16)}
 
 
 def limit_hint() -> str:

@@ -4,7 +4,8 @@ Two limits, each with an environment variable to raise it (the commands' ``--max
 option sets the first for their run):
 
 - :func:`max_pixels`: width × height of one image or video frame, read from the file's
-  header before a pixel is decoded (default 64 megapixels; ``RELIGHTNET_MAX_PIXELS``);
+  header before a pixel is decoded (default 12.5 megapixels: what the 2 GiB memory budget
+  of ``relight-image`` holds, measured; ``RELIGHTNET_MAX_PIXELS``);
 - :func:`max_array_bytes`: the bytes an ``.npz`` / ``.npy`` file may expand to in memory
   (default 4 GiB; ``RELIGHTNET_MAX_ARRAY_BYTES``), checked from its headers before reading.
 
@@ -20,7 +21,7 @@ from ..errors import InputError
 __all__ = ["DEFAULT_MAX_PIXELS", "DEFAULT_MAX_ARRAY_BYTES", "max_pixels", "max_array_bytes", "check_pixels",
            "set_max_pixels"]
 
-DEFAULT_MAX_PIXELS = 64_000_000
+DEFAULT_MAX_PIXELS = 12_500_000
 DEFAULT_MAX_ARRAY_BYTES = 4 << 30
 _PIXELS_ENV, _BYTES_ENV = "RELIGHTNET_MAX_PIXELS", "RELIGHTNET_MAX_ARRAY_BYTES"
 
@@ -39,7 +40,7 @@ def _positive(env: str, default: int) -> int:
 
 
 def max_pixels() -> int:
-    """Largest width × height decoded (``RELIGHTNET_MAX_PIXELS``, default 64 megapixels)."""
+    """Largest width × height decoded (``RELIGHTNET_MAX_PIXELS``, default 12.5 megapixels)."""
     return _positive(_PIXELS_ENV, DEFAULT_MAX_PIXELS)
 
 
@@ -59,7 +60,7 @@ def check_pixels(width: int, height: int, what: str) -> None:
     """Refuse an image or frame above :func:`max_pixels` (or with a non-positive side) before decoding it.
 
     Raises:
-        InputError: ``"photo.png: 12000x12000 pixels (144.0 MP) is above the limit of 64.0 MP ..."``.
+        InputError: ``"photo.png: 12000x12000 pixels (144.0 MP) is above the limit of 12.5 MP ..."``.
     """
     limit = max_pixels()
     if width < 1 or height < 1:

@@ -10,14 +10,20 @@ from __future__ import annotations
 
 import re
 import struct
+import zlib
 from pathlib import Path
 
 from ..errors import InputError
 from .limits import check_pixels
 
-__all__ = ["header_size", "check_image_file"]
+__all__ = ["header_size", "check_image_file", "check_png_chunks", "MAX_PNG_METADATA"]
 
 _HEAD = 1 << 16
+#: Most bytes of text and metadata (tEXt, zTXt, iTXt, iCCP, eXIf; decompressed) a PNG may carry.
+#: FFmpeg's decoder expands every text chunk into the frame's metadata, so a 1 MB zTXt
+#: chunk could otherwise become a gigabyte before the first pixel.
+MAX_PNG_METADATA = 8 << 20
+_PNG_META = (b"tEXt", b"zTXt", b"iTXt", b"iCCP", b"eXIf")
 
 
 def header_size(path: str | Path) -> tuple[int, int] | None:
@@ -41,6 +47,62 @@ def _png(head: bytes, f) -> tuple[int, int] | None:
     if head[12:16] != b"IHDR":
         return None
     return struct.unpack(">II", head[16:24])
+
+
+def _inflated(data: bytes, start: int, budget: int) -> int:
+    """Bytes the zlib stream at ``data[start:]`` inflates to, counting at most ``budget + 1``."""
+    z, n, rest = zlib.decompressobj(), 0, data[start:]
+    try:
+        while rest and n <= budget:
+            n += len(z.decompress(rest, 1 << 16))
+            rest = z.unconsumed_tail
+    except zlib.error:
+        return n  # a damaged stream: the decoder reports it (or skips the chunk)
+    return n
+
+
+def _metadata_bytes(kind: bytes, data: bytes, budget: int) -> int:
+    """Bytes a PNG metadata chunk becomes once decoded (compressed text counted inflated)."""
+    sep = data.find(b"\0")
+    if kind in (b"zTXt", b"iCCP") and sep >= 0:
+        return sep + _inflated(data, sep + 2, budget)
+    if kind == b"iTXt" and sep >= 0 and data[sep + 1:sep + 2] == b"\1":  # compressed international text
+        tail = data.find(b"\0", data.find(b"\0", sep + 3) + 1)
+        return len(data) if tail < 0 else tail + _inflated(data, tail + 1, budget)
+    return len(data)
+
+
+def check_png_chunks(path: str | Path, limit: int | None = None) -> None:
+    """Refuse a PNG whose text and metadata chunks decode to more than :data:`MAX_PNG_METADATA`.
+
+    The chunk headers are walked (seeking over image data); compressed chunks are inflated
+    in 64 KiB steps only until the budget is spent, so the check costs at most the budget.
+
+    Raises:
+        InputError: ``"x.png: its text/metadata chunks hold more than 8.0 MiB; ..."``.
+    """
+    budget = MAX_PNG_METADATA if limit is None else int(limit)
+    used = 0
+    with open(path, "rb") as f:
+        f.seek(8)
+        while True:
+            head = f.read(8)
+            if len(head) < 8:
+                return
+            size, kind = struct.unpack(">I", head[:4])[0], head[4:]
+            if kind == b"IEND":
+                return
+            if kind in _PNG_META:
+                if size > budget - used + (1 << 16):  # raw chunk alone over the budget
+                    used = budget + 1
+                else:
+                    used += _metadata_bytes(kind, f.read(size), budget - used)
+                    f.seek(4, 1)
+                if used > budget:
+                    raise InputError(f"{path}: its text/metadata chunks hold more than {budget / 2**20:.1f} MiB; "
+                                     "a photo's metadata is refused above that (tEXt/zTXt/iTXt/iCCP/eXIf)")
+            else:
+                f.seek(size + 4, 1)
 
 
 def _jpeg(head: bytes, f) -> tuple[int, int] | None:
@@ -197,4 +259,11 @@ def check_image_file(path: str | Path, what: str = "an image") -> tuple[int, int
         raise InputError(f"{path}: cannot read {what} ({e})") from None
     if size is not None:
         check_pixels(*size, f"{path}")
+    try:
+        with open(path, "rb") as f:
+            png = f.read(8) == b"\x89PNG\r\n\x1a\n"
+        if png:
+            check_png_chunks(path)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read {what} ({e})") from None
     return size

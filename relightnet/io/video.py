@@ -32,7 +32,8 @@ _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), 
 
 @dataclass(frozen=True)
 class VideoInfo:
-    """n_frames (0 when the container does not say), fps, size (H, W)."""
+    """n_frames (what the container says, 0 when it does not; for progress bars only: use
+    :func:`count_frames` to size anything), fps, size (H, W)."""
 
     n_frames: int
     fps: float
@@ -74,17 +75,20 @@ def video_info(path) -> VideoInfo:
 
 
 def count_frames(path) -> int:
-    """Frames of a video: the container's count, else (mkv, webm store none) by decoding every frame."""
+    """Frames of a video, counted from the packets really in the file (demuxed, not decoded).
+
+    The count a container states (an mp4's ``stts``) is a claim of the file: a 2 KB mp4 can
+    say 20 million frames, so it is never used to size anything. Demuxing reads each packet's
+    header and data only (milliseconds per thousand frames) and stops where the file's data ends.
+    """
     import av
 
-    n = video_info(path).n_frames
-    if n:
-        return n
+    video_info(path)  # the size, rate and first frame checked as every reader does
     with contextlib.closing(_open(path)) as c:
         try:
-            return sum(1 for _ in c.decode(video=0))
-        except av.error.FFmpegError as e:
-            raise InputError(f"{path}: corrupt video ({e})") from None
+            return sum(1 for p in c.demux(video=0) if p.size)
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
 
 
 def read_video(path) -> Iterator[np.ndarray]:
@@ -257,14 +261,16 @@ def frames_with_masks(video, masks, allow_empty: bool = False
 
     Returns:
         (video info, mask count, iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W))).
-        The iterator raises :class:`InputError` when the counts differ (also for containers
-        that do not store a frame count), a mask's size differs from its frame, or a mask is
-        empty (unless ``allow_empty``).
+        The counts are compared before any frame is decoded (both counted from the packets
+        really in the files, :func:`count_frames`); the iterator raises :class:`InputError`
+        when a mask's size differs from its frame, a mask is empty (unless ``allow_empty``),
+        or a damaged file decodes fewer frames than it holds.
     """
     info = video_info(video)
     n_masks, mask_iter = read_masks(masks)
-    if info.n_frames and info.n_frames != n_masks:
-        raise InputError(f"{masks}: {n_masks} masks for {info.n_frames} video frames")
+    n_frames = count_frames(video)
+    if n_frames != n_masks:
+        raise InputError(f"{masks}: {n_masks} masks for {n_frames} video frames")
 
     def pairs():
         for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import math
 import pickle
 import re
 from pathlib import Path
@@ -23,10 +24,11 @@ import torch
 
 from ..checks import InputError, check_device
 from ..io import atomic_write
+from ..io.documents import clip, short
 from .network import NetConfig, RelightNet
 
-__all__ = ["FORMAT", "SHIPPED", "save_checkpoint", "load_checkpoint", "load_model", "shipped_checkpoint",
-           "release_checkpoint"]
+__all__ = ["FORMAT", "SHIPPED", "MAX_PARAMETERS", "MAX_ACTIVATION", "save_checkpoint", "load_checkpoint",
+           "load_model", "shipped_checkpoint", "release_checkpoint"]
 
 FORMAT = "relightnet-ckpt-2"
 #: Formats read: 1 had the same plain content (it loads with ``weights_only=True`` too).
@@ -35,6 +37,14 @@ READ_FORMATS = ("relightnet-ckpt-1", FORMAT)
 SHIPPED = Path(__file__).resolve().parents[1] / "weights" / "relightnet_small.pt"
 #: Largest integer accepted in a checkpoint's network configuration (sizes, levels, orders).
 _MAX_CONFIG_INT = 4096
+#: Most parameters of a checkpoint's network (counted on the meta device before anything is
+#: allocated): 64 M float32 parameters are 256 MB; the shipped network has 1.9 M.
+MAX_PARAMETERS = 64_000_000
+#: Most activation elements of one feature map at the working size (input_size² × width):
+#: 2²⁷ float32 values are 512 MB, which keeps a forward pass within the 2 GB budget.
+MAX_ACTIVATION = 1 << 27
+#: Most values and containers walked in a checkpoint's plain (non-tensor) content.
+_MAX_NODES = 100_000
 _PLAIN = (str, int, float, bool, type(None), torch.Tensor)
 
 
@@ -65,18 +75,26 @@ def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 
     return _write(path, state)
 
 
-def _check_plain(value, where: str = "checkpoint", depth: int = 0) -> None:
-    """Raise TypeError unless ``value`` is tensors and plain Python values all the way down."""
+def _check_plain(value, where: str = "checkpoint", depth: int = 0, seen: list | None = None) -> None:
+    """Raise TypeError unless ``value`` is tensors and plain Python values all the way down.
+
+    At most :data:`_MAX_NODES` values are walked: shared containers (a pickle's memo can make
+    one list appear exponentially often) end the walk instead of making it exponential.
+    """
+    seen = [0] if seen is None else seen
+    seen[0] += 1
+    if seen[0] > _MAX_NODES:
+        raise TypeError(f"{where}: more than {_MAX_NODES} values (or one container shared many times)")
     if depth > 32:
         raise TypeError(f"{where}: nested deeper than 32 levels")
     if isinstance(value, dict):
         for k, v in value.items():
             if not isinstance(k, (str, int)):
-                raise TypeError(f"{where}: key {k!r} is a {type(k).__name__}; keys are strings or integers")
-            _check_plain(v, f"{where}[{k!r}]", depth + 1)
+                raise TypeError(f"{where}: key {short(k, 40)} is a {type(k).__name__}; keys are strings or integers")
+            _check_plain(v, f"{where}[{short(k, 40)}]", depth + 1, seen)
     elif isinstance(value, (list, tuple)):
         for i, v in enumerate(value):
-            _check_plain(v, f"{where}[{i}]", depth + 1)
+            _check_plain(v, f"{where}[{i}]", depth + 1, seen)
     elif not isinstance(value, _PLAIN):
         raise TypeError(f"{where} is a {type(value).__module__}.{type(value).__name__}; a checkpoint holds "
                         "tensors and plain Python values only (configs as dicts)")
@@ -146,17 +164,17 @@ def _net_config(state: dict, path: Path) -> NetConfig:
     fields = {f.name: f for f in dataclasses.fields(NetConfig)}
     for key, value in state["net_config"].items():
         if key not in fields:
-            raise InputError(f"{path}: unknown network configuration key {key!r}")
+            raise InputError(f"{path}: unknown network configuration key {short(key, 40)}")
         default = fields[key].default
         kind = None if default is dataclasses.MISSING or default is None else type(default)
         if kind is not None and (type(value) is not kind and not (kind is float and type(value) is int)):
-            raise InputError(f"{path}: net_config {key!r}: expected a {kind.__name__}, got {value!r}")
+            raise InputError(f"{path}: net_config {key!r}: expected a {kind.__name__}, got {short(value)}")
         if type(value) is int and not 0 <= value <= _MAX_CONFIG_INT:
             raise InputError(f"{path}: net_config {key!r}: {value} is outside [0, {_MAX_CONFIG_INT}]")
     try:
         return NetConfig(**state["net_config"])
     except (TypeError, ValueError) as e:
-        raise InputError(f"{path}: unknown network configuration ({e})") from None
+        raise InputError(f"{path}: unknown network configuration ({clip(str(e), 160)})") from None
 
 
 def _network(cfg: NetConfig, weights: dict, path: Path) -> RelightNet:
@@ -166,7 +184,21 @@ def _network(cfg: NetConfig, weights: dict, path: Path) -> RelightNet:
         with torch.device("meta"):
             shapes = {k: tuple(v.shape) for k, v in RelightNet(cfg).state_dict().items()}
     except (TypeError, ValueError, RuntimeError, InputError) as e:
-        raise InputError(f"{path}: unusable network configuration ({type(e).__name__}: {e})") from None
+        raise InputError(f"{path}: unusable network configuration ({type(e).__name__}: {clip(str(e), 160)})") \
+            from None
+    count = sum(math.prod(s) for s in shapes.values())
+    if count > MAX_PARAMETERS:
+        raise InputError(f"{path}: the network has {count / 1e6:.1f} M parameters; at most "
+                         f"{MAX_PARAMETERS / 1e6:.0f} M are loaded (relightnet.model.checkpoint.MAX_PARAMETERS)")
+    feature = cfg.input_size ** 2 * cfg.width
+    if feature > MAX_ACTIVATION:
+        raise InputError(f"{path}: input_size {cfg.input_size} × width {cfg.width} makes feature maps of "
+                         f"{feature / 1e6:.0f} M values; at most {MAX_ACTIVATION / 1e6:.0f} M (MAX_ACTIVATION)")
+    for k, v in weights.items():
+        expanded = any(st == 0 and n > 1 for st, n in zip(v.stride(), v.shape, strict=True))
+        if expanded or v.untyped_storage().nbytes() < v.numel() * v.element_size():
+            raise InputError(f"{path}: weight {short(k, 60)} {tuple(v.shape)} is expanded from "
+                             f"{v.untyped_storage().nbytes()} bytes of data (stride 0); weights must hold their values")
     got = {k: tuple(v.shape) for k, v in weights.items()}
     bad = next((k for k, v in weights.items() if v.is_floating_point() and not bool(torch.isfinite(v).all())), None)
     if bad is not None:

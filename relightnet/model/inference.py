@@ -61,13 +61,17 @@ def crop_to_box(x: torch.Tensor, box: CropBox) -> torch.Tensor:
 
 def paste_from_box(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tensor:
     """Inverse of :func:`crop_to_box` for maps at any working size: resized back to ``box.size``
-    (bilinear) and placed in an (H, W) frame, zero outside the box: (B, C, s, s) → (B, C, H, W)."""
-    x = F.interpolate(x, size=(box.size, box.size), mode="bilinear", align_corners=False)
+    (bilinear) and placed in an (H, W) frame, zero outside the box: (B, C, s, s) → (B, C, H, W).
+
+    One channel is resized at a time (the same values): a large photo's box resized with all
+    its channels at once (a transport's K = 9) would double the peak memory of the paste."""
     out = x.new_zeros(*x.shape[:-2], h, w)
     t, l, s = box.top, box.left, box.size
     ys, ye, xs, xe = max(t, 0), min(t + s, h), max(l, 0), min(l + s, w)
     if ys < ye and xs < xe:
-        out[..., ys:ye, xs:xe] = x[..., ys - t : ye - t, xs - l : xe - l]
+        for c in range(x.shape[-3]):
+            up = F.interpolate(x[..., c : c + 1, :, :], size=(s, s), mode="bilinear", align_corners=False)
+            out[..., c : c + 1, ys:ye, xs:xe] = up[..., ys - t : ye - t, xs - l : xe - l]
     return out
 
 

@@ -33,13 +33,15 @@ from ..render.shading import shade, shading, to_channels_first, to_channels_last
 from .light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
-           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map"]
+           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
 
 
 #: How the network gets its light (see the module docstring).
 LIGHT_MODES = ("head", "solve", "hybrid")
 #: Working size of a network whose checkpoint does not say what it was trained at.
 DEFAULT_INPUT_SIZE = 256
+#: Rows per band where full-resolution maps are combined elementwise (bounded temporaries on large photos).
+ROW_BAND = 256
 
 
 @dataclass(frozen=True)
@@ -179,8 +181,18 @@ def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
     m = pred.mask if pred.mask is not None else torch.ones_like(shading[:, :1])
     mean = (shading * m).sum((2, 3), keepdim=True) / m.sum((2, 3), keepdim=True).clamp_min(1e-8)
     tau = (floor * mean).clamp_min(1e-6)
-    w = (shading / tau).clamp(0, 1)
-    return (w * image.to(shading).clamp_min(0) / torch.maximum(shading, tau) + (1 - w) * pred.albedo).clamp_min(0)
+
+    def rows(s, img, alb):
+        w = (s / tau).clamp(0, 1)
+        return (w * img.to(s).clamp_min(0) / torch.maximum(s, tau) + (1 - w) * alb).clamp_min(0)
+
+    if torch.is_grad_enabled() and (shading.requires_grad or pred.albedo.requires_grad):
+        return rows(shading, image, pred.albedo)
+    out = torch.empty_like(shading)  # in bands of rows: a large photo's temporaries stay small (same values)
+    for r in range(0, dims["H"], ROW_BAND):
+        band = slice(r, r + ROW_BAND)
+        out[:, :, band] = rows(shading[:, :, band], image[:, :, band], pred.albedo[:, :, band])
+    return out
 
 
 def normalize_input(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:

@@ -34,9 +34,17 @@ class OnnxRelighter:
     def __init__(self, path, threads: int = 0) -> None:
         import onnxruntime as ort
 
+        from .onnx_check import check_graph, load_graph
+
         self.path = Path(path)
         if not self.path.is_file():
             raise InputError(f"{self.path}: ONNX model not found")
+        # The graph is checked before ONNX Runtime sees it (it folds constants when the session
+        # is made): relightnet's inputs and outputs, every shape bounded at the working size.
+        self._graph = load_graph(self.path)
+        self._checked: set[tuple[int, int, int]] = set()
+        self._check_graph = check_graph
+        self._graph_shapes(1, self._meta_size(), self._meta_size())
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = threads
         opts.log_severity_level = 3
@@ -59,6 +67,24 @@ class OnnxRelighter:
         #: the light solve's per-frame evidence outputs (solve/hybrid networks), else empty
         self.evidence_outputs = tuple(n for n in EVIDENCE_OUTPUTS if n in outputs)
         self._state: np.ndarray | None = None
+
+    def _meta_size(self) -> int:
+        from .network import DEFAULT_INPUT_SIZE
+
+        meta = {p.key: p.value for p in self._graph.metadata_props}
+        try:
+            size = int(meta.get("relightnet.input_size", DEFAULT_INPUT_SIZE))
+        except ValueError:
+            raise InputError(f"{self.path}: metadata relightnet.input_size is not an integer") from None
+        if not 16 <= size <= 4096 or size % 16:
+            raise InputError(f"{self.path}: metadata relightnet.input_size {size} is not a multiple of 16 in 16..4096")
+        return size
+
+    def _graph_shapes(self, batch: int, height: int, width: int) -> None:
+        """Check the graph's shapes at this input size once (:func:`~relightnet.model.onnx_check.check_graph`)."""
+        if (batch, height, width) not in self._checked:
+            self._check_graph(self._graph, self.path, batch, height, width)
+            self._checked.add((batch, height, width))
 
     @property
     def input_size(self) -> int:
@@ -101,6 +127,7 @@ class OnnxRelighter:
                                  f"{getattr(arr, 'dtype', type(arr).__name__)}")
         self._check(feeds["image"], feeds["mask"])
         b = feeds["image"].shape[0]
+        self._graph_shapes(b, *feeds["image"].shape[2:])
         if feeds["light_state"].shape != (b, self.state_size, self.n_coeffs, 3):
             raise ShapeError(f"light_state: expected ({b}, {self.state_size}, {self.n_coeffs}, 3), "
                              f"got {tuple(feeds['light_state'].shape)}")

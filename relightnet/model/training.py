@@ -25,6 +25,7 @@ import torch
 
 from ..checks import InputError
 from ..io import atomic_write, linear_to_srgb
+from ..io.documents import clip, short
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
@@ -73,22 +74,23 @@ class TrainConfig:
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
             if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
-                raise InputError(f"train config {name}: expected an integer >= 1, got {getattr(self, name)!r}")
+                raise InputError(f"train config {name}: expected an integer >= 1, got {short(getattr(self, name))}")
         if not self.lr > 0:
-            raise InputError(f"train config lr: expected > 0, got {self.lr!r}")
+            raise InputError(f"train config lr: expected > 0, got {short(self.lr)}")
         if self.target not in ("transport", "transport_unoccluded"):
             raise InputError(
-                f"train config target: expected 'transport' or 'transport_unoccluded', got {self.target!r}"
+                f"train config target: expected 'transport' or 'transport_unoccluded', got {short(self.target)}"
             )
         if self.precision not in ("fp32", "bf16"):
-            raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {self.precision!r}")
+            raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {short(self.precision)}")
         if self.train_items is not None and (not isinstance(self.train_items, int) or isinstance(self.train_items, bool)
                                              or self.train_items < 1):
-            raise InputError(f"train config train_items: expected an integer >= 1, got {self.train_items!r}")
+            raise InputError(f"train config train_items: expected an integer >= 1, got {short(self.train_items)}")
         if self.data_dtype not in ("float32", "float16"):
-            raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {self.data_dtype!r}")
+            raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {short(self.data_dtype)}")
         if self.render_target not in ("image", "model"):
-            raise InputError(f"train config render_target: expected 'image' or 'model', got {self.render_target!r}")
+            raise InputError(
+                f"train config render_target: expected 'image' or 'model', got {short(self.render_target)}")
         NetConfig(**self.net)
         LossWeights(**self.loss)
         cs = self.augment.get("crop_scale") if self.augment else None
@@ -104,26 +106,22 @@ class TrainConfig:
 
 def load_train_config(path) -> TrainConfig:
     """Read a :class:`TrainConfig` from YAML/JSON; unknown keys are an error."""
-    import yaml
+    from ..io.documents import read_document
 
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: training config not found")
-    try:
-        d = yaml.safe_load(path.read_bytes().decode("utf-8")) or {}
-    except (yaml.YAMLError, ValueError, TypeError, RecursionError) as e:  # also bad UTF-8, bad dates
-        raise InputError(f"{path}: unreadable YAML ({type(e).__name__}: {str(e)[:200]})") from None
+    d = read_document(path, "training config")
+    d = {} if d is None else d
     if not isinstance(d, dict):
         raise InputError(f"{path}: expected a mapping of training settings, got {type(d).__name__}")
     unknown = set(d) - {f.name for f in dataclasses.fields(TrainConfig)}
     if unknown:
-        raise InputError(f"{path}: unknown keys {sorted(unknown, key=str)}")
+        raise InputError(f"{path}: unknown keys {short(sorted(map(str, unknown)))}")
     try:
         return TrainConfig(**d)
     except InputError:
         raise
     except (TypeError, ValueError, OverflowError, AttributeError) as e:  # a value of the wrong type
-        raise InputError(f"{path}: a setting has the wrong type ({e})") from None
+        raise InputError(f"{path}: a setting has the wrong type ({clip(str(e), 160)})") from None
 
 
 class TrainData:

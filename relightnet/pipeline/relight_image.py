@@ -21,7 +21,7 @@ import torch
 
 from ..checks import check_finite, check_shape, sh_order_from_count
 from ..color import linear_to_srgb, luminance, srgb_to_linear
-from ..model.network import Prediction, photo_albedo, shading_map
+from ..model.network import ROW_BAND, Prediction, photo_albedo, shading_map
 from ..render.shading import composite, shade, to_channels_first, to_channels_last
 from ..sh.io import resize_sh
 from .backends import as_predictor
@@ -129,8 +129,13 @@ def over_photo(relit: torch.Tensor, mask: torch.Tensor, image: torch.Tensor) -> 
     Returns:
         (B, H, W, 3) sRGB in [0, 1].
     """
-    fg = to_channels_last(linear_to_srgb(relit.clamp(0, 1)))
-    return composite(fg, to_channels_last(mask), to_channels_last(image.to(fg)))
+    dims = check_shape(relit, ["B", 3, "H", "W"], name="relit")
+    out = relit.new_empty(dims["B"], dims["H"], dims["W"], 3)
+    for r in range(0, dims["H"], ROW_BAND):  # in bands of rows: a large photo's temporaries stay small
+        band = slice(r, r + ROW_BAND)
+        fg = to_channels_last(linear_to_srgb(relit[:, :, band].clamp(0, 1)))
+        out[:, band] = composite(fg, to_channels_last(mask[:, :, band]), to_channels_last(image[:, :, band].to(fg)))
+    return out
 
 
 @torch.no_grad()

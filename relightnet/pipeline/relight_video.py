@@ -93,6 +93,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
             relit = relight_prediction(pred, img[None], new, detail=detail, reference=src[None])
             writer.write(over_photo(relit.linear, pred.mask, img[None])[0])
+            del pred, relit, img, mask  # the next frame is decoded and predicted without this one's maps
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
             raise InputError(f"{masks or video}: every mask is empty: no person to relight")

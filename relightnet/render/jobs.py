@@ -16,6 +16,7 @@ import torch
 
 from ..body.base import vertex_normals
 from ..checks import InputError, sh_order_from_count
+from ..io.documents import clip
 from ..prt import check_mesh, vertex_transport
 from ..raster import Camera, default_camera, look_at, perspective_camera, rasterize
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
@@ -40,18 +41,24 @@ def load_mesh(path, albedo=(0.8, 0.8, 0.8)) -> LoadedMesh:
     """Load any mesh trimesh reads (OBJ, PLY, GLB, STL, OFF, ...), assumed y-up.
 
     Vertex colours in the file become the albedo (sRGB → linear); otherwise ``albedo``.
+    The file is bounded before it is parsed (:mod:`relightnet.io.meshfile`: size, face count,
+    referenced files regular and inside its folder).
     """
     import trimesh
 
+    from ..io.meshfile import check_face_count, check_mesh_file, mesh_resolver
+
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: mesh file not found")
+    used = check_mesh_file(path)
     try:
-        m = trimesh.load(path, force="mesh", process=True)
+        m = trimesh.load(path, force="mesh", process=True, resolver=mesh_resolver(path, used))
+    except InputError:
+        raise
     except Exception as e:  # trimesh raises many types for bad files
-        raise InputError(f"{path}: unreadable mesh ({type(e).__name__}: {e})") from None
+        raise InputError(f"{path}: unreadable mesh ({type(e).__name__}: {clip(str(e))})") from None
     if not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0:
         raise InputError(f"{path}: expected a triangle mesh with at least one face")
+    check_face_count(len(m.faces), path)
     v = torch.as_tensor(np.asarray(m.vertices), dtype=torch.float32)
     f = torch.as_tensor(np.asarray(m.faces), dtype=torch.int64)
     alb = torch.tensor(albedo, dtype=torch.float32).expand(len(v), 3).clone()

@@ -43,6 +43,11 @@ logger = logging.getLogger(__name__)
 LIGHT_SUFFIXES = (".npz", ".json", ".npy")
 _ENVMAP_SUFFIXES = (".exr", ".hdr")
 _FRAME, _UNITS = "light", "linear radiance"
+#: Most bytes a light file's ``sh`` (with its metadata) may hold: 64 MiB is a (T, 9, 3) float64
+#: sequence of 310,000 frames (86 minutes at 60 fps); a light from a stranger cannot ask for more.
+MAX_LIGHT_BYTES = 64 << 20
+#: Most bytes of a light sequence's side arrays together (``raw``, ``evidence_M``, ...).
+MAX_SIDE_BYTES = 512 << 20
 #: The arrays of a light .npz itself; a sequence file's side arrays take other names.
 _OWN = ("sh", "lmax", "frame", "units")
 
@@ -157,7 +162,7 @@ def _scalar_meta(arrays: dict, key: str, path: Path):
 def _read_npz(path: Path) -> torch.Tensor:
     from ..io.arrays import read_npz
 
-    z = read_npz(path, "light .npz", ("sh", "lmax", "frame", "units"))
+    z = read_npz(path, "light .npz", ("sh", "lmax", "frame", "units"), max_bytes=MAX_LIGHT_BYTES)
     if "sh" not in z:
         raise InputError(f"{path}: no 'sh' array in the .npz (has {', '.join(sorted(z)) or 'nothing else'})")
     meta = {k: _scalar_meta(z, k, path) for k in ("lmax", "frame", "units")}
@@ -167,10 +172,9 @@ def _read_npz(path: Path) -> torch.Tensor:
 
 
 def _read_json(path: Path) -> torch.Tensor:
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError) as e:
-        raise InputError(f"{path}: cannot read light .json ({type(e).__name__}: {e})") from None
+    from ..io.documents import read_document
+
+    doc = read_document(path, "light .json", yaml_ok=False)
     if not isinstance(doc, dict) or "sh" not in doc:
         raise InputError(f"{path}: expected a JSON object with an 'sh' list")
     try:
@@ -185,7 +189,7 @@ def _read_json(path: Path) -> torch.Tensor:
 def _read_npy(path: Path) -> torch.Tensor:
     from ..io.arrays import read_npy
 
-    arr = read_npy(path, "Kanamori-Endo light .npy")
+    arr = read_npy(path, "Kanamori-Endo light .npy", max_bytes=1 << 16)
     if tuple(arr.shape) != (9, 3):
         raise ShapeError(f"{path}: a Kanamori-Endo light .npy must be (9, 3) BGR, got {tuple(arr.shape)}")
     if not np.issubdtype(arr.dtype, np.number) or arr.dtype.kind == "c":
@@ -319,5 +323,5 @@ def load_light_sequence(path: str | os.PathLike, names=None) -> tuple[torch.Tens
     from ..io.arrays import read_npz, read_npz_names
 
     wanted = [n for n in (read_npz_names(path) if names is None else names) if n not in _OWN]
-    side = read_npz(path, "light sequence .npz", wanted) if wanted else {}
+    side = read_npz(path, "light sequence .npz", wanted, max_bytes=MAX_SIDE_BYTES) if wanted else {}
     return sh, {k: _side_array(k, v, sh.shape[0], str(path)) for k, v in side.items()}

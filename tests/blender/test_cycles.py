@@ -91,3 +91,41 @@ def test_render_blend_bad_inputs(sphere_case, tmp_path):
     with pytest.raises(InputError, match="spp"):
         next(render_blend(sphere_case["tmp"] / "s.blend", spp=0))
     assert not (tmp_path / "o").exists()
+
+
+def test_render_settings_of_a_blend_are_bounded(monkeypatch):
+    """A .blend asking 20000² × 16.7 M samples × 10⁶ frames is refused before Blender renders
+    (the check takes the scene's numbers; the pixel limit is --max-pixels')."""
+    from relightnet.blender.cycles import MAX_FRAMES, MAX_SAMPLES, check_render_settings
+
+    check_render_settings("a.blend", 1920, 1080, 100, 128, 300)
+    with pytest.raises(InputError, match="a.blend: render output: 20000x20000 pixels"):
+        check_render_settings("a.blend", 20000, 20000, 100, 16_777_216, 1_000_000)
+    check_render_settings("a.blend", 20000, 20000, 10, 64, 1)  # resolution_percentage 10: 2000²
+    monkeypatch.setenv("RELIGHTNET_MAX_PIXELS", "1000")
+    with pytest.raises(InputError, match="above the limit"):
+        check_render_settings("a.blend", 64, 64, 100, 64, 1)
+    monkeypatch.delenv("RELIGHTNET_MAX_PIXELS")
+    with pytest.raises(InputError, match="16777216 Cycles samples"):
+        check_render_settings("a.blend", 64, 64, 100, 16_777_216, 1)
+    with pytest.raises(InputError, match="1000000 frames"):
+        check_render_settings("a.blend", 64, 64, 100, MAX_SAMPLES, 1_000_000)
+    check_render_settings("a.blend", 64, 64, 100, MAX_SAMPLES, MAX_FRAMES)
+
+
+def test_raw_frames_are_staged_so_a_killed_render_leaves_nothing(tmp_path):
+    """The staging folder in OUT is removed at the end, and one left by a killed render is removed
+    by the next render into the same folder."""
+    import os
+
+    from relightnet.blender.cycles import _staging
+
+    with _staging(tmp_path) as tmp:
+        (tmp_path / "x").write_text("")
+        assert os.path.isdir(tmp) and os.path.basename(tmp).startswith(".frames.stage.")
+        dead = tmp_path / os.path.basename(tmp).replace(f".{os.getpid()}-", ".999999999-")
+        dead.mkdir()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [dead.name, "x"]
+    with _staging(tmp_path):
+        pass
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x"]

@@ -87,3 +87,43 @@ def test_temp_names_record_the_writer(tmp_path):
     assert a != b and a.parent == tmp_path and f".{os.getpid()}-" in a.name and ".video." in b.name
     with pytest.raises(ValueError, match="letters"):
         temp_path(tmp_path / "x.png", "a.b")
+
+
+def test_a_long_output_name_gets_a_temporary_name_that_fits(tmp_path):
+    """A valid 251-character name: its temporary name is cut (with a hash) to 255 bytes, and found again."""
+    from relightnet.io.atomic import remove_stale, temp_path
+
+    name = "é" * 100 + "a" * 47 + ".png"  # 251 bytes
+    assert len(os.fsencode(name)) == 251
+    with atomic_write(tmp_path / name) as f:
+        f.write(b"x")
+    assert (tmp_path / name).read_bytes() == b"x" and os.listdir(tmp_path) == [name]
+    tmp = temp_path(tmp_path / name, "video")
+    assert len(os.fsencode(tmp.name)) <= 255 and tmp.name.endswith(".tmp")
+    dead = tmp.with_name(tmp.name.replace(f".{os.getpid()}-", ".999999999-"))
+    dead.write_bytes(b"")
+    assert remove_stale(tmp_path / name) == [dead]
+
+
+def test_a_full_disk_names_the_file(tmp_path):
+    """ENOSPC / EFBIG while writing: the error names the output (here: a file-size limit in a child)."""
+    import subprocess
+    import sys
+
+    script = (
+        "import resource, signal, sys\n"
+        "from relightnet.io import atomic_write\n"
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+        "resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))\n"
+        "try:\n"
+        "    with atomic_write(sys.argv[1]) as f:\n"
+        "        f.write(bytes(5000))\n"
+        "except OSError as e:\n"
+        "    print(e.filename, e.errno)\n"
+    )
+    out = tmp_path / "out.bin"
+    proc = subprocess.run([sys.executable, "-c", script, str(out)], capture_output=True, text=True, check=True)
+    import errno
+
+    assert proc.stdout.split() == [str(out), str(errno.EFBIG)]
+    assert os.listdir(tmp_path) == []

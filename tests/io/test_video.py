@@ -92,8 +92,8 @@ def test_frames_with_masks_from_a_mask_video_and_its_checks(tmp_path):
     with VideoWriter(tmp_path / "m2.mkv", fps=5) as w:
         for f in (masks[0], masks[2]):
             w.write(f)
-    with pytest.raises(InputError, match="different number of frames"):
-        list(frames_with_masks(tmp_path / "v.mkv", tmp_path / "m2.mkv")[2])
+    with pytest.raises(InputError, match="m2.mkv: 2 masks for 3 video frames"):  # before any frame is decoded
+        frames_with_masks(tmp_path / "v.mkv", tmp_path / "m2.mkv")
 
 
 def _write_webm(path, frames, fps=5):
@@ -142,3 +142,20 @@ def test_mask_videos_pair_across_containers(tmp_path, video_ext, mask_ext):
                     w.write(f)
         with pytest.raises(InputError, match="3 masks"):
             list(frames_with_masks(tmp_path / f"v{video_ext}", short)[2])
+
+
+def test_count_frames_trusts_no_container_claim(tmp_path):
+    """An mp4 whose stts says 20 M frames holds 5: count_frames counts the packets really there."""
+    import struct
+
+    from relightnet.io import VideoWriter, count_frames, video_info
+
+    with VideoWriter(tmp_path / "v.mp4", fps=10) as w:
+        for i in range(5):
+            w.write(np.full((32, 32, 3), 40 * i, np.uint8))
+    data = bytearray((tmp_path / "v.mp4").read_bytes())
+    at = data.find(b"stts")
+    data[at + 12:at + 16] = struct.pack(">I", 20_000_000)
+    (tmp_path / "lie.mp4").write_bytes(bytes(data))
+    assert video_info(tmp_path / "lie.mp4").n_frames == 20_000_000  # the claim, for progress bars only
+    assert count_frames(tmp_path / "lie.mp4") == count_frames(tmp_path / "v.mp4") == 5

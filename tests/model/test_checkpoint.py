@@ -59,3 +59,37 @@ def test_shipped_model_is_in_the_safe_form():
     state = torch.load(SHIPPED, weights_only=True)
     assert state["format"] == FORMAT and "optimizer" not in state
     load_model()
+
+
+def test_architecture_and_storage_are_bounded(tmp_path):
+    """A network over MAX_PARAMETERS (counted on the meta device), feature maps over MAX_ACTIVATION,
+    stride-0 weights and shared "laughs" in plain values are refused in one line."""
+    from relightnet.model.checkpoint import MAX_ACTIVATION, MAX_PARAMETERS, release_checkpoint
+
+    def fails(state, text):
+        torch.save(state, tmp_path / "x.pt")
+        with pytest.raises(InputError, match=text) as e:
+            load_model(tmp_path / "x.pt")
+        assert len(str(e.value)) < 400
+        return e.value
+
+    wide = {**dataclasses.asdict(CFG), "width": 2048, "max_width": 4096}
+    with torch.device("meta"):
+        shapes = {k: v.shape for k, v in RelightNet(type(CFG)(**wide)).state_dict().items()}
+    assert sum(s.numel() for s in shapes.values()) > MAX_PARAMETERS
+    fails(_state(net_config=wide) | {"model": {k: torch.zeros(1).expand(s) for k, s in shapes.items()}},
+          "M parameters; at most 64 M")
+    assert 4096 ** 2 * 16 > MAX_ACTIVATION
+    fails(_state(input_size=4096, net_config={**dataclasses.asdict(CFG), "width": 16, "max_width": 16}),
+          "feature maps")
+    state = _state()
+    state["model"] = {k: v.reshape(-1)[:1].clone().expand(v.shape) if v.numel() > 1 else v
+                      for k, v in state["model"].items()}
+    fails(state, "stride 0")
+    laugh: list = [1] * 9
+    for _ in range(12):
+        laugh = [laugh] * 9
+    fails(_state(net_config={**dataclasses.asdict(CFG), "width": laugh}), "expected a int")
+    torch.save(_state(train_config={"x": laugh}), tmp_path / "y.pt")
+    with pytest.raises(TypeError, match="more than 100000 values"):
+        release_checkpoint(tmp_path / "y.pt", tmp_path / "z.pt")
