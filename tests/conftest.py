@@ -47,14 +47,21 @@ def _cpu_line() -> str:
             f"{torch.get_num_threads()} threads")
 
 
+_CPU_LINE: list[str] = []  # taken at the start: tests change torch's thread count on the way
+
+
+def pytest_sessionstart(session):
+    _CPU_LINE.append(_cpu_line())
+
+
 def pytest_report_header(config):
     """The processor the suite runs on, as torch sees it (a red run on another CPU says which)."""
-    return _cpu_line()
+    return _CPU_LINE[0] if _CPU_LINE else _cpu_line()
 
 
 def pytest_terminal_summary(terminalreporter):
     """The same line at the end, where ``-q`` (``make test``) shows it too."""
-    terminalreporter.write_line(_cpu_line())
+    terminalreporter.write_line(_CPU_LINE[0] if _CPU_LINE else _cpu_line())
 
 
 def pytest_addoption(parser):
