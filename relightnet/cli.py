@@ -54,6 +54,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def command_table(parser: argparse.ArgumentParser | None = None) -> dict[str, argparse.ArgumentParser]:
+    """The commands of ``parser`` (default: :func:`build_parser`'s) and their parsers, in --help order."""
+    for action in (parser or build_parser())._actions:  # argparse keeps subparsers here, with no public accessor
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
 def _leaf_parsers(sub) -> list[argparse.ArgumentParser]:
     """The parsers of the commands under ``sub``, nested ones (``light show``) included."""
     out = []

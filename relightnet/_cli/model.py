@@ -65,7 +65,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
     from ..io import atomic_write
-    from ..model.light_eval import evaluate_light, format_light_report
+    from ..pipeline.light_eval import evaluate_light, format_light_report
 
     result = evaluate_light(model, args.data, clips=args.clips or (), split=args.split)
     text = format_light_report(result, str(args.checkpoint or "shipped model"))

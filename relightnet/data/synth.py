@@ -46,7 +46,7 @@ from .shards import (
     shard_plan,
 )
 
-__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed", "default_workers"]
+__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed"]
 
 logger = logging.getLogger("relightnet.data.synth")
 
@@ -190,7 +190,7 @@ def _run_here(tasks: list, body, max_retries: int, on_result, on_tick) -> None:
 
 def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result, on_tick) -> None:
     """Run shard tasks in this process (workers=0), on the local pool, or on Ray (``ray`` given)."""
-    from .pool import FAULT_ENV, run_pool
+    from .pool import FAULT_ENV, run_pool, shard_task
 
     fault = os.environ.get(FAULT_ENV) or None
     if ray is not None:
@@ -198,8 +198,8 @@ def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result,
         from ..distributed.ray_synth import run_ray_shards
 
         with connect(ray.address):
-            run_ray_shards(tasks, on_result, on_tick, cpus_per_task=ray.cpus_per_task, max_retries=max_retries,
-                           fault=fault)
+            run_ray_shards(shard_task, tasks, on_result, on_tick, cpus_per_task=ray.cpus_per_task,
+                           max_retries=max_retries, fault=fault)
     elif workers == 0:
         _run_here(tasks, body, max_retries, on_result, on_tick)
     else:
@@ -304,11 +304,3 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
     _make_shards(out_dir, cfg, manifest, todo, total, workers, ray, body, max_retries, compression, progress)
     logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
     return manifest
-
-
-def default_workers() -> int:
-    """The CPUs this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)

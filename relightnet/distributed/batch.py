@@ -22,6 +22,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 from ..io import atomic_write
+from .cluster import default_workers
 from .jobs import Job, execute_job, load_jobs
 
 __all__ = ["run_batch", "summary_path", "SUMMARY_FORMAT"]
@@ -71,8 +72,6 @@ def run_local(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
     A job asking for more CPUs than the machine has runs alone with all of them; one asking
     for more GPUs than there are fails. ``on_done(job, result)`` is called in this thread.
     """
-    from ..data.synth import default_workers
-
     cpus = default_workers()
     gpus = _local_gpus() if any(j.gpus for j in jobs) else 0
     free_cpus, free_gpus = float(cpus), list(range(gpus))
@@ -109,11 +108,13 @@ def _counts(records: list[dict]) -> dict:
     return {s: sum(r["status"] == s for r in records) for s in ("done", "skipped", "failed", "pending")}
 
 
-def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) -> dict:
+def run_batch(jobs_file, commands, ray=None, max_retries: int = 1, progress: bool = True) -> dict:
     """Run every job of a jobs file that is not complete yet (module docstring).
 
     Args:
         jobs_file: the YAML/JSON jobs file (:mod:`relightnet.distributed.jobs`).
+        commands: the CLI's command table, {name: parser}, that the jobs are checked against
+            (:func:`relightnet.cli.command_table`).
         ray: a :class:`relightnet.distributed.RayOptions` (its ``address``) to run on a Ray
             cluster; None: on this machine.
         max_retries: times a crashed job is run again (bad input is not retried).
@@ -129,7 +130,7 @@ def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) 
     """
     from tqdm import tqdm
 
-    jobs = load_jobs(jobs_file)
+    jobs = load_jobs(jobs_file, commands)
     cwd = Path.cwd()
     spath, logs = summary_path(jobs_file), _logs_dir(jobs_file)
     previous = _previous(spath)

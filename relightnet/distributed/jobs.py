@@ -10,8 +10,8 @@ A jobs file (YAML or JSON) holds ``jobs``, a list of entries::
         args: [person.png, --light, studio, --out, out/b.png]
 
 Other keys are ignored (tools may add their own). A job's output is its ``--out``. The
-commands a job may run are those of the ``relightnet`` CLI itself (its own command table,
-so new commands join by themselves), except ``batch``. An entry that is not a job — an
+commands a job may run are those of the ``relightnet`` CLI itself (its command table, handed
+in by the caller, so new commands join by themselves), except ``batch``. An entry that is not a job — an
 unknown command, arguments the command's parser refuses, no ``--out`` — becomes a failed
 job with its one-line reason; the other jobs still run. Relative paths in ``args`` are
 relative to the folder ``relightnet batch`` runs in (as they would be on the command line).
@@ -28,6 +28,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -60,24 +61,15 @@ class Job:
                 "resources": {"cpus": self.cpus, "gpus": self.gpus}}
 
 
-def _cli_parser() -> argparse.ArgumentParser:
-    from ..cli import build_parser
+def batchable_commands(commands: Mapping[str, argparse.ArgumentParser]) -> list[str]:
+    """The commands a job may run: every command of the table but :data:`NOT_BATCHABLE`.
 
-    return build_parser()
-
-
-def _command_table(parser: argparse.ArgumentParser) -> dict:
-    """The CLI's subcommand parsers: {name: parser}."""
-    for action in parser._actions:  # argparse keeps subparsers here; there is no public accessor
-        if isinstance(action, argparse._SubParsersAction):
-            return dict(action.choices)
-    return {}
-
-
-def batchable_commands(parser: argparse.ArgumentParser | None = None) -> list[str]:
-    """The CLI commands a job may run: every command of ``relightnet`` but :data:`NOT_BATCHABLE`."""
-    table = _command_table(parser or _cli_parser())
-    return [name for name in table if name not in NOT_BATCHABLE]
+    Args:
+        commands: the CLI's command table, {name: the command's parser} (``relightnet batch`` passes
+            its own; :func:`relightnet.cli.command_table` builds it). This package sits below the
+            CLI and never imports it.
+    """
+    return [name for name in commands if name not in NOT_BATCHABLE]
 
 
 def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> tuple[argparse.Namespace | None, str]:
@@ -102,7 +94,7 @@ def _resources(entry: dict) -> tuple[float, float]:
     return float(cpus), float(gpus)
 
 
-def _job(index: int, entry, parser, commands: list[str]) -> Job:
+def _job(index: int, entry, table: Mapping[str, argparse.ArgumentParser], commands: list[str]) -> Job:
     """Check one entry; a bad one comes back as a Job with ``error`` set."""
     if not isinstance(entry, dict):
         return Job(index, "?", (), error=f"expected a mapping with command and args, got {type(entry).__name__}")
@@ -117,7 +109,7 @@ def _job(index: int, entry, parser, commands: list[str]) -> Job:
         cpus, gpus = _resources(entry)
     except ValueError as e:
         return Job(index, command, args, error=str(e))
-    ns, complaint = _parse(parser, [command, *args])
+    ns, complaint = _parse(table[command], list(args))
     if ns is None:
         return Job(index, command, args, cpus=cpus, gpus=gpus, error=complaint)
     out = getattr(ns, "out", None)
@@ -128,8 +120,12 @@ def _job(index: int, entry, parser, commands: list[str]) -> Job:
     return Job(index, command, args, str(out), cpus, gpus, extra=extra)
 
 
-def load_jobs(path) -> list[Job]:
+def load_jobs(path, commands: Mapping[str, argparse.ArgumentParser]) -> list[Job]:
     """Read and check a jobs file (module docstring); bad entries come back with ``error`` set.
+
+    Args:
+        path: the YAML/JSON jobs file.
+        commands: the CLI's command table, {name: parser} (:func:`batchable_commands`).
 
     Raises:
         InputError: the file is missing, unreadable, not YAML/JSON, or has no ``jobs`` list.
@@ -145,11 +141,10 @@ def load_jobs(path) -> list[Job]:
         raise InputError(f"{path}: unreadable jobs file ({type(e).__name__}: {str(e).splitlines()[0]})") from None
     if not isinstance(data, dict) or not isinstance(data.get("jobs"), list):
         raise InputError(f"{path}: expected a mapping with a 'jobs' list ({{jobs: [{{command: ..., args: [...]}}]}})")
-    parser = _cli_parser()
-    commands = batchable_commands(parser)
+    names = batchable_commands(commands)
     jobs, outputs = [], {}
     for i, entry in enumerate(data["jobs"]):
-        job = _job(i, entry, parser, commands)
+        job = _job(i, entry, commands, names)
         if job.error is None:
             key = os.path.normpath(job.out)
             if key in outputs:

@@ -1,10 +1,12 @@
 """``relightnet synth --ray``: one Ray task per shard, the manifest and progress bar on the driver.
 
-Each task runs :func:`relightnet.data.pool.shard_task` (the same function as the local pool,
-so the bytes are the same) in a Ray worker process that keeps its body assets between
-tasks, and writes its shard atomically into the dataset folder, which must be a path every
-node sees. A task that raises, or whose worker process or node dies, is run again up to
-``max_retries`` times by Ray; one that still fails comes back as a failure naming its shard.
+Each task runs the shard function it is given (``relightnet synth`` gives
+:func:`relightnet.data.pool.shard_task`, the same function as the local pool, so the bytes
+are the same; this package sits below :mod:`relightnet.data` and does not import it) in a Ray
+worker process that keeps its body assets between tasks, and writes its shard atomically into
+the dataset folder, which must be a path every node sees. A task that raises, or whose worker
+process or node dies, is run again up to ``max_retries`` times by Ray; one that still fails
+comes back as a failure naming its shard.
 Progress moves by whole shards as they are written (no actor: on a small machine another
 Python process per run is a real cost).
 """
@@ -23,22 +25,22 @@ __all__ = ["run_ray_shards"]
 logger = logging.getLogger("relightnet.distributed")
 
 
-def _ray_shard(task: tuple, fault: str | None) -> dict:
+def _ray_shard(shard_fn, task: tuple, fault: str | None) -> dict:
     """A Ray task: make and write one shard on whichever node runs it."""
-    from ..data.pool import shard_task
-
     out_dir = Path(task[3])
     if not out_dir.is_dir():
         raise InputError(f"{out_dir}: not found on node {socket.gethostname()}; the dataset folder must be "
                          "a path every node sees (a shared file system)")
-    return shard_task(task, None, fault)
+    return shard_fn(task, None, fault)
 
 
-def run_ray_shards(tasks: list, on_result, on_tick, cpus_per_task: float = 1, max_retries: int = 2,
+def run_ray_shards(shard_fn, tasks: list, on_result, on_tick, cpus_per_task: float = 1, max_retries: int = 2,
                    fault: str | None = None) -> None:
     """Run shard tasks on the connected Ray cluster (see :func:`relightnet.distributed.connect`).
 
     Args:
+        shard_fn: ``shard_fn(task, tick, fault) -> dict`` makes and writes one shard and returns its
+            result (:func:`relightnet.data.pool.shard_task`); it must be importable on every node.
         tasks: ``(cfg_dict, split, index, out_dir, compression)`` tuples.
         on_result: gets every finished shard's result (in finishing order), or a failure
             ``{"split", "index", "error"}`` once its retries are spent.
@@ -52,7 +54,7 @@ def run_ray_shards(tasks: list, on_result, on_tick, cpus_per_task: float = 1, ma
         raise InputError(f"--cpus-per-task: expected a number > 0, got {cpus_per_task}")
     run = ray.remote(_ray_shard).options(num_cpus=cpus_per_task, max_retries=int(max_retries),
                                          retry_exceptions=True)
-    pending = {run.remote(t, fault): t for t in tasks}
+    pending = {run.remote(shard_fn, t, fault): t for t in tasks}
     try:
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)

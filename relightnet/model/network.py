@@ -8,7 +8,7 @@ An encoder–decoder with skip connections reads a masked image of a person and 
   chooses how: ``"head"`` regresses it from the pooled bottleneck and decoder features (KE18);
   ``"solve"`` solves it from the predicted maps — the light that makes A ⊙ (T · L) explain the
   image over the person, weighted by a predicted per-pixel confidence
-  (:mod:`relightnet.model.light_solve`); ``"hybrid"`` solves with the head's light as the
+  (:mod:`relightnet.sh.light_solve`); ``"hybrid"`` solves with the head's light as the
   prior. Any batch size and any H, W that are multiples of 16 (no fixed reshape as in KE18);
 - optionally ``mask`` (B, 1, H, W) logits, so the 2D path runs without a user mask.
 
@@ -30,7 +30,7 @@ from torch.nn import functional as F
 from ..checks import InputError, ShapeError, check_shape
 from ..color import srgb_to_linear
 from ..render.shading import shade, shading, to_channels_first, to_channels_last
-from .light_solve import Evidence, light_evidence, solve_light
+from ..sh.light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
            "photo_albedo", "pad_to_multiple", "shade_map", "shading_map"]

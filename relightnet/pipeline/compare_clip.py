@@ -20,10 +20,10 @@ import torch
 from ..checks import InputError, sh_order_from_count
 from ..color import linear_to_srgb
 from ..io.image import to_uint8
-from ..model.light_solve import stack_evidence
 from ..model.network import Prediction
 from ..render.shading import composite, shade, to_channels_last
 from ..sh.io import resize_sh
+from ..sh.light_solve import stack_evidence
 from ..temporal import jitter, light_distance, light_error
 from . import metrics as M
 from .backends import as_predictor

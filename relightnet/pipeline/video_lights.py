@@ -50,14 +50,14 @@ def estimate_video_evidence(model, video, masks=None, progress: bool = True, mas
     Same arguments as :func:`estimate_video_lights`.
 
     Returns:
-        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.model.light_solve.Evidence`
+        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.sh.light_solve.Evidence`
         (``M`` (T, 3, K, K), ``r`` (T, 3, K)) and priors (T, K, 3) — None for a network that
         regresses its light (and the prior None for ``light_mode="solve"``).
     """
     from tqdm import tqdm
 
-    from ..model.light_solve import stack_evidence
     from ..segment.sources import video_masks
+    from ..sh.light_solve import stack_evidence
 
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
@@ -119,7 +119,7 @@ def read_light_estimates(path: Path, fingerprint: str):
     """``(raw, evidence, prior)`` saved by an earlier run with the same inputs, or None (no file,
     another fingerprint, a damaged or foreign file: it is then rewritten)."""
     from ..io.arrays import read_npz
-    from ..model.light_solve import Evidence
+    from ..sh.light_solve import Evidence
 
     if not path.is_file():
         return None

@@ -6,7 +6,6 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.light_solve import Evidence
 from relightnet.pipeline.video_lights import (
     estimate_video_evidence,
     estimate_video_lights,
@@ -16,6 +15,7 @@ from relightnet.pipeline.video_lights import (
     write_video_lights,
 )
 from relightnet.sh import preset_light
+from relightnet.sh.light_solve import Evidence
 
 
 def test_smoothing_none_and_short_clips():

@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.light_eval import clip_metrics, evaluate_light, format_light_report, still_metrics
+from relightnet.pipeline.light_eval import clip_metrics, evaluate_light, format_light_report, still_metrics
 
 
 @pytest.fixture(scope="module")

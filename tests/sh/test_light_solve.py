@@ -3,9 +3,9 @@
 import pytest
 import torch
 
-from relightnet.model.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 from relightnet.model.network import NetConfig, RelightNet, normalize_input
 from relightnet.sh import directional_light, irradiance
+from relightnet.sh.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 
 
 def _scene(b=2, k=9, h=24, w=20, seed=0):
