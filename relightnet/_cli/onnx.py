@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..names import STREAMING_SMOOTHING
+from ..names import STREAMING_SMOOTHING, smoothing_help
 from .common import (
     add_checkpoint_args,
     add_command,
@@ -66,8 +66,7 @@ def register(sub) -> None:
     add_checkpoint_args(p, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
     p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
-                   help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
-                        "since the last light switch — for a network that solves its light, else ema)")
+                   help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; inside the graph")
     p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     method_options(p, {"alpha": ("ema",)})
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")

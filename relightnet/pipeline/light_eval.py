@@ -104,15 +104,15 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
         predictor: a model or predictor (:mod:`relightnet.pipeline.backends`).
         data_dir: a dataset of clips (``sequence_frames`` > 0).
         split: which split.
-        smoothing: as the video jobs (:data:`relightnet.temporal.registry.VIDEO_SMOOTHING`).
+        smoothing: as the video jobs (:data:`relightnet.names.VIDEO_SMOOTHING`).
 
     Returns:
         One dict per clip: ``raw``, ``smoothed`` (T, K, 3), ``true`` (T, K, 3), ``switch`` (the
         first frame of the new light, or None).
     """
     from ..data.dataset import SynthDataset
+    from ..temporal.registry import smooth_video_lights
     from .backends import as_predictor
-    from .video_lights import smooth_video_lights
 
     predict = as_predictor(predictor)
     ds = SynthDataset(data_dir, split, fields=("image_composite", "mask", "light"), cache_shards=1)

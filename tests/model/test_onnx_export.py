@@ -9,7 +9,9 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.onnx_export import SMOOTHERS, StreamingRelighter, export_onnx, make_smoother
+from relightnet.model.onnx_export import StreamingRelighter, export_onnx
+from relightnet.names import STREAMING_SMOOTHING
+from relightnet.temporal import make_smoother
 from relightnet.model.onnx_serving import OnnxRelighter
 
 from .conftest import NET, TRAIN_CONFIG
@@ -85,4 +87,4 @@ def test_bad_exports_write_nothing(tmp_path):
     with pytest.raises(InputError):
         export_onnx(net, tmp_path / "m.onnx", smoothing="no-such-smoother")
     assert list(tmp_path.iterdir()) == []
-    assert "ema" in SMOOTHERS and "pooled" in SMOOTHERS
+    assert "ema" in STREAMING_SMOOTHING and "pooled" in STREAMING_SMOOTHING
