@@ -8,8 +8,8 @@ from pathlib import Path
 
 from ..names import STREAMING_SMOOTHING, smoothing_help
 from .common import (
-    add_checkpoint_args,
     add_command,
+    add_model_args,
     check_method_options,
     in_path,
     method_options,
@@ -63,7 +63,7 @@ def register(sub) -> None:
                     "  relightnet export --out relightnet.onnx\n"
                     "  relightnet export --checkpoint runs/small/last.pt --out m.onnx --smoothing one-euro\n"
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
-    add_checkpoint_args(p, device=False)
+    add_model_args(p, backend=False, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
     p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
                    help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; inside the graph")

@@ -10,9 +10,9 @@ import torch
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet
 from relightnet.model.onnx_export import StreamingRelighter, export_onnx
+from relightnet.model.onnx_serving import OnnxRelighter
 from relightnet.names import STREAMING_SMOOTHING
 from relightnet.temporal import make_smoother
-from relightnet.model.onnx_serving import OnnxRelighter
 
 from .conftest import NET, TRAIN_CONFIG
 from .conftest import make_inputs as _inputs

@@ -6,8 +6,8 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.model import normalize_input
-from relightnet.temporal import make_smoother
 from relightnet.model.onnx_serving import OnnxRelighter, calibration_set, quantize_int8, run_video
+from relightnet.temporal import make_smoother
 
 from .conftest import make_inputs as _inputs
 
