@@ -12,6 +12,7 @@ Nothing here imports torch at import time (see :mod:`relightnet.cli`).
 
 from __future__ import annotations
 
+from ..deprecation import deprecated
 from .argtypes import (
     exposure_arg,
     image_size,
@@ -36,9 +37,10 @@ from .options import (
 from .paths import in_path, made_folders, out_dir, out_file
 
 
+@deprecated("0.1.0", "0.2.0", "add_model_args(p, backend=False)")
 def add_checkpoint_args(p, device: bool = True) -> None:
-    """--checkpoint (and --device): :func:`add_model_args` without --backend; the name stays while
-    branches that call it are merged."""
+    """--checkpoint (and --device): :func:`add_model_args` without --backend (kept while branches that
+    call it are merged)."""
     add_model_args(p, backend=False, device=device)
 
 __all__ = [

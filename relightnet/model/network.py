@@ -29,7 +29,8 @@ from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError, check_shape
 from ..color import srgb_to_linear
-from ..render.shading import shade, shading, to_channels_first, to_channels_last
+from ..raster.interpolate import to_channels_first, to_channels_last
+from ..render.shading import shade, shading
 from ..sh.light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
@@ -259,11 +260,6 @@ class RelightNet(nn.Module):
             self.light_head = nn.Sequential(
                 nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
             )
-
-    @property
-    def input_size(self) -> int:
-        """The working size, ``config.input_size`` (kept for code that read the attribute)."""
-        return self.config.input_size
 
     def forward(self, x: torch.Tensor) -> Prediction:
         """Args: x (B, 4, H, W) from :func:`normalize_input`, H and W multiples of 2**levels.

@@ -27,7 +27,7 @@ outside ``mask``. Per clip:
 
 Each path is shaded with L ∈ {true L_t, raw L̂_t, smoothed L̃_t}: six outputs, compared with
 the ground truth ``image`` in its mask, on sRGB-encoded values (clipped to [0, 1], then
-:func:`~relightnet.io.image.linear_to_srgb`) with :mod:`relightnet.pipeline.metrics`: RMSE,
+:func:`~relightnet.color.linear_to_srgb`) with :mod:`relightnet.pipeline.metrics`: RMSE,
 PSNR, SSIM per frame, and the temporal error per pair of frames. No exposure matching: the
 lights of the data are on an absolute scale. The light error (irradiance L2,
 :func:`~relightnet.temporal.light_error`) compares L̂ and L̃ with the truth.

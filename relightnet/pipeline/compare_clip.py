@@ -21,7 +21,8 @@ from ..checks import InputError, sh_order_from_count
 from ..color import linear_to_srgb
 from ..io.image import to_uint8
 from ..model.network import Prediction
-from ..render.shading import composite, shade, to_channels_last
+from ..raster.interpolate import to_channels_last
+from ..render.shading import composite, shade
 from ..sh.io import resize_sh
 from ..sh.light_solve import stack_evidence
 from ..temporal import jitter, light_distance, light_error

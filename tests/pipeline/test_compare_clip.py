@@ -79,7 +79,7 @@ def test_clip_metrics_are_exact_for_a_perfect_output(clip0):
     r = rows[("2d", "true")]
     assert r["rmse"] == 0 and math.isinf(r["psnr"]) and r["ssim"] == 1 and r["temporal"] == 0
     assert len(r["per_frame"]["rmse"]) == T and len(r["per_frame"]["temporal"]) == T - 1
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
 
     err = linear_to_srgb((gt + 0.5).clamp(0, 1)) - linear_to_srgb(gt.clamp(0, 1))
     per_frame = [math.sqrt(float((err[t][mask[t] > 0] ** 2).mean())) for t in range(T)]

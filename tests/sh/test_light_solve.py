@@ -101,7 +101,7 @@ def test_network_modes(mode):
 def test_solve_network_reads_the_image_it_was_given():
     """The network's solve undoes normalize_input: given exact maps, it recovers the light that
     rendered the (sRGB, masked) input image."""
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
     from relightnet.sh import cosine_lobe_per_coeff, sh_basis
 
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=16, levels=2, light_mode="solve", solve_reg=1e-6))
