@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..checks import InputError
+from .records import JobResult
 
 __all__ = ["Job", "load_jobs", "batchable_commands", "execute_job", "NOT_BATCHABLE"]
 
@@ -174,7 +175,7 @@ def _why(output: str, returncode: int, command: str) -> tuple[str, bool]:
     return last, returncode == 2  # 2: argparse refused the arguments
 
 
-def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = None) -> dict:
+def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = None) -> JobResult:
     """Run one job as a ``relightnet`` subprocess in ``cwd`` (this machine, or a Ray worker's node).
 
     A failure the CLI reported as bad input (its one-line error, exit status 1, or a usage
@@ -184,15 +185,15 @@ def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = Non
         env: variables added to this process's environment for the job (e.g. ``OMP_NUM_THREADS``).
 
     Returns:
-        ``{"status": "done"|"failed", "error", "seconds", "attempts", "output"}`` (``output``: the
-        tail of the job's stdout and stderr, for its log).
+        A :class:`~relightnet.distributed.records.JobResult`, done or failed (``output``: the tail of
+        the job's stdout and stderr, for its log).
     """
     import socket
 
     t0 = time.monotonic()
     if not Path(cwd).is_dir():
-        return {"status": "failed", "error": f"{cwd}: not found on node {socket.gethostname()}; run batch from a "
-                "folder every node sees", "seconds": 0.0, "attempts": 0, "output": ""}
+        return JobResult.failed(f"{cwd}: not found on node {socket.gethostname()}; run batch from a folder every "
+                                "node sees")
     cmd = [sys.executable, "-m", "relightnet.cli", job.command, *job.args]
     child_env = {**os.environ, **(env or {})}
     output, error, attempt = "", None, 0
@@ -203,10 +204,8 @@ def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = Non
             log.seek(max(0, log.seek(0, os.SEEK_END) - 4 * _LOG_TAIL))
             output = log.read().decode("utf-8", "replace")[-_LOG_TAIL:]
         if rc == 0:
-            return {"status": "done", "error": None, "seconds": time.monotonic() - t0, "attempts": attempt,
-                    "output": output}
+            return JobResult("done", None, time.monotonic() - t0, attempt, output)
         error, bad_input = _why(output, rc, job.command)
         if bad_input:
             break  # the same again would fail the same way
-    return {"status": "failed", "error": error, "seconds": time.monotonic() - t0, "attempts": attempt,
-            "output": output}
+    return JobResult.failed(error, time.monotonic() - t0, attempt, output)

@@ -19,15 +19,16 @@ from pathlib import Path
 
 from ..checks import InputError
 from .cluster import import_ray, one_line
+from .records import ShardFailure, ShardTask
 
 __all__ = ["run_ray_shards"]
 
 logger = logging.getLogger("relightnet.distributed")
 
 
-def _ray_shard(shard_fn, task: tuple, fault: str | None) -> dict:
+def _ray_shard(shard_fn, task: ShardTask, fault: str | None) -> dict:
     """A Ray task: make and write one shard on whichever node runs it."""
-    out_dir = Path(task[3])
+    out_dir = Path(task.out_dir)
     if not out_dir.is_dir():
         raise InputError(f"{out_dir}: not found on node {socket.gethostname()}; the dataset folder must be "
                          "a path every node sees (a shared file system)")
@@ -41,13 +42,13 @@ def run_ray_shards(shard_fn, tasks: list, on_result, on_tick, cpus_per_task: flo
     Args:
         shard_fn: ``shard_fn(task, tick, fault) -> dict`` makes and writes one shard and returns its
             result (:func:`relightnet.data.pool.shard_task`); it must be importable on every node.
-        tasks: ``(cfg_dict, split, index, out_dir, compression)`` tuples.
-        on_result: gets every finished shard's result (in finishing order), or a failure
-            ``{"split", "index", "error"}`` once its retries are spent.
+        tasks: the :class:`~relightnet.distributed.records.ShardTask` s.
+        on_result: gets every finished shard's result (in finishing order), or its
+            :class:`~relightnet.distributed.records.ShardFailure` once its retries are spent.
         on_tick: called with a shard's sample count when it is written (progress).
         cpus_per_task: CPUs Ray reserves for each task (the generator itself runs one torch thread).
         max_retries: Ray retries of a task that raised or whose process died.
-        fault: the fault-hook spec (:mod:`relightnet.data.pool`), or None.
+        fault: the test-only fault hook's spec (:mod:`relightnet.data.fault_hook`), or None.
     """
     ray = import_ray()
     if not cpus_per_task > 0:
@@ -63,7 +64,7 @@ def run_ray_shards(shard_fn, tasks: list, on_result, on_tick, cpus_per_task: flo
                 try:
                     result = ray.get(ref)
                 except ray.exceptions.RayError as e:
-                    result = {"split": task[1], "index": task[2], "error": one_line(e)}
+                    result = ShardFailure(task.split, task.index, one_line(e), max_retries + 1)
                 else:
                     on_tick(result["count"])
                 on_result(result)
