@@ -9,58 +9,40 @@ __all__ = ["exposure_arg", "nonneg_int", "pos_int", "pos_float", "work_size", "i
            "phenotype_arg"]
 
 
+def _parsed(text: str, cast, ok, expected: str):
+    """``cast(text)`` when it parses and ``ok`` accepts it, else a usage error "expected EXPECTED, got TEXT"."""
+    try:
+        v = cast(text)
+    except (ValueError, OverflowError):
+        v = None
+    if v is None or not ok(v):
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+    return v
+
+
 def exposure_arg(text: str):
     """'auto' or a number > 0 (an exposure)."""
-    if text == "auto":
-        return text
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected 'auto' or a positive number, got {text!r}")
-    return v
+    return text if text == "auto" else _parsed(text, float, lambda v: v > 0, "'auto' or a positive number")
 
 
 def nonneg_int(text: str) -> int:
     """An integer >= 0."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
-    return v
+    return _parsed(text, int, lambda v: v >= 0, "a non-negative integer")
 
 
 def pos_int(text: str) -> int:
     """An integer >= 1."""
-    v = nonneg_int(text)
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return v
+    return _parsed(text, int, lambda v: v >= 1, "a positive integer")
 
 
 def pos_float(text: str) -> float:
     """A finite number > 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not v > 0 or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return v
+    return _parsed(text, float, lambda v: 0 < v < float("inf"), "a positive number")
 
 
 def _int_in(text: str, lo: int, hi: int, step: int, expected: str) -> int:
     """An integer in [lo, hi] that is a multiple of ``step``, else an argparse error saying ``expected``."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = lo - 1
-    if not lo <= v <= hi or v % step:
-        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
-    return v
+    return _parsed(text, int, lambda v: lo <= v <= hi and v % step == 0, expected)
 
 
 def work_size(text: str) -> int:
