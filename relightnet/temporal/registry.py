@@ -180,8 +180,7 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
     Returns:
         :class:`VideoSmoothing` ``(smoothed (T, K, 3), outliers (T,), switches (T,), method)``.
     """
-    check_smoothing(method, VIDEO_SMOOTHING)
-    name = resolve_smoothing(method, evidence is not None, frames=raw.shape[0])
+    name = resolve_smoothing(method, evidence is not None, frames=raw.shape[0])  # checks the name too
     robust = not SMOOTHING_METHODS[name].causal
     opts = {"outlier_eps": "3mad", "switches": "auto"} if robust else {}
     res = _smooth(raw, name, evidence, prior, reg, fps, None, **opts)
