@@ -1,11 +1,15 @@
 import dataclasses
 
+import pytest
+
 from relightnet.data import SynthConfig
 from relightnet.data.fault_hook import FAULT_ENV
 from relightnet.data.pool import LocalPool
 from relightnet.data.shards import verify_dataset
 from relightnet.data.synth import run_synth
 from relightnet.distributed.records import ShardFailure, ShardTask
+
+pytestmark = pytest.mark.slow  # process pools whose workers build the body assets and die on purpose
 
 CFG = SynthConfig(res=32, n_dirs=16, shard_size=2, counts={"train": 4, "val": 0, "test": 0})
 

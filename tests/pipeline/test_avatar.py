@@ -13,6 +13,8 @@ from relightnet.pipeline.avatar import avatar
 from relightnet.render import render_body_frames
 from relightnet.sh import save_light
 
+pytestmark = pytest.mark.slow  # avatar video jobs: Anny posed per frame, PRT, rendering, encoding
+
 N, RES = 4, 64
 
 

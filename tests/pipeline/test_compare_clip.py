@@ -12,6 +12,8 @@ from relightnet.pipeline.compare_report import json_safe
 
 from .conftest import RES, T
 
+pytestmark = pytest.mark.slow  # one clip through both paths with PRT, about a minute
+
 
 def test_3d_path_with_the_truths_prt_reproduces_the_ground_truth(clip0, model):
     # With the ground truth's own directions (count and seed), the 3D path is the generator's renderer.

@@ -8,6 +8,8 @@ import torch
 from relightnet.model import NetConfig, RelightNet
 from relightnet.pipeline.light_eval import clip_metrics, evaluate_light, format_light_report, still_metrics
 
+pytestmark = pytest.mark.slow  # a generated clip dataset, then the CNN over every frame
+
 
 @pytest.fixture(scope="module")
 def tiny_clips(tmp_path_factory, anny_body):

@@ -1,7 +1,10 @@
 import numpy as np
+import pytest
 
 from relightnet.cli import main
 from relightnet.io import read_video, video_info
+
+pytestmark = pytest.mark.slow  # video jobs through the CLI (segmentation, CNN per frame, encoding)
 
 
 def test_relight_video_streams_all_frames(tmp_path, masked_clip):
