@@ -125,7 +125,11 @@ def clip_with_sound():
 
 #: Markers given by what a test uses (pyproject.toml registers them; docs/design.md, "Tests"):
 #: a test that takes one of these fixtures, or lives in one of these folders, gets the marker.
-FIXTURE_MARKERS = {"ray_cluster": "ray"}
+FIXTURE_MARKERS = {
+    "ray_cluster": "ray",
+    "exported": "slow",  # a network exported to ONNX with dynamo (tests/model/conftest.py), ~10 s
+    "generated_people": "slow",  # people made by the generator at 256² (tests/segment/conftest.py), ~10 s
+}
 FOLDER_MARKERS = {"blender": "blender"}
 
 

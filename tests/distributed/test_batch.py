@@ -5,6 +5,8 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from relightnet.cli import command_table
 from relightnet.distributed import RayOptions
 from relightnet.distributed.batch import run_batch
@@ -22,6 +24,7 @@ def _summary(folder):
     return json.loads((folder / "jobs.summary.json").read_text())
 
 
+@pytest.mark.slow
 def test_killed_driver_resumes_and_a_bad_job_fails_alone(tmp_path):
     (tmp_path / "out").mkdir()
     (tmp_path / "jobs.yaml").write_text(

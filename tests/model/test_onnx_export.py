@@ -35,6 +35,7 @@ def test_ort_matches_torch_at_several_sizes_and_batches(exported):
             assert np.abs(o - e.numpy()).max() <= 1e-4
 
 
+@pytest.mark.slow
 def test_pooled_solve_in_the_graph_equals_torch_over_12_frames(tmp_path):
     """A hybrid network exported with the 'pooled' smoother: evidence outputs and the pooled light match torch
     frame by frame, and the predictor hands the evidence to the video jobs."""

@@ -16,6 +16,7 @@ from relightnet.pipeline.video_lights import (
 from relightnet.sh.light_solve import Evidence
 
 
+@pytest.mark.slow
 def test_estimates_of_a_video_per_frame(masked_clip, tmp_path):
     torch.manual_seed(0)
     net = RelightNet(NetConfig(width=4, max_width=8, levels=2, light_hidden=8, mask_head=False, input_size=32)).eval()
