@@ -18,7 +18,7 @@ PIP := $(VENV)/bin/python -m pip
 # Where the kernel tests run: the GPU when torch sees one (checked when `make test` runs).
 PYTEST_ARGS ?= $$($(PY) -c "import torch; print('--device cuda' if torch.cuda.is_available() else '')")
 
-.PHONY: demo test lint bench bench-deps setup clean-venv system-deps
+.PHONY: demo test test-fast lint bench bench-deps setup clean-venv system-deps
 
 setup: $(CACHE_DIR)/.sysdeps $(CACHE_DIR)/.sysdeps-browser $(VENV)/.installed $(ANNY_CACHE_DIR)/.filled
 
@@ -27,6 +27,12 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q tests $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
+
+# The quick loop: everything but the tests marked slow, ray, browser or blender (a few minutes on 2 cores).
+FAST_MARKERS ?= not slow and not ray and not browser and not blender
+test-fast: setup
+	$(PY) -m pytest -q tests -m "$(FAST_MARKERS)" $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 lint: setup

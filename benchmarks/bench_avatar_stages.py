@@ -41,9 +41,9 @@ def make_target(path: Path, h: int, w: int, frames: int) -> Path:
     import torch.nn.functional as F
 
     from relightnet.body import AnnyBody, make_motion
+    from relightnet.color import linear_to_srgb
     from relightnet.io import VideoWriter
     from relightnet.io.envmap import read_envmap
-    from relightnet.io.image import linear_to_srgb
     from relightnet.pipeline import avatar_albedo
     from relightnet.raster import default_camera
     from relightnet.render import render_body_frames
@@ -129,7 +129,8 @@ def child_stages(args) -> dict:
     try:
         from relightnet.pipeline.avatar import _composite_covered as composite
     except ImportError:
-        from relightnet.io.image import linear_to_srgb, to_uint8
+        from relightnet.color import linear_to_srgb
+        from relightnet.io.image import to_uint8
 
         def composite(r, bg):
             a = r.alpha[0][..., None]

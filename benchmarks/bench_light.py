@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.model.checkpoint import load_model  # noqa: E402
-from relightnet.model.light_eval import evaluate_light  # noqa: E402
+from relightnet.pipeline.light_eval import evaluate_light  # noqa: E402
 
 
 def main() -> None:

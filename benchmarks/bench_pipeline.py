@@ -72,11 +72,12 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     """Median ms per frame of each stage of the avatar job."""
     from relightnet.body import AnnyBody, make_motion
     from relightnet.io import VideoWriter, read_masks, read_video
-    from relightnet.pipeline import avatar_albedo, make_predictor, smooth_video_lights
+    from relightnet.pipeline import avatar_albedo, make_predictor
     from relightnet.pipeline.avatar import _composite_covered
     from relightnet.prt import vertex_transport
     from relightnet.raster import default_camera, rasterize
     from relightnet.render import render_mesh
+    from relightnet.temporal import smooth_video_lights
 
     frames = [f for _, f in zip(range(4), read_video(video), strict=False)]
     mask = next(read_masks(masks)[1])

@@ -37,8 +37,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.data import SynthConfig  # noqa: E402
-from relightnet.data.pool import LocalPool  # noqa: E402
+from relightnet.data.pool import LocalPool, shard_task  # noqa: E402
 from relightnet.distributed.ray_synth import run_ray_shards  # noqa: E402
+from relightnet.distributed.records import ShardTask  # noqa: E402
 
 WORKERS = 2
 
@@ -46,12 +47,12 @@ WORKERS = 2
 def _run(executor, cfg: SynthConfig, shards: range) -> float:
     """Wall seconds of one run of these shards on ``executor`` (a LocalPool, or None for Ray)."""
     with tempfile.TemporaryDirectory() as d:
-        tasks = [(cfg.to_dict(), "train", i, d, "deflate") for i in shards]
+        tasks = [ShardTask(cfg.to_dict(), "train", i, d, "deflate") for i in shards]
         t0 = time.perf_counter()
         if executor is not None:
             executor.run(tasks, on_result=lambda r: None, on_tick=lambda k: None)
         else:
-            run_ray_shards(tasks, on_result=lambda r: None, on_tick=lambda k: None)
+            run_ray_shards(shard_task, tasks, on_result=lambda r: None, on_tick=lambda k: None)
         return time.perf_counter() - t0
 
 

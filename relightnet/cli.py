@@ -9,7 +9,7 @@ the names listed in the help come from :mod:`relightnet.names`.
 The rules every command follows (see ``docs/design.md``, "Command line"):
 
 - Output paths are checked, and their missing parent folders made, before any work
-  (:func:`relightnet._cli.common.out_file` / :func:`~relightnet._cli.common.out_dir`).
+  (:func:`relightnet._cli.paths.out_file` / :func:`~relightnet._cli.paths.out_dir`).
 - Bad input ends in one line on stderr, ``relightnet COMMAND: ...``, and exit status 1;
   Ctrl-C in one line (with the command's resume hint, if it has one) and status 130.
 - Only relightnet's own loggers speak at INFO; third-party libraries at WARNING (all at
@@ -52,6 +52,14 @@ def build_parser() -> argparse.ArgumentParser:
                              help="largest image or video frame decoded, width x height (default: 64000000, "
                                   "or $RELIGHTNET_MAX_PIXELS); larger files are refused before decoding")
     return parser
+
+
+def command_table(parser: argparse.ArgumentParser | None = None) -> dict[str, argparse.ArgumentParser]:
+    """The commands of ``parser`` (default: :func:`build_parser`'s) and their parsers, in --help order."""
+    for action in (parser or build_parser())._actions:  # argparse keeps subparsers here, with no public accessor
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
 
 
 def _leaf_parsers(sub) -> list[argparse.ArgumentParser]:
@@ -120,18 +128,16 @@ def main(argv: list[str] | None = None) -> int:
         from .io.limits import set_max_pixels
 
         set_max_pixels(args.max_pixels)
-    from ._cli.common import forget_made_folders, remove_made_folders
+    from ._cli.paths import made_folders
 
-    forget_made_folders()
     try:
-        return int(args.func(args) or 0)
+        with made_folders():  # a command that fails removes the output folders it made, if still empty
+            return int(args.func(args) or 0)
     except KeyboardInterrupt:
-        remove_made_folders()
         hint = getattr(args, "interrupt_hint", None)
         sys.stderr.write(f"relightnet {args.command}: interrupted{'; ' + hint(args) if hint else ''}\n")
         return 130
     except Exception as e:  # input errors become one line; anything else is a bug and keeps its traceback
-        remove_made_folders()  # a failed command leaves no empty output folder behind
         line = error_line(e)
         if line is None:
             raise

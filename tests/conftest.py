@@ -172,3 +172,24 @@ def clip_with_sound():
         return path
 
     return make
+
+
+#: Markers given by what a test uses (pyproject.toml registers them; docs/design.md, "Tests"):
+#: a test that takes one of these fixtures, or lives in one of these folders, gets the marker.
+FIXTURE_MARKERS = {
+    "ray_cluster": "ray",
+    "exported": "slow",  # a network exported to ONNX with dynamo (tests/model/conftest.py), ~10 s
+    "generated_people": "slow",  # people made by the generator at 256² (tests/segment/conftest.py), ~10 s
+}
+FOLDER_MARKERS = {"blender": "blender"}
+
+
+def pytest_collection_modifyitems(config, items):
+    root = Path(__file__).resolve().parent
+    for item in items:
+        for fixture, marker in FIXTURE_MARKERS.items():
+            if fixture in getattr(item, "fixturenames", ()):
+                item.add_marker(marker)
+        parts = Path(str(item.fspath)).resolve().relative_to(root).parts
+        if len(parts) > 1 and parts[0] in FOLDER_MARKERS:
+            item.add_marker(FOLDER_MARKERS[parts[0]])

@@ -150,6 +150,7 @@ def test_logging_quiet_for_third_parties(capsys):
         logging.basicConfig(level=logging.WARNING, force=True)
 
 
+@pytest.mark.slow
 def test_ctrl_c_in_train_is_one_line_with_the_resume_hint(tmp_path, tiny_dataset):
     """A real SIGINT to the process group (as a terminal sends it) while the model trains."""
     config = tmp_path / "long.yaml"

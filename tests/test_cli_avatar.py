@@ -5,6 +5,8 @@ import pytest
 from relightnet.cli import build_parser, main
 from relightnet.names import VIDEO_SMOOTHING as SMOOTHING
 
+pytestmark = pytest.mark.slow  # the avatar command end to end
+
 
 def _one_line(capsys, rc):
     err = capsys.readouterr().err.strip().splitlines()

@@ -1,4 +1,5 @@
-"""relightnet._cli.common: the output-path rule, input checks and argument types shared by every command."""
+"""relightnet._cli's shared helpers (argtypes, paths, options, inputs, gathered in _cli.common): the output-path
+rule, input checks and argument types shared by every command."""
 
 import argparse
 
@@ -11,7 +12,6 @@ from relightnet.sh import save_light
 
 
 def test_out_file_makes_missing_parents_and_checks_the_type(tmp_path):
-    common.forget_made_folders()
     p = common.out_file(tmp_path / "a" / "b" / "x.mp4", suffixes=(".mp4", ".mkv"))
     assert p == tmp_path / "a" / "b" / "x.mp4" and p.parent.is_dir() and not p.exists()
     assert common.out_file(str(tmp_path / "y.PNG"), suffixes=(".png",)).name == "y.PNG"  # any case
@@ -25,21 +25,24 @@ def test_out_file_makes_missing_parents_and_checks_the_type(tmp_path):
 
 
 def test_out_dir_and_the_removal_of_folders_a_failed_command_made(tmp_path):
-    common.forget_made_folders()
-    d = common.out_dir(tmp_path / "n1" / "n2" / "run", "--out-dir")
-    assert d.parent.is_dir() and not d.exists()  # the folder itself is the command's to make
-    (tmp_path / "kept").mkdir()
-    common.out_file(tmp_path / "kept" / "n3" / "x.png")
-    (tmp_path / "kept" / "n3" / "partial.txt").write_text("")  # something the command wrote: kept
-    common.remove_made_folders()
+    with pytest.raises(RuntimeError), common.made_folders() as made:  # a command that fails
+        d = common.out_dir(tmp_path / "n1" / "n2" / "run", "--out-dir")
+        assert d.parent.is_dir() and not d.exists()  # the folder itself is the command's to make
+        (tmp_path / "kept").mkdir()
+        common.out_file(tmp_path / "kept" / "n3" / "x.png")
+        (tmp_path / "kept" / "n3" / "partial.txt").write_text("")  # something the command wrote: kept
+        assert made == [tmp_path / "n1", tmp_path / "n1" / "n2", tmp_path / "kept" / "n3"]
+        raise RuntimeError("the command failed")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept"] and (tmp_path / "kept" / "n3").is_dir()
     (tmp_path / "file").write_text("")
     with pytest.raises(InputError, match="--out-dir .*file: is a file; expected a folder"):
         common.out_dir(tmp_path / "file", "--out-dir")
-    common.out_dir(tmp_path / "n4" / "d")
-    common.forget_made_folders()  # a command that succeeded: its folders are not removed by the next one
-    common.remove_made_folders()
-    assert (tmp_path / "n4").is_dir()
+    with common.made_folders() as made:  # a command that succeeds keeps its folders
+        common.out_dir(tmp_path / "n4" / "d")
+    assert made == [tmp_path / "n4"] and (tmp_path / "n4").is_dir()
+    with common.made_folders() as made:  # each command lists only its own folders
+        common.out_file(tmp_path / "n5" / "x.png")
+    assert made == [tmp_path / "n5"]
 
 
 def test_in_path_names_the_option(tmp_path):
@@ -82,7 +85,7 @@ def test_key_value_arg_takes_its_keys_late():
 def test_load_single_light_refuses_a_sequence(tmp_path):
     assert common.load_single_light("studio").shape == (9, 3)
     seq = save_light(tmp_path / "seq.npz", torch.zeros(3, 9, 3))
-    with pytest.raises(ValueError, match=r"expected one light \(K, 3\), got a sequence \(3, 9, 3\)"):
+    with pytest.raises(InputError, match=r"expected one light \(K, 3\), got a sequence \(3, 9, 3\)"):
         common.load_single_light(str(seq))
 
 
@@ -91,6 +94,9 @@ def test_shared_options_list_their_choices():
     common.add_body_args(p)
     common.add_mask_source_arg(p)
     common.add_model_args(p)
+    q = argparse.ArgumentParser()
+    common.add_model_args(q, backend=False, device=False)  # --checkpoint alone
+    assert vars(q.parse_args(["--checkpoint", "m.pt"])) == {"checkpoint": "m.pt"}
     a = p.parse_args(["--pose", "tpose", "--phenotype", "age=0.3", "--mask-source", "head", "--backend", "onnx"])
     assert (a.pose, a.phenotype, a.mask_source, a.backend) == ("tpose", [("age", 0.3)], "head", "onnx")
     with pytest.raises(SystemExit):

@@ -1,8 +1,12 @@
 """`relightnet compare` at the command line: inputs and the report folder checked before any work (runs:
 tests/pipeline/test_compare.py)."""
 
+import pytest
+
 from relightnet.cli import build_parser, main
 from relightnet.names import VIDEO_SMOOTHING as SMOOTHING
+
+pytestmark = pytest.mark.slow  # the compare command end to end
 
 
 def test_missing_data_and_a_file_for_the_report_folder(tmp_path, capsys):

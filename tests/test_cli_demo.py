@@ -1,7 +1,11 @@
 """`relightnet demo` at the command line: sizes and the output folder checked before any work (the run:
 tests/pipeline/test_demo.py)."""
 
+import pytest
+
 from relightnet.cli import main
+
+pytestmark = pytest.mark.slow  # the demo end to end
 
 
 def test_bad_sizes_and_outputs_fail_in_one_line(tmp_path, capsys):

@@ -75,6 +75,7 @@ def test_bad_arguments_are_usage_errors(tmp_path, capsys):
     assert main(["light"]) == 2  # no subcommand: help
 
 
+@pytest.mark.slow
 def test_subprocess(tmp_path):
     env = dict(os.environ, MPLBACKEND="Agg")
     out = tmp_path / "sunset.png"

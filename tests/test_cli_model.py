@@ -9,6 +9,8 @@ from relightnet.cli import main
 from relightnet.io import write_image
 from relightnet.sh import load_light
 
+pytestmark = pytest.mark.slow  # train and evaluate through the CLI
+
 REPO = Path(__file__).resolve().parents[1]
 
 

@@ -7,6 +7,8 @@ from relightnet.cli import main
 from relightnet.model.onnx_serving import OnnxRelighter
 from relightnet.sh import load_light
 
+pytestmark = pytest.mark.slow  # export (dynamo) and onnx-run through the CLI
+
 REPO = Path(__file__).resolve().parents[1]
 
 

@@ -17,6 +17,7 @@ def test_render_mesh_file(tmp_path):
     assert maps["transport"].shape == (48, 48, 9) and maps["mask"].sum() > 100
 
 
+@pytest.mark.slow
 def test_render_body_still_and_motion(tmp_path):
     assert main(["-q", "render-body", "--pose", "arms_crossed", "--light", "sunset", "--res", "64", "--n-dirs", "16",
                  "--out", str(tmp_path / "b.png"), "--mask-out", str(tmp_path / "m.png")]) == 0

@@ -30,6 +30,7 @@ def test_count_rules_and_config_file(tmp_path):
     assert _cfg("--config", str(tmp_path / "c.yaml"), "--res", "96").res == 96
 
 
+@pytest.mark.slow
 def test_make_verify_preview(tmp_path, capsys):
     d = tmp_path / "data" / "ds"  # missing parent folders are made, as for every command's output
     argv = ["-q", "synth", "--out", str(d), "--count", "2", "--split-count", "val=0", "--split-count", "test=1", *TINY]

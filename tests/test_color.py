@@ -2,11 +2,14 @@ import numpy as np
 import torch
 
 from relightnet import color
-from relightnet.io import linear_to_srgb, srgb_to_linear
+from relightnet.color import linear_to_srgb, srgb_to_linear
 
 
-def test_io_names_are_the_colour_module_functions():
+def test_the_srgb_functions_live_in_color_only():
+    import relightnet.io
+
     assert linear_to_srgb is color.linear_to_srgb and srgb_to_linear is color.srgb_to_linear
+    assert not hasattr(relightnet.io, "linear_to_srgb") and "srgb_to_linear" not in relightnet.io.__all__
 
 
 def test_transfer_functions_known_values_and_inverse():

@@ -11,9 +11,8 @@ from relightnet import names
 def test_every_listed_name_is_implemented():
     from relightnet.body.anny_model import POSE_PRESETS, pose_preset
     from relightnet.body.motion import make_motion
-    from relightnet.model.onnx_export import make_smoother
     from relightnet.sh import load_light
-    from relightnet.temporal import smoothing_matrix
+    from relightnet.temporal import make_smoother, smooth_sequence, smoothing_matrix
 
     assert tuple(POSE_PRESETS) == names.POSE_PRESETS  # the rotations exist for exactly the listed poses
     assert all(isinstance(pose_preset(p), dict) for p in names.POSE_PRESETS)
@@ -21,26 +20,47 @@ def test_every_listed_name_is_implemented():
         assert isinstance(make_motion(kind, 2, fps=10), dict)
     for method in names.OFFLINE_METHODS:
         assert smoothing_matrix(12, method).shape == (12, 12)
-    for name in names.ONNX_SMOOTHERS:
-        assert isinstance(make_smoother(name), torch.nn.Module)
+    lights = torch.rand(6, 9, 3)
+    for name, method in names.SMOOTHING_METHODS.items():
+        if method.causal:
+            assert isinstance(make_smoother(name), torch.nn.Module)
+        if not method.evidence:  # every method smooths a recorded sequence
+            assert smooth_sequence(lights, name).smoothed.shape == lights.shape
     assert names.light_presets() and all(load_light(p).shape == (9, 3) for p in names.light_presets()[:2])
 
 
 def test_lists_agree_with_the_library():
-    from relightnet.model.onnx_export import SMOOTHERS
     from relightnet.segment.sources import MASK_SOURCES, check_mask_source
     from relightnet.sh.presets import preset_names
-    from relightnet.temporal.registry import SMOOTHING_METHODS, smoothing_names
-    from relightnet.temporal.smoothers import METHODS
 
-    assert (SMOOTHERS, MASK_SOURCES, METHODS) == (names.ONNX_SMOOTHERS, names.MASK_SOURCES, names.OFFLINE_METHODS)
+    assert MASK_SOURCES == names.MASK_SOURCES
     assert preset_names() == names.light_presets() == sorted(p.stem for p in names.envmap_dir().glob("*.exr"))
     assert [check_mask_source(s) for s in names.MASK_SOURCES] == list(names.MASK_SOURCES)
-    # the smoothing lists are the registry's methods, split by where they run
-    assert set(names.VIDEO_SMOOTHING) == {"auto", *SMOOTHING_METHODS}
-    assert set(names.STREAMING_SMOOTHING) == {"auto", *smoothing_names(causal=True)}
-    assert set(names.SEQUENCE_SMOOTHING) == set(smoothing_names(evidence=False))
-    assert set(names.OFFLINE_METHODS) == set(smoothing_names(causal=False))
+
+
+def test_the_smoothing_lists_derive_from_the_one_table():
+    table = names.SMOOTHING_METHODS
+    assert names.VIDEO_SMOOTHING == ("auto", *table)
+    assert names.STREAMING_SMOOTHING == ("auto", *(n for n, m in table.items() if m.causal))
+    assert names.SEQUENCE_SMOOTHING == tuple(n for n, m in table.items() if not m.evidence)
+    assert names.OFFLINE_METHODS == ("hermite", "poly", "savgol")
+    assert names.smoothing_names(causal=True, evidence=True) == ("pooled",)
+
+
+def test_every_smoothing_option_in_the_help_comes_from_the_table():
+    from relightnet.cli import build_parser, command_table
+
+    seen = {}
+    for name, parser in command_table(build_parser()).items():
+        for action in parser._actions:
+            # segment's --smoothing is the mask tracker's weight (a number), not a light-smoothing method
+            if "--smoothing" in action.option_strings and action.type is not float:
+                seen[name] = action
+    assert set(seen) >= {"avatar", "compare", "relight-video", "export", "smooth-light"}
+    for name, action in seen.items():
+        allowed = tuple(action.choices)
+        assert allowed in (names.VIDEO_SMOOTHING, names.STREAMING_SMOOTHING, names.SEQUENCE_SMOOTHING), name
+        assert action.help.startswith(names.smoothing_help(allowed, action.default).replace("%", "%%")), name
 
 
 def test_importing_names_and_the_cli_parser_does_not_import_torch():

@@ -1,7 +1,9 @@
-"""The package's shape: small files and functions, no private name imported across subpackages, no
-import cycle (module imports anywhere in a file count, lazy ones included)."""
+"""The package's shape: small files and functions, no private name imported across subpackages, every
+import going down the declared floors (:data:`FLOORS`, as in docs/design.md "Layers"), no import cycle
+between packages or modules (module imports anywhere in a file count, lazy ones included)."""
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -9,6 +11,32 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "relightnet"
 MAX_FILE_LINES = 400
 MAX_FUNCTION_LINES = 80
+
+#: The floors of the package, bottom first (docs/design.md, "Layers"). A module may import its own
+#: subpackage and anything on a lower floor, never the same floor's other packages or a higher one;
+#: imports inside functions count. "" is ``relightnet/__init__.py`` (only ``__version__``); the other
+#: names are subpackages (``relightnet/NAME/``) or top-level modules (``relightnet/NAME.py``).
+FLOORS: tuple[tuple[str, ...], ...] = (
+    ("", "errors"),
+    ("checks", "color", "deprecation", "names"),
+    ("io",),
+    ("raster",),
+    ("sh",),
+    ("body",),
+    ("segment",),
+    ("distributed",),
+    ("prt",),
+    ("temporal",),
+    ("render",),
+    ("data",),
+    ("blender",),
+    ("model",),
+    ("pipeline",),
+    ("_cli",),
+    ("cli",),
+    ("__main__",),
+)
+FLOOR = {name: i for i, floor in enumerate(FLOORS) for name in floor}
 
 
 def _modules() -> dict[str, Path]:
@@ -83,6 +111,67 @@ def test_no_private_name_imported_across_subpackages():
             if private_name or private_module:
                 bad.append(f"{m} imports {full}")
     assert bad == []
+
+
+def _package_edges() -> set[tuple[str, str, str]]:
+    """(importing module, imported module, ...) as (module, dest, dest's package) for every import
+    that leaves the importing module's package."""
+    out = set()
+    for m in MODULES:
+        for target, name in _imports(m):
+            full = f"{target}.{name}" if name else target
+            dest = full if full in MODULES else target
+            if _subpackage(dest) != _subpackage(m):
+                out.add((m, dest, _subpackage(dest)))
+    return out
+
+
+def _climbs(edges, floor: dict[str, int]) -> list[str]:
+    """Imports ``(module, dest)`` whose package is not on a lower floor than the importer's."""
+    bad = []
+    for m, dest in sorted(edges):
+        a, b = _subpackage(m), _subpackage(dest)
+        if a != b and floor[b] >= floor[a]:
+            bad.append(f"{m} (floor {floor[a]}: {a or 'relightnet'}) imports {dest} (floor {floor[b]}: "
+                       f"{b or 'relightnet'})")
+    return bad
+
+
+def test_every_package_has_a_floor():
+    assert sorted({_subpackage(m) for m in MODULES} - set(FLOOR)) == []
+    assert len(FLOOR) == sum(len(f) for f in FLOORS)  # each name on one floor
+
+
+def test_the_design_doc_lists_the_same_floors():
+    text = (ROOT.parent / "docs" / "design.md").read_text(encoding="utf-8")
+    section = text.split("## Layers", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| (\d+) \| (.+) \|$", section, flags=re.M)
+    doc = [tuple(sorted("" if n == "relightnet/__init__.py" else n for n in re.findall(r"`([^`]+)`", names)
+                        if n in FLOOR or n == "relightnet/__init__.py"))
+           for _, names in rows]
+    assert [int(i) for i, _ in rows] == list(range(len(FLOORS)))
+    assert doc == [tuple(sorted(f)) for f in FLOORS]
+
+
+def test_imports_only_go_down_the_floors():
+    assert _climbs({(m, d) for m, d, _ in _package_edges()}, FLOOR) == []
+
+
+def test_no_package_cycle():
+    edges: dict[str, set[str]] = {_subpackage(m): set() for m in MODULES}
+    for m, _, pkg in _package_edges():
+        edges[_subpackage(m)].add(pkg)
+    assert _cycles(edges) == []
+
+
+def test_the_floor_check_finds_climbs():
+    floor = {"": 0, "io": 1, "model": 2, "pipeline": 3}
+    edges = {("relightnet.model.a", "relightnet.pipeline.b"), ("relightnet.pipeline.b", "relightnet.io.c"),
+             ("relightnet.model.a", "relightnet.model.d"), ("relightnet.io.c", "relightnet")}
+    assert _climbs(edges, floor) == ["relightnet.model.a (floor 2: model) imports relightnet.pipeline.b (floor 3: "
+                                     "pipeline)"]
+    assert _climbs({("relightnet.io.c", "relightnet.io.e"), ("relightnet.io.c", "relightnet.x")},
+                   {"": 0, "io": 1, "x": 1}) == ["relightnet.io.c (floor 1: io) imports relightnet.x (floor 1: x)"]
 
 
 def _graph() -> dict[str, set[str]]:

@@ -6,7 +6,7 @@ import argparse
 import logging
 
 from ..errors import InputError
-from ..names import LIGHT_FROM, MOTION_KINDS, VIDEO_SMOOTHING
+from ..names import LIGHT_FROM, MOTION_KINDS, VIDEO_SMOOTHING, smoothing_help
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -122,10 +122,7 @@ def register(sub) -> None:
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
                    "(default: full body at the origin)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
-                   help="light over time: pooled (one light solve per shot, split at detected light switches), "
-                        "hermite/poly/savgol (robust smoothing of per-frame lights), ema/one-euro/fir/gated-one-euro "
-                        "(causal filters), none; default auto: pooled "
-                        "when the model solves its light, else hermite")
+                   help=smoothing_help(VIDEO_SMOOTHING, "auto"))
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
     p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")

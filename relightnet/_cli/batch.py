@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from ..distributed.batch import run_batch, summary_path
 
     ray = RayOptions(address=args.ray or None) if args.ray is not None else None
-    summary = run_batch(args.jobs, ray=ray, max_retries=args.max_retries, progress=not args.quiet)
+    summary = run_batch(args.jobs, args.commands, ray=ray, max_retries=args.max_retries, progress=not args.quiet)
     print(_table(summary))
     print(f"summary: {summary_path(args.jobs)}")
     return 1 if summary["counts"]["failed"] else 0
@@ -64,4 +64,6 @@ def register(sub) -> None:
                    "new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")
     p.add_argument("--max-retries", type=nonneg_int, default=1,
                    help="times a crashed job is run again; bad input is not retried (default: 1)")
-    p.set_defaults(func=run, interrupt_hint=lambda a: f"run the same command again to resume {a.jobs}")
+    # sub.choices: the command table (filled as the commands register), which the jobs are checked against
+    p.set_defaults(func=run, commands=sub.choices,
+                   interrupt_hint=lambda a: f"run the same command again to resume {a.jobs}")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..names import VIDEO_SMOOTHING
+from ..names import VIDEO_SMOOTHING, smoothing_help
 from .common import add_command, add_model_args, in_path, nonneg_int, out_dir, pos_int, work_size
 
 logger = logging.getLogger("relightnet.compare")
@@ -49,10 +49,7 @@ def register(sub) -> None:
                    help="rotation seed of the 3D path's PRT directions (default: 0)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces of the 3D path (default: 0)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
-                   help="light over time: pooled (one light solve per shot, split at detected light switches), "
-                        "hermite/poly/savgol (robust smoothing of per-frame lights), ema/one-euro/fir/gated-one-euro "
-                        "(causal filters), none; default auto: pooled "
-                        "when the model solves its light, else hermite")
+                   help=smoothing_help(VIDEO_SMOOTHING, "auto"))
     p.add_argument("--source-light", default="studio", metavar="PRESET",
                    help="preset light of the 2D path's input image of the subject (default: studio)")
     p.add_argument("--size", type=work_size, help="CNN working size, a multiple of 16 (default: its training size)")

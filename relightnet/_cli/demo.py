@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import InputError
 from .common import add_command, out_dir, pos_int
 
 
@@ -12,7 +13,7 @@ def run(args: argparse.Namespace) -> int:
 
     for name in ("size", "compare_size"):
         if getattr(args, name) % 16:
-            raise ValueError(f"--{name.replace('_', '-')}: expected a multiple of 16, got {getattr(args, name)}")
+            raise InputError(f"--{name.replace('_', '-')}: expected a multiple of 16, got {getattr(args, name)}")
     p = run_demo(out_dir(args.out), size=args.size, frames=args.frames, n_dirs=args.n_dirs,
                  compare_clips=args.compare_clips, compare_size=args.compare_size, compare_frames=args.compare_frames,
                  progress=not args.quiet)

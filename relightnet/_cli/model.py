@@ -7,8 +7,8 @@ import json
 import logging
 from pathlib import Path
 
+from ..errors import InputError
 from .common import (
-    add_checkpoint_args,
     add_command,
     add_mask_source_arg,
     add_model_args,
@@ -26,7 +26,7 @@ def run_train(args: argparse.Namespace) -> int:
 
     cfg = load_train_config(args.config)
     if not Path(args.data, "manifest.json").is_file():
-        raise ValueError(f"--data {args.data}: expected a dataset folder made by 'relightnet synth' (no manifest.json)")
+        raise InputError(f"--data {args.data}: expected a dataset folder made by 'relightnet synth' (no manifest.json)")
     out = out_dir(args.out)
     last = train(cfg, args.data, out, resume=args.resume, device=args.device)
     logger.info("training finished: %s", json.dumps({k: round(v, 5) for k, v in last.items()}) if last else "-")
@@ -40,10 +40,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
     out = out_dir(args.out)
     if args.clips and not args.light:
-        raise ValueError("--clips: only with --light (the light report)")
+        raise InputError("--clips: only with --light (the light report)")
     unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline)) if given]
     if args.light and unused:
-        raise ValueError(f"{', '.join(unused)}: not used with --light (the light report has no baseline or twin)")
+        raise InputError(f"{', '.join(unused)}: not used with --light (the light report has no baseline or twin)")
     model = load_model(args.checkpoint, device=args.device)
     if args.light:
         return _evaluate_light(args, model, out)
@@ -65,7 +65,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
     from ..io import atomic_write
-    from ..model.light_eval import evaluate_light, format_light_report
+    from ..pipeline.light_eval import evaluate_light, format_light_report
 
     result = evaluate_light(model, args.data, clips=args.clips or (), split=args.split)
     text = format_light_report(result, str(args.checkpoint or "shipped model"))
@@ -127,7 +127,7 @@ def register(sub) -> None:
                     "--data data/medium --out reports/ablation\n"
                     "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
                     "--out reports/light\n")
-    add_checkpoint_args(p)
+    add_model_args(p, backend=False)
     p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
     p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
     p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png")

@@ -6,10 +6,10 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..names import STREAMING_SMOOTHING
+from ..names import STREAMING_SMOOTHING, smoothing_help
 from .common import (
-    add_checkpoint_args,
     add_command,
+    add_model_args,
     check_method_options,
     in_path,
     method_options,
@@ -63,11 +63,10 @@ def register(sub) -> None:
                     "  relightnet export --out relightnet.onnx\n"
                     "  relightnet export --checkpoint runs/small/last.pt --out m.onnx --smoothing one-euro\n"
                     "  relightnet export --out m.onnx --int8          # also writes m_int8.onnx\n")
-    add_checkpoint_args(p, device=False)
+    add_model_args(p, backend=False, device=False)
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
     p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
-                   help="light smoothing in the graph (default auto: pooled — the light solve's evidence pooled "
-                        "since the last light switch — for a network that solves its light, else ema)")
+                   help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; inside the graph")
     p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     method_options(p, {"alpha": ("ema",)})
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
+from ..names import STREAMING_SMOOTHING, smoothing_help
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -69,30 +70,10 @@ def run_video(args: argparse.Namespace) -> int:
         in_path(args.masks, "--masks", "a folder of mask images or a mask video")
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
-    smoothing, alpha = args.smoothing, args.alpha
-    if isinstance(smoothing, float):  # the former spelling: the EMA weight
-        logger.warning("--smoothing %g: a number is deprecated; use --smoothing auto --alpha %g (or none for 1)",
-                       smoothing, smoothing)
-        smoothing, alpha = ("none" if smoothing == 1 else "auto"), smoothing
     relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
-                  smoothing=smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
-                  mask_source=args.mask_source, alpha=alpha)
+                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
+                  mask_source=args.mask_source, alpha=args.alpha)
     return 0
-
-
-def _streaming_smoothing(text: str):
-    """--smoothing of relight-video: a causal method name, or (deprecated) the EMA weight as a number."""
-    from ..names import STREAMING_SMOOTHING
-
-    if text in STREAMING_SMOOTHING:
-        return text
-    try:
-        w = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected one of {', '.join(STREAMING_SMOOTHING)}, got {text!r}") from None
-    if not 0 < w <= 1:
-        raise argparse.ArgumentTypeError(f"expected a method name, or a weight in (0, 1], got {text!r}")
-    return w
 
 
 def register(sub) -> None:
@@ -127,9 +108,8 @@ def register(sub) -> None:
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="output video (.mp4 or .mkv)")
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
-    p.add_argument("--smoothing", type=_streaming_smoothing, default="auto",
-                   help="causal smoothing of the source-light estimate: auto, pooled, ema, one-euro, fir, "
-                        "gated-one-euro, none (default auto: pooled for a network that solves its light, else ema)")
+    p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
+                   help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; of the source-light estimate")
     p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo instead of each frame divided by the predicted shading")

@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..names import OFFLINE_METHODS, SEQUENCE_SMOOTHING, SMOOTHING_METHODS, smoothing_help, smoothing_names
 from .common import add_command, check_method_options, method_options, nonneg_int, out_file, pos_float, pos_int
 
 logger = logging.getLogger("relightnet.smooth")
@@ -16,15 +17,15 @@ def _smooth(args, sh):
     :func:`relightnet.temporal.smooth_sequence`; the command's defaults for each method's options)."""
     from ..checks import InputError
     from ..temporal import parse_eps
-    from ..temporal.registry import SMOOTHING_METHODS, smooth_sequence
+    from ..temporal.registry import smooth_sequence
 
     eps = parse_eps(args.outlier_eps)
     deg = 2 if args.degree is None else args.degree
-    if not SMOOTHING_METHODS[args.method].causal:
+    if not SMOOTHING_METHODS[args.smoothing].causal:
         opts = {"hermite": {"knot_spacing": args.knots, "tangents": args.tangents},
                 "poly": {"degree": deg, "window": 15 if args.window is None else (args.window or None)},
-                "savgol": {"degree": deg, "window": 9 if args.window is None else args.window}}[args.method]
-        res = smooth_sequence(sh, args.method, outlier_eps=args.outlier_eps, iterations=args.iterations,
+                "savgol": {"degree": deg, "window": 9 if args.window is None else args.window}}[args.smoothing]
+        res = smooth_sequence(sh, args.smoothing, outlier_eps=args.outlier_eps, iterations=args.iterations,
                               switches=None if args.switches == "none" else "auto", **opts)
         return res.smoothed, res.outliers, res.switches
     if eps is not None and eps[0] != "mad":
@@ -36,10 +37,10 @@ def _smooth(args, sh):
             "one-euro": {"min_cutoff": args.min_cutoff, "beta": args.beta, "rate": args.rate},
             "fir": {"window": 5 if args.window is None else args.window, "degree": args.degree or 0},
             "gated-one-euro": {"persist": args.persist, **({"eps": eps[1]} if eps is not None else {})},
-            "none": {}}[args.method]
-    gate = None if eps is None or args.method in ("gated-one-euro", "none") else {"eps": eps[1],
+            "none": {}}[args.smoothing]
+    gate = None if eps is None or args.smoothing in ("gated-one-euro", "none") else {"eps": eps[1],
                                                                                   "persist": args.persist}
-    res = smooth_sequence(sh, args.method, gate=gate, **opts)
+    res = smooth_sequence(sh, args.smoothing, gate=gate, **opts)
     return res.smoothed, res.outliers, res.switches
 
 
@@ -49,10 +50,8 @@ def run_smooth(args: argparse.Namespace) -> int:
     from ..sh.io import load_light, load_light_sequence, save_light, save_light_sequence
     from ..temporal import jitter, light_error, parse_eps
     from ..temporal.plot import light_curves_png
-    from ..temporal.registry import SEQUENCE_SMOOTHING, check_smoothing
 
-    check_smoothing(args.method, SEQUENCE_SMOOTHING, "--smoothing")
-    check_method_options(args, args.method)
+    check_method_options(args, args.smoothing)
     parse_eps(args.outlier_eps)
     out = out_file(args.output, "OUT", (".npz", ".json"))
     plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
@@ -73,7 +72,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     smoothed, outliers, switches = _smooth(args, sh)
     smoothed = smoothed.detach()
     n_out = int(outliers.sum())
-    summary = f"{args.method}: {sh.shape[0]} frames, {n_out} outlier(s)"
+    summary = f"{args.smoothing}: {sh.shape[0]} frames, {n_out} outlier(s)"
     if bool(switches.any()):
         summary += f", switches at frames {switches.nonzero().flatten().tolist()}"
     if truth is not None and sh.shape[0] >= 3:
@@ -84,7 +83,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     png = light_curves_png(sh, smoothed, truth, outliers, switches, title) if plot else None
 
     if out.suffix.lower() == ".npz":
-        save_light_sequence(out, smoothed, raw=sh, outliers=outliers, switches=switches, smoothing=args.method)
+        save_light_sequence(out, smoothed, raw=sh, outliers=outliers, switches=switches, smoothing=args.smoothing)
     else:
         save_light(out, smoothed)
     if png is not None:
@@ -110,10 +109,8 @@ def register(sub) -> None:
                    ".npz output), those are smoothed")
     p.add_argument("output", metavar="OUT", help="smoothed sequence: .npz (sh = smoothed, with raw, outliers, "
                    "switches) or .json (sh only)")
-    p.add_argument("--smoothing", "--method", dest="method", default="hermite",
-                   metavar="METHOD",
-                   help="hermite, poly, savgol (offline regressions), ema, one-euro, fir, gated-one-euro (causal "
-                        "filters, as on live video) or none (default: hermite; --method is the former spelling)")
+    p.add_argument("--smoothing", default="hermite", choices=SEQUENCE_SMOOTHING,
+                   help=smoothing_help(SEQUENCE_SMOOTHING, "hermite"))
     p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
     p.add_argument("--tangents", choices=("catmull-rom", "free"), default="catmull-rom",
                    help="hermite: knot tangents from finite differences or fitted (default: catmull-rom)")
@@ -137,7 +134,7 @@ def register(sub) -> None:
                    help="causal: frames a jump must last to count as a switch (default: 2)")
     p.add_argument("--truth", default=None, help="true light sequence, for the error and the plot")
     p.add_argument("--plot", default=None, help="write a .png of raw/smoothed/true coefficients over time")
-    offline, causal = ("hermite", "poly", "savgol"), ("ema", "one-euro", "fir", "gated-one-euro")
+    offline, causal = OFFLINE_METHODS, tuple(n for n in smoothing_names(causal=True) if n in SEQUENCE_SMOOTHING)
     method_options(p, {"knots": ("hermite",), "tangents": ("hermite",), "degree": ("poly", "savgol", "fir"),
                        "window": ("poly", "savgol", "fir"), "switches": offline, "iterations": offline,
                        "alpha": ("ema",), "min_cutoff": ("one-euro",), "beta": ("one-euro",),

@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.out:
         raise InputError("--out: a dataset folder is required (or use --verify DIR / --preview DIR)")
     from ..data import SPLITS
-    from ..data.synth import default_workers, run_synth
+    from ..data.synth import run_synth
+    from ..distributed.cluster import default_workers
 
     cfg = build_config(args)
     out = out_dir(args.out)

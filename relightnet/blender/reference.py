@@ -35,6 +35,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from ..raster import Camera, default_camera
+from ..raster.morphology import erode as erode_mask
 from ..render.frame import TexturedAlbedo, render_mesh
 from .cycles import CYCLES_TO_RELIGHTNET, render_blend
 from .scene import export_scene
@@ -61,7 +62,6 @@ def masked_rel_rmse(pred: torch.Tensor, ref: torch.Tensor, mask: torch.Tensor) -
 
 def comparison_mask(alpha_a: torch.Tensor, alpha_b: torch.Tensor, erode: int = 1) -> torch.Tensor:
     """(H, W) bool: pixels fully covered in both (H, W) coverage maps, eroded by ``erode`` pixels."""
-    from ..model.losses import erode as erode_mask
 
     m = ((alpha_a > 0.999) & (alpha_b > 0.999)).float()
     return erode_mask(m[None, None], erode)[0, 0] > 0.5

@@ -25,7 +25,7 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError
-from ..io import linear_to_srgb, srgb_to_linear
+from ..color import linear_to_srgb, srgb_to_linear
 
 __all__ = [
     "SPATIAL_FIELDS",

@@ -1,16 +1,12 @@
 """Running shard tasks: the task every executor runs, and the local process pool.
 
-A shard task is ``(cfg_dict, split, index, out_dir, compression)``: make shard ``index`` of
+A shard task is a :class:`~relightnet.distributed.records.ShardTask`: make shard ``index`` of
 ``split`` and write it (atomically) into ``out_dir``. :func:`shard_task` runs one in the
 calling process — a pool worker, a Ray worker (:mod:`relightnet.distributed.ray_synth`) or
 the driver — with body assets built once per process; the driver alone writes the manifest.
-
-Fault injection (for tests of retries): with ``RELIGHTNET_SYNTH_FAULT=SHARD`` in the
-driver's environment (``SHARD`` a file name such as ``train-00001.npz``) the process making
-that shard exits (``os._exit``) after its first sample, i.e. mid-shard, every time;
-``SHARD@MARKER`` does so only while the file ``MARKER`` does not exist (it is created just
-before), i.e. on the first attempt only. The driver reads the variable and hands it to the
-tasks, so it reaches workers on any executor.
+A shard that still fails after its retries comes back as a
+:class:`~relightnet.distributed.records.ShardFailure`. The ``fault`` argument is the spec of the
+test-only fault hook (:mod:`relightnet.data.fault_hook`), None outside tests.
 """
 
 from __future__ import annotations
@@ -19,22 +15,18 @@ import collections
 import contextlib
 import logging
 import multiprocessing as mp
-import os
 import queue
 import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from pathlib import Path
 
+from ..distributed.records import ShardFailure, ShardTask
 from .config import SynthConfig
 from .shards import shard_name
 
-__all__ = ["FAULT_ENV", "shard_task", "worker_assets", "LocalPool", "run_pool"]
+__all__ = ["shard_task", "worker_assets", "LocalPool", "run_pool"]
 
 logger = logging.getLogger("relightnet.data.synth")
-
-#: Environment variable of the fault-injection hook (read by the driver; see the module docstring).
-FAULT_ENV = "RELIGHTNET_SYNTH_FAULT"
 
 _WORKER: dict = {}
 
@@ -48,41 +40,25 @@ def worker_assets():
     return _WORKER["body"]
 
 
-def _fault_tick(fault: str | None, split: str, index: int, tick):
-    """``tick`` wrapped by the fault hook when ``fault`` names this shard."""
-    name, _, marker = (fault or "").partition("@")
-    if name != shard_name(split, index):
-        return tick
-
-    def die() -> None:
-        if marker:
-            if Path(marker).exists():
-                if tick is not None:
-                    tick()
-                return
-            Path(marker).touch()
-        logger.warning("%s: fault hook (%s): this process exits now", name, FAULT_ENV)
-        os._exit(70)
-
-    return die
-
-
-def shard_task(task: tuple, tick=None, fault: str | None = None) -> dict:
+def shard_task(task: ShardTask, tick=None, fault: str | None = None) -> dict:
     """Make and write one shard in this process (raises on failure).
 
     Args:
-        task: ``(cfg_dict, split, index, out_dir, compression)``.
+        task: which shard, with the generator's configuration.
         tick: optional callable, called after every sample.
-        fault: the fault-hook spec (see the module docstring), or None.
+        fault: the test-only fault hook's spec (:mod:`relightnet.data.fault_hook`), or None.
 
     Returns:
-        ``{"split", "index", "start", "count", "sha256", "bytes", "fields"}``.
+        The shard's manifest entry ``{"split", "index", "start", "count", "sha256", "bytes", "fields"}``.
     """
     from .making import make_and_write_shard
 
-    cfg_dict, split, index, out_dir, compression = task
-    return make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,
-                                worker_assets(), _fault_tick(fault, split, index, tick))
+    if fault is not None:
+        from .fault_hook import faulty_tick
+
+        tick = faulty_tick(fault, shard_name(task.split, task.index), tick)
+    return make_and_write_shard(SynthConfig.from_dict(task.config), task.split, task.index, task.out_dir,
+                                task.compression, worker_assets(), tick)
 
 
 def _worker_init(ticks, fault, max_retries) -> None:
@@ -95,8 +71,8 @@ def _worker_init(ticks, fault, max_retries) -> None:
     _WORKER.update(ticks=ticks, fault=fault, max_retries=max_retries)
 
 
-def _worker_task(task) -> dict:
-    """A shard task with in-process retries: its result, or ``{"split", "index", "error", "attempts"}``."""
+def _worker_task(task: ShardTask) -> dict | ShardFailure:
+    """A shard task with in-process retries: its manifest entry, or its failure."""
     from ..distributed.cluster import one_line
 
     ticks, attempts = _WORKER["ticks"], 1 + _WORKER["max_retries"]
@@ -105,8 +81,9 @@ def _worker_task(task) -> dict:
             return shard_task(task, lambda: ticks.put(1), _WORKER["fault"])
         except Exception as e:  # noqa: BLE001 - reported with its shard, never lost
             error = one_line(e)
-            logger.warning("%s: attempt %d of %d failed: %s", shard_name(task[1], task[2]), attempt, attempts, error)
-    return {"split": task[1], "index": task[2], "error": error, "attempts": attempts}
+            logger.warning("%s: attempt %d of %d failed: %s", shard_name(task.split, task.index), attempt, attempts,
+                           error)
+    return ShardFailure(task.split, task.index, error, attempts)
 
 
 class LocalPool:
@@ -122,7 +99,7 @@ class LocalPool:
     Args:
         workers: processes.
         max_retries: retries of a task that raised, and of a task whose process died.
-        fault: the fault-hook spec handed to the workers (module docstring), or None.
+        fault: the test-only fault hook's spec handed to the workers (:mod:`relightnet.data.fault_hook`), or None.
     """
 
     def __init__(self, workers: int, max_retries: int = 0, fault: str | None = None):
@@ -150,10 +127,10 @@ class LocalPool:
             on_tick(1)
 
     def run(self, tasks: list, on_result, on_tick) -> None:
-        """Run shard tasks ``(cfg_dict, split, index, out_dir, compression)``, at most one per worker at a time.
+        """Run :class:`~relightnet.distributed.records.ShardTask` s, at most one per worker at a time.
 
-        ``on_result`` gets every finished shard's result (any order), or a failure
-        ``{"split", "index", "error", "attempts"}``; ``on_tick`` is called with 1 after every sample.
+        ``on_result`` gets every finished shard's manifest entry (any order), or its
+        :class:`~relightnet.distributed.records.ShardFailure`; ``on_tick`` is called with 1 after every sample.
         """
         stop = threading.Event()
         thread = threading.Thread(target=self._drain, args=(on_tick, stop), daemon=True)
@@ -169,12 +146,12 @@ class LocalPool:
                     self._pool.shutdown(wait=True, cancel_futures=True)  # every task in flight died with it
                     self._pool = self._start()
                     for task in running.values():
-                        deaths[task[1:3]] += 1
-                        name = shard_name(task[1], task[2])
-                        if deaths[task[1:3]] > self._max_retries:
-                            on_result({"split": task[1], "index": task[2], "attempts": deaths[task[1:3]],
-                                       "error": "WorkerCrashedError: the worker process died (killed or out of "
-                                                "memory) while making the shard"})
+                        deaths[task.key] += 1
+                        name = shard_name(task.split, task.index)
+                        if deaths[task.key] > self._max_retries:
+                            on_result(ShardFailure(task.split, task.index, "WorkerCrashedError: the worker process "
+                                                   "died (killed or out of memory) while making the shard",
+                                                   deaths[task.key]))
                         else:
                             logger.warning("%s: a worker process died while making it; trying again", name)
                             todo.appendleft(task)

@@ -27,7 +27,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..io import linear_to_srgb, write_image
+from ..color import linear_to_srgb
+from ..io import write_image
 from .config import SPLITS
 from .shards import dataset_config, load_manifest, read_shard
 

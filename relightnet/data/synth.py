@@ -27,11 +27,11 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
-import os
 import time
 from pathlib import Path
 
 from ..checks import InputError, RelightError
+from ..distributed.records import ShardFailure, ShardTask
 from ..io import atomic_write
 from .config import SPLITS, SynthConfig
 from .making import fields_of, make_and_write_shard, make_items, make_shard
@@ -46,7 +46,7 @@ from .shards import (
     shard_plan,
 )
 
-__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed", "default_workers"]
+__all__ = ["make_items", "make_shard", "make_and_write_shard", "run_synth", "ShardsFailed"]
 
 logger = logging.getLogger("relightnet.data.synth")
 
@@ -176,30 +176,31 @@ def _run_here(tasks: list, body, max_retries: int, on_result, on_tick) -> None:
     from .generate import prepare_assets
 
     body = prepare_assets() if body is None else body
-    for cfg_dict, split, index, out_dir, compression in tasks:
+    for t in tasks:
         for attempt in range(1, max_retries + 2):
             try:
-                on_result(make_and_write_shard(SynthConfig.from_dict(cfg_dict), split, index, out_dir, compression,
-                                               body, lambda: on_tick(1)))
+                on_result(make_and_write_shard(SynthConfig.from_dict(t.config), t.split, t.index, t.out_dir,
+                                               t.compression, body, lambda: on_tick(1)))
                 break
             except Exception as e:  # noqa: BLE001 - reported with its shard, never lost
-                logger.warning("%s: attempt %d failed: %s", shard_name(split, index), attempt, one_line(e))
+                logger.warning("%s: attempt %d failed: %s", shard_name(t.split, t.index), attempt, one_line(e))
                 if attempt > max_retries:
-                    on_result({"split": split, "index": index, "error": one_line(e)})
+                    on_result(ShardFailure(t.split, t.index, one_line(e), attempt))
 
 
 def _dispatch(tasks: list, workers: int, ray, body, max_retries: int, on_result, on_tick) -> None:
     """Run shard tasks in this process (workers=0), on the local pool, or on Ray (``ray`` given)."""
-    from .pool import FAULT_ENV, run_pool
+    from .fault_hook import fault_spec
+    from .pool import run_pool, shard_task
 
-    fault = os.environ.get(FAULT_ENV) or None
+    fault = fault_spec()  # the test-only fault hook: None outside tests
     if ray is not None:
         from ..distributed.cluster import connect
         from ..distributed.ray_synth import run_ray_shards
 
         with connect(ray.address):
-            run_ray_shards(tasks, on_result, on_tick, cpus_per_task=ray.cpus_per_task, max_retries=max_retries,
-                           fault=fault)
+            run_ray_shards(shard_task, tasks, on_result, on_tick, cpus_per_task=ray.cpus_per_task,
+                           max_retries=max_retries, fault=fault)
     elif workers == 0:
         _run_here(tasks, body, max_retries, on_result, on_tick)
     else:
@@ -217,9 +218,9 @@ def _make_shards(out_dir: Path, cfg: SynthConfig, manifest: dict, todo: list, to
                smoothing=0.1, dynamic_ncols=True)
     failures = []
 
-    def finished(r: dict) -> None:
-        if "error" in r:
-            failures.append((shard_name(r["split"], r["index"]), r["error"]))
+    def finished(r: dict | ShardFailure) -> None:
+        if isinstance(r, ShardFailure):
+            failures.append((shard_name(r.split, r.index), r.error))
             return
         _add_entry(manifest, r)
         if time.monotonic() - written[0] >= MANIFEST_EVERY_S:
@@ -227,7 +228,7 @@ def _make_shards(out_dir: Path, cfg: SynthConfig, manifest: dict, todo: list, to
             written[0] = time.monotonic()
 
     written = [time.monotonic()]
-    tasks = [(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
+    tasks = [ShardTask(cfg.to_dict(), s, i, str(out_dir), compression) for s, i, _, _ in todo]
     try:
         _dispatch(tasks, int(workers), ray, body, int(max_retries), finished, bar.update)
     finally:
@@ -304,11 +305,3 @@ def run_synth(out_dir, cfg: SynthConfig, workers: int = 1, splits=None, progress
     _make_shards(out_dir, cfg, manifest, todo, total, workers, ray, body, max_retries, compression, progress)
     logger.info("%s: done (%s)", out_dir, "complete" if manifest["complete"] else "some splits still to make")
     return manifest
-
-
-def default_workers() -> int:
-    """The CPUs this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)

@@ -24,9 +24,11 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 from ..io import atomic_write
+from .cluster import default_workers
 from .jobs import Job, execute_job, load_jobs
+from .records import JOB_STATUSES, JobResult
 
-__all__ = ["run_batch", "summary_path", "SUMMARY_FORMAT"]
+__all__ = ["run_batch", "summary_path", "summary_entry", "write_summary", "SUMMARY_FORMAT"]
 
 logger = logging.getLogger("relightnet.distributed")
 
@@ -76,8 +78,6 @@ def run_local(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
     A job asking for more CPUs than the machine has runs alone with all of them; one asking
     for more GPUs than there are fails. ``on_done(job, result)`` is called in this thread.
     """
-    from ..data.synth import default_workers
-
     cpus = default_workers()
     gpus = _local_gpus() if any(j.gpus for j in jobs) else 0
     free_cpus, free_gpus = float(cpus), list(range(gpus))
@@ -88,8 +88,7 @@ def run_local(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
                 need_c, need_g = min(job.cpus, cpus), math.ceil(job.gpus)
                 if need_g > gpus:
                     pending.remove(job)
-                    on_done(job, {"status": "failed", "error": f"needs {job.gpus:g} GPU(s); this machine has {gpus}",
-                                  "seconds": 0.0, "attempts": 0, "output": ""})
+                    on_done(job, JobResult.failed(f"needs {job.gpus:g} GPU(s); this machine has {gpus}"))
                     continue
                 if need_c > free_cpus + 1e-9 or need_g > len(free_gpus):
                     continue
@@ -110,15 +109,31 @@ def run_local(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
                 on_done(job, fut.result())
 
 
-def _counts(records: list[dict]) -> dict:
-    return {s: sum(r["status"] == s for r in records) for s in ("done", "skipped", "failed", "pending")}
+def summary_entry(job: Job, result: JobResult | None = None, log: str | None = None) -> dict:
+    """A job's entry in the summary (:data:`SUMMARY_FORMAT`): the job as its file gave it
+    (:meth:`~relightnet.distributed.jobs.Job.record`), then how it went (``pending`` without a result)."""
+    r = result if result is not None else JobResult("pending")
+    return {**job.record(), "status": r.status, "error": r.error, "seconds": round(r.seconds, 3),
+            "attempts": r.attempts, "log": log}
 
 
-def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) -> dict:
+def write_summary(path: Path, jobs_file, runner: str, entries: list[dict]) -> dict:
+    """Write the summary atomically, the one writer of :data:`SUMMARY_FORMAT`: ``{"format", "jobs_file",
+    "runner", "counts": {done, skipped, failed, pending}, "jobs": [summary_entry, ...]}``; returns it."""
+    summary = {"format": SUMMARY_FORMAT, "jobs_file": str(jobs_file), "runner": runner,
+               "counts": {s: sum(e["status"] == s for e in entries) for s in JOB_STATUSES}, "jobs": entries}
+    with atomic_write(path, "w") as f:
+        f.write(json.dumps(summary, indent=1) + "\n")
+    return summary
+
+
+def run_batch(jobs_file, commands, ray=None, max_retries: int = 1, progress: bool = True) -> dict:
     """Run every job of a jobs file that is not complete yet (module docstring).
 
     Args:
         jobs_file: the YAML/JSON jobs file (:mod:`relightnet.distributed.jobs`).
+        commands: the CLI's command table, {name: parser}, that the jobs are checked against
+            (:func:`relightnet.cli.command_table`).
         ray: a :class:`relightnet.distributed.RayOptions` (its ``address``) to run on a Ray
             cluster; None: on this machine.
         max_retries: times a crashed job is run again (bad input is not retried).
@@ -134,46 +149,43 @@ def run_batch(jobs_file, ray=None, max_retries: int = 1, progress: bool = True) 
     """
     from tqdm import tqdm
 
-    jobs = load_jobs(jobs_file)
+    jobs = load_jobs(jobs_file, commands)
     cwd = Path.cwd()
     spath, logs = summary_path(jobs_file), _logs_dir(jobs_file)
     previous = _previous(spath)
-    records = [{**j.record(), "status": "pending", "error": None, "seconds": 0.0, "attempts": 0, "log": None}
-               for j in jobs]
-    summary = {"format": SUMMARY_FORMAT, "jobs_file": str(jobs_file), "runner": "ray" if ray else "local",
-               "counts": {}, "jobs": records}
+    entries = [summary_entry(j) for j in jobs]
+    runner = "ray" if ray else "local"
+    summary = {}
 
     last = [-math.inf]
 
     def write(force: bool = True) -> None:
         if not force and time.monotonic() - last[0] < SUMMARY_INTERVAL:
             return
-        summary["counts"] = _counts(records)
-        with atomic_write(spath, "w") as f:
-            f.write(json.dumps(summary, indent=1) + "\n")
+        summary.update(write_summary(spath, jobs_file, runner, entries))
         last[0] = time.monotonic()
 
     bar = tqdm(total=len(jobs), unit="job", desc="batch", disable=not progress, dynamic_ncols=True)
 
-    def done(job: Job, result: dict) -> None:
-        rec = records[job.index]
-        rec.update({k: result[k] for k in ("status", "error", "attempts")}, seconds=round(result["seconds"], 3))
-        if result.get("output"):
+    def done(job: Job, result: JobResult) -> None:
+        log = None
+        if result.output:
             logs.mkdir(exist_ok=True)
-            rec["log"] = str(logs / f"{job.index:03d}.log")
-            with atomic_write(rec["log"], "w") as f:
-                f.write(f"$ relightnet {job.command} {' '.join(job.args)}\n{result['output'].rstrip()}\n")
+            log = str(logs / f"{job.index:03d}.log")
+            with atomic_write(log, "w") as f:
+                f.write(f"$ relightnet {job.command} {' '.join(job.args)}\n{result.output.rstrip()}\n")
+        entries[job.index] = summary_entry(job, result, log)
         logger.info("job %d (%s): %s%s", job.index, " ".join([job.command, *([job.out] if job.out else [])]),
-                    rec["status"], f": {rec['error']}" if rec["error"] else "")
+                    result.status, f": {result.error}" if result.error else "")
         bar.update(1)
         write(force=False)
 
     todo = []
     for job in jobs:
         if job.error is not None:
-            done(job, {"status": "failed", "error": job.error, "seconds": 0.0, "attempts": 0})
+            done(job, JobResult.failed(job.error))
         elif _complete(job, cwd, previous):
-            done(job, {"status": "skipped", "error": None, "seconds": 0.0, "attempts": 0})
+            done(job, JobResult("skipped"))
         else:
             todo.append(job)
     write()

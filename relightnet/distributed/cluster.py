@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 from ..checks import InputError
 
-__all__ = ["RayOptions", "import_ray", "connect", "one_line"]
+__all__ = ["RayOptions", "import_ray", "connect", "one_line", "default_workers"]
 
 logger = logging.getLogger("relightnet.distributed")
 
@@ -89,3 +90,11 @@ def one_line(e: BaseException) -> str:
         e = cause
     text = next((ln.strip() for ln in str(e).splitlines() if ln.strip()), "")
     return f"{type(e).__name__}: {text}" if text else type(e).__name__
+
+
+def default_workers() -> int:
+    """The CPUs this process may use (its affinity mask): the local pool's and batch's default."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)

@@ -10,8 +10,8 @@ A jobs file (YAML or JSON) holds ``jobs``, a list of entries::
         args: [person.png, --light, studio, --out, out/b.png]
 
 Other keys are ignored (tools may add their own). A job's output is its ``--out``. The
-commands a job may run are those of the ``relightnet`` CLI itself (its own command table,
-so new commands join by themselves), except ``batch``. An entry that is not a job — an
+commands a job may run are those of the ``relightnet`` CLI itself (its command table, handed
+in by the caller, so new commands join by themselves), except ``batch``. An entry that is not a job — an
 unknown command, arguments the command's parser refuses, no ``--out`` — becomes a failed
 job with its one-line reason; the other jobs still run. Relative paths in ``args`` are
 relative to the folder ``relightnet batch`` runs in (as they would be on the command line).
@@ -28,11 +28,13 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..checks import InputError
 from ..io.documents import short
+from .records import JobResult
 
 __all__ = ["Job", "load_jobs", "batchable_commands", "execute_job", "NOT_BATCHABLE"]
 
@@ -61,24 +63,15 @@ class Job:
                 "resources": {"cpus": self.cpus, "gpus": self.gpus}}
 
 
-def _cli_parser() -> argparse.ArgumentParser:
-    from ..cli import build_parser
+def batchable_commands(commands: Mapping[str, argparse.ArgumentParser]) -> list[str]:
+    """The commands a job may run: every command of the table but :data:`NOT_BATCHABLE`.
 
-    return build_parser()
-
-
-def _command_table(parser: argparse.ArgumentParser) -> dict:
-    """The CLI's subcommand parsers: {name: parser}."""
-    for action in parser._actions:  # argparse keeps subparsers here; there is no public accessor
-        if isinstance(action, argparse._SubParsersAction):
-            return dict(action.choices)
-    return {}
-
-
-def batchable_commands(parser: argparse.ArgumentParser | None = None) -> list[str]:
-    """The CLI commands a job may run: every command of ``relightnet`` but :data:`NOT_BATCHABLE`."""
-    table = _command_table(parser or _cli_parser())
-    return [name for name in table if name not in NOT_BATCHABLE]
+    Args:
+        commands: the CLI's command table, {name: the command's parser} (``relightnet batch`` passes
+            its own; :func:`relightnet.cli.command_table` builds it). This package sits below the
+            CLI and never imports it.
+    """
+    return [name for name in commands if name not in NOT_BATCHABLE]
 
 
 def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> tuple[argparse.Namespace | None, str]:
@@ -103,7 +96,7 @@ def _resources(entry: dict) -> tuple[float, float]:
     return float(cpus), float(gpus)
 
 
-def _job(index: int, entry, parser, commands: list[str]) -> Job:
+def _job(index: int, entry, table: Mapping[str, argparse.ArgumentParser], commands: list[str]) -> Job:
     """Check one entry; a bad one comes back as a Job with ``error`` set."""
     if not isinstance(entry, dict):
         return Job(index, "?", (), error=f"expected a mapping with command and args, got {type(entry).__name__}")
@@ -120,7 +113,7 @@ def _job(index: int, entry, parser, commands: list[str]) -> Job:
         cpus, gpus = _resources(entry)
     except ValueError as e:
         return Job(index, command, args, error=str(e))
-    ns, complaint = _parse(parser, [command, *args])
+    ns, complaint = _parse(table[command], list(args))
     if ns is None:
         return Job(index, command, args, cpus=cpus, gpus=gpus, error=complaint)
     out = getattr(ns, "out", None)
@@ -131,8 +124,12 @@ def _job(index: int, entry, parser, commands: list[str]) -> Job:
     return Job(index, command, args, str(out), cpus, gpus, extra=extra)
 
 
-def load_jobs(path) -> list[Job]:
+def load_jobs(path, commands: Mapping[str, argparse.ArgumentParser]) -> list[Job]:
     """Read and check a jobs file (module docstring); bad entries come back with ``error`` set.
+
+    Args:
+        path: the YAML/JSON jobs file.
+        commands: the CLI's command table, {name: parser} (:func:`batchable_commands`).
 
     Raises:
         InputError: the file is missing, unreadable, not YAML/JSON, or has no ``jobs`` list.
@@ -143,11 +140,10 @@ def load_jobs(path) -> list[Job]:
     data = read_document(path, "jobs file")
     if not isinstance(data, dict) or not isinstance(data.get("jobs"), list):
         raise InputError(f"{path}: expected a mapping with a 'jobs' list ({{jobs: [{{command: ..., args: [...]}}]}})")
-    parser = _cli_parser()
-    commands = batchable_commands(parser)
+    names = batchable_commands(commands)
     jobs, outputs = [], {}
     for i, entry in enumerate(data["jobs"]):
-        job = _job(i, entry, parser, commands)
+        job = _job(i, entry, commands, names)
         if job.error is None:
             key = os.path.normpath(job.out)
             if key in outputs:
@@ -177,7 +173,7 @@ def _why(output: str, returncode: int, command: str) -> tuple[str, bool]:
     return last, returncode == 2  # 2: argparse refused the arguments
 
 
-def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = None) -> dict:
+def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = None) -> JobResult:
     """Run one job as a ``relightnet`` subprocess in ``cwd`` (this machine, or a Ray worker's node).
 
     A failure the CLI reported as bad input (its one-line error, exit status 1, or a usage
@@ -187,15 +183,15 @@ def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = Non
         env: variables added to this process's environment for the job (e.g. ``OMP_NUM_THREADS``).
 
     Returns:
-        ``{"status": "done"|"failed", "error", "seconds", "attempts", "output"}`` (``output``: the
-        tail of the job's stdout and stderr, for its log).
+        A :class:`~relightnet.distributed.records.JobResult`, done or failed (``output``: the tail of
+        the job's stdout and stderr, for its log).
     """
     import socket
 
     t0 = time.monotonic()
     if not Path(cwd).is_dir():
-        return {"status": "failed", "error": f"{cwd}: not found on node {socket.gethostname()}; run batch from a "
-                "folder every node sees", "seconds": 0.0, "attempts": 0, "output": ""}
+        return JobResult.failed(f"{cwd}: not found on node {socket.gethostname()}; run batch from a folder every "
+                                "node sees")
     cmd = [sys.executable, "-m", "relightnet.cli", job.command, *job.args]
     child_env = {**os.environ, **(env or {})}
     output, error, attempt = "", None, 0
@@ -206,10 +202,8 @@ def execute_job(job: Job, cwd: str, max_retries: int = 1, env: dict | None = Non
             log.seek(max(0, log.seek(0, os.SEEK_END) - 4 * _LOG_TAIL))
             output = log.read().decode("utf-8", "replace")[-_LOG_TAIL:]
         if rc == 0:
-            return {"status": "done", "error": None, "seconds": time.monotonic() - t0, "attempts": attempt,
-                    "output": output}
+            return JobResult("done", None, time.monotonic() - t0, attempt, output)
         error, bad_input = _why(output, rc, job.command)
         if bad_input:
             break  # the same again would fail the same way
-    return {"status": "failed", "error": error, "seconds": time.monotonic() - t0, "attempts": attempt,
-            "output": output}
+    return JobResult.failed(error, time.monotonic() - t0, attempt, output)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from .cluster import import_ray, one_line
 from .jobs import Job, execute_job
+from .records import JobResult
 
 __all__ = ["run_ray_jobs"]
 
@@ -30,8 +31,8 @@ def run_ray_jobs(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
     pending = {}
     for job in jobs:
         if not any(r.get("CPU", 0) >= job.cpus and r.get("GPU", 0) >= job.gpus for r in nodes):
-            on_done(job, {"status": "failed", "error": f"needs {job.cpus:g} CPU(s) and {job.gpus:g} GPU(s) on one "
-                          "node; no node of the cluster has them", "seconds": 0.0, "attempts": 0, "output": ""})
+            on_done(job, JobResult.failed(f"needs {job.cpus:g} CPU(s) and {job.gpus:g} GPU(s) on one node; no node "
+                                          "of the cluster has them"))
             continue
         ref = run.options(num_cpus=job.cpus, num_gpus=job.gpus, max_retries=int(max_retries),
                           retry_exceptions=False).remote(job, cwd, max_retries)
@@ -44,7 +45,7 @@ def run_ray_jobs(jobs: list[Job], cwd: str, max_retries: int, on_done) -> None:
                 try:
                     result = ray.get(ref)
                 except ray.exceptions.RayError as e:
-                    result = {"status": "failed", "error": one_line(e), "seconds": 0.0, "attempts": 0, "output": ""}
+                    result = JobResult.failed(one_line(e))
                 on_done(job, result)
     finally:
         for ref in pending:

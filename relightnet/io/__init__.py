@@ -13,7 +13,7 @@ from importlib import import_module
 _WHERE = {
     "atomic_write": "atomic",
     "ENVMAP_SUFFIXES": "envmap", "read_envmap": "envmap", "write_envmap": "envmap",
-    "linear_to_srgb": "image", "srgb_to_linear": "image", "to_uint8": "image", "read_image": "image",
+    "to_uint8": "image", "read_image": "image",
     "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
     "VideoInfo": "video", "VideoWriter": "video", "count_frames": "video", "frames_with_masks": "video",
     "read_masks": "video", "read_video": "video", "video_info": "video",

@@ -24,7 +24,7 @@ from .atomic import atomic_write
 from .limits import check_pixels, max_pixels
 from .probe import check_image_file
 
-__all__ = ["linear_to_srgb", "srgb_to_linear", "to_uint8", "write_image", "read_image", "read_image_alpha",
+__all__ = ["to_uint8", "write_image", "read_image", "read_image_alpha",
            "read_alpha", "read_mask"]
 
 

@@ -11,8 +11,7 @@ from .inference import (
     paste_from_box,
     predict_image,
 )
-from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve, stack_evidence
-from .losses import LossWeights, erode, masked_l1, relight_losses, total_variation
+from .losses import LossWeights, masked_l1, relight_losses, total_variation
 from .network import (
     DEFAULT_INPUT_SIZE,
     LIGHT_MODES,
@@ -31,8 +30,7 @@ __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
     "CropBox", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person", "mask_crop_box",
     "paste_from_box", "predict_image",
-    "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve", "stack_evidence",
-    "LossWeights", "erode", "masked_l1", "relight_losses", "total_variation",
+    "LossWeights", "masked_l1", "relight_losses", "total_variation",
     "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "pad_to_multiple",
     "photo_albedo", "relight", "shade_map", "shading_map",
 ]

@@ -16,7 +16,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..io import atomic_write, linear_to_srgb, write_image
+from ..color import linear_to_srgb
+from ..io import atomic_write, write_image
 from .network import Prediction, RelightNet, photo_albedo, shade_map, shading_map
 from .training import TrainData, batch_to_input
 

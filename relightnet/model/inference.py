@@ -218,7 +218,7 @@ def estimate_light_evidence(model: RelightNet, image: torch.Tensor, mask: torch.
     Same arguments as :func:`predict_image`.
 
     Returns:
-        ``(light (K, 3), evidence, prior)``: the solve's :class:`~relightnet.model.light_solve.Evidence`
+        ``(light (K, 3), evidence, prior)``: the solve's :class:`~relightnet.sh.light_solve.Evidence`
         (``M`` (1, 3, K, K), ``r`` (1, 3, K)) and its prior light (K, 3) — None for a network that
         regresses its light (``light_mode="head"``), and the prior None for ``"solve"``.
     """

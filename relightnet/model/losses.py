@@ -25,10 +25,11 @@ from dataclasses import asdict, dataclass
 import torch
 from torch.nn import functional as F
 
+from ..raster.morphology import erode
 from ..sh.metrics import scale_invariant_light_error
 from .network import Prediction, shading_map
 
-__all__ = ["LossWeights", "erode", "masked_l1", "total_variation", "relight_losses"]
+__all__ = ["LossWeights", "masked_l1", "total_variation", "relight_losses"]
 
 
 @dataclass(frozen=True)
@@ -54,13 +55,6 @@ class LossWeights:
 
     def to_dict(self) -> dict:
         return asdict(self)
-
-
-def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
-    """Binary erosion of (B, 1, H, W) masks by a (2r+1)² square (min-pooling)."""
-    if radius <= 0:
-        return mask
-    return -F.max_pool2d(-mask, 2 * radius + 1, stride=1, padding=radius)
 
 
 def masked_l1(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:

@@ -8,7 +8,7 @@ An encoder–decoder with skip connections reads a masked image of a person and 
   chooses how: ``"head"`` regresses it from the pooled bottleneck and decoder features (KE18);
   ``"solve"`` solves it from the predicted maps — the light that makes A ⊙ (T · L) explain the
   image over the person, weighted by a predicted per-pixel confidence
-  (:mod:`relightnet.model.light_solve`); ``"hybrid"`` solves with the head's light as the
+  (:mod:`relightnet.sh.light_solve`); ``"hybrid"`` solves with the head's light as the
   prior. Any batch size and any H, W that are multiples of 16 (no fixed reshape as in KE18);
 - optionally ``mask`` (B, 1, H, W) logits, so the 2D path runs without a user mask.
 
@@ -29,8 +29,9 @@ from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError, check_shape
 from ..color import srgb_to_linear
-from ..render.shading import shade, shading, to_channels_first, to_channels_last
-from .light_solve import Evidence, light_evidence, solve_light
+from ..raster.interpolate import to_channels_first, to_channels_last
+from ..render.shading import shade, shading
+from ..sh.light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
            "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
@@ -271,11 +272,6 @@ class RelightNet(nn.Module):
             self.light_head = nn.Sequential(
                 nn.Linear(pooled, cfg.light_hidden), nn.SiLU(inplace=True), nn.Linear(cfg.light_hidden, k * 3)
             )
-
-    @property
-    def input_size(self) -> int:
-        """The working size, ``config.input_size`` (kept for code that read the attribute)."""
-        return self.config.input_size
 
     def forward(self, x: torch.Tensor) -> Prediction:
         """Args: x (B, 4, H, W) from :func:`normalize_input`, H and W multiples of 2**levels.

@@ -29,24 +29,16 @@ from torch import nn
 
 from ..checks import InputError
 from ..io import atomic_write
-from ..names import ONNX_SMOOTHERS
-from ..temporal.registry import PassThrough, make_smoother
+from ..temporal.registry import make_smoother
 from .network import RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["PassThrough", "StreamingRelighter", "make_smoother", "export_onnx", "INPUTS", "OUTPUTS",
-           "EVIDENCE_OUTPUTS", "SMOOTHERS"]
+__all__ = ["StreamingRelighter", "export_onnx", "INPUTS", "OUTPUTS", "EVIDENCE_OUTPUTS"]
 
 INPUTS = ("image", "mask", "light_state", "is_first")
 OUTPUTS = ("albedo", "transport", "light_raw", "light_smoothed", "light_state_out")
 EVIDENCE_OUTPUTS = ("evidence_M", "evidence_r", "light_prior")
-
-
-#: Streaming smoothers that can live inside the exported graph (the causal methods of
-#: :mod:`relightnet.temporal.registry`, which also builds them: :func:`make_smoother`; the names
-#: are listed in :mod:`relightnet.names`).
-SMOOTHERS = ONNX_SMOOTHERS
 
 
 class StreamingRelighter(nn.Module):
@@ -93,7 +85,8 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     Args:
         net: the trained network (eval mode).
         out: output path (written atomically).
-        smoothing: one of :data:`SMOOTHERS` (the causal methods of :mod:`relightnet.temporal.registry`).
+        smoothing: a causal method (:func:`relightnet.names.smoothing_names` ``(causal=True)``; each can
+            live inside the graph, built by :func:`relightnet.temporal.make_smoother`).
         train_config: stored as a hash in the model metadata.
         example_size: H = W of the example used for tracing (any multiple of 16).
 

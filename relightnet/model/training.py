@@ -24,7 +24,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..io import atomic_write, linear_to_srgb
+from ..color import linear_to_srgb
+from ..io import atomic_write
 from ..io.documents import clip, short
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses

@@ -4,7 +4,7 @@ Two streaming passes over the target video, so memory does not grow with its len
 
 1. **Light.** The CNN estimates the SH light of every frame from the person in it (masks
    given, or found by the person segmentation or the model's mask head). The per-frame
-   estimates are smoothed over time (:func:`~relightnet.pipeline.video_lights.smooth_video_lights`;
+   estimates are smoothed over time (:func:`~relightnet.temporal.smooth_video_lights`;
    default ``auto``: the shot's evidence pooled for a network that solves its light, else robust
    Hermite splines with 3-MAD outlier correction and light-switch detection). ``light=`` skips
    this pass.
@@ -35,28 +35,19 @@ import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import VideoWriter, count_frames, read_video, video_info
+from ..names import VIDEO_SMOOTHING
 from ..raster import Camera, default_camera, silhouette_pixels
 from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
-from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing, resolve_smoothing
+from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
 from .scene import avatar_albedo, load_body, open_motion
-from .video_lights import (
-    estimate_video_evidence,
-    estimate_video_lights,
-    lights_fingerprint,
-    read_light_estimates,
-    smooth_video_lights,
-    write_video_lights,
-)
+from .video_lights import estimate_video_evidence, lights_fingerprint, read_light_estimates, write_video_lights
 
 logger = logging.getLogger(__name__)
 
-#: The smoothing methods of the video jobs (:data:`relightnet.temporal.registry.VIDEO_SMOOTHING`).
-SMOOTHING = VIDEO_SMOOTHING
 
-__all__ = ["SMOOTHING", "AvatarResult", "estimate_video_lights", "estimate_video_evidence", "smooth_video_lights",
-           "avatar"]
+__all__ = ["AvatarResult", "avatar"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,8 +144,8 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
         logger.info("reusing the light estimates in %s", lights_file)
     raw, ev, prior = cached if cached is not None else estimate_video_evidence(predict, target, target_masks,
                                                                                progress, mask_source)
-    method = resolve_smoothing(smoothing, ev is not None)  # resolved once: smoothed with it, recorded as used
-    smoothed, outliers, switches = smooth_video_lights(raw, method, ev, prior, predict.solve_reg, fps)
+    # resolved once, there: smoothed with it, recorded as used (a too short clip: none)
+    smoothed, outliers, switches, method = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, fps)
     if plate_light is not None:
         from ..sh.plate import combine_person_plate
 
@@ -254,7 +245,7 @@ def avatar(
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
         camera: the avatar's camera (default: :func:`~relightnet.raster.default_camera` at the
             video's size: full body, standing at the origin).
-        smoothing: one of :data:`SMOOTHING`.
+        smoothing: one of :data:`relightnet.names.VIDEO_SMOOTHING`.
         n_dirs, occlusion, bounces: PRT options.
         antialias: smooth the avatar's silhouette against the background (analytic edge
             antialiasing at the silhouette pixels; about 24 ms per 512² frame).
@@ -269,7 +260,7 @@ def avatar(
     out = Path(out)
     if out.suffix.lower() not in (".mp4", ".mkv"):
         raise InputError(f"{out}: expected an .mp4 or .mkv output path")
-    check_smoothing(smoothing, SMOOTHING)
+    check_smoothing(smoothing, VIDEO_SMOOTHING)
     info = video_info(target)
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)

@@ -150,7 +150,7 @@ class OnnxPredictor:
 
 def _evidence(res: dict):
     """The light solve's evidence among an ONNX step's outputs, or None."""
-    from ..model.light_solve import Evidence
+    from ..sh.light_solve import Evidence
 
     if "evidence_M" not in res:
         return None

@@ -10,7 +10,7 @@ outside ``mask``. Per clip:
 1. **Light.** The CNN estimates L̂_t from each target frame (``image_composite``, the person
    over a background, 8-bit sRGB) with its mask; L̃_t =
    :func:`~relightnet.temporal.smooth_lights` (L̂, method, outlier_eps="3mad",
-   switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.pipeline.video_lights.smooth_video_lights`):
+   switches="auto"), as ``relightnet avatar`` does (:func:`~relightnet.temporal.smooth_video_lights`):
    by default one light solve per shot for a network that solves its light (``pooled``), else
    the robust Hermite spline (``smoothing="none"``, or fewer than 3 frames: L̃ = L̂).
 2. **2D path** (the baseline, Kanamori–Endo style). The CNN sees the subject in a "texture
@@ -27,7 +27,7 @@ outside ``mask``. Per clip:
 
 Each path is shaded with L ∈ {true L_t, raw L̂_t, smoothed L̃_t}: six outputs, compared with
 the ground truth ``image`` in its mask, on sRGB-encoded values (clipped to [0, 1], then
-:func:`~relightnet.io.image.linear_to_srgb`) with :mod:`relightnet.pipeline.metrics`: RMSE,
+:func:`~relightnet.color.linear_to_srgb`) with :mod:`relightnet.pipeline.metrics`: RMSE,
 PSNR, SSIM per frame, and the temporal error per pair of frames. No exposure matching: the
 lights of the data are on an absolute scale. The light error (irradiance L2,
 :func:`~relightnet.temporal.light_error`) compares L̂ and L̃ with the truth.
@@ -51,7 +51,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError, check_device
-from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing
+from ..names import VIDEO_SMOOTHING
+from ..temporal.registry import check_smoothing
 from .compare_clip import (
     CLIP_FIELDS,
     CLIP_FPS,
@@ -65,8 +66,6 @@ from .compare_clip import (
 
 logger = logging.getLogger(__name__)
 
-#: The smoothing methods the comparison accepts.
-SMOOTHING = VIDEO_SMOOTHING
 
 __all__ = ["PATHS", "LIGHTS", "CLIP_FIELDS", "ClipOutputs", "CompareResult", "source_light",
            "compare_clip", "clip_metrics", "compare"]
@@ -139,7 +138,7 @@ def _check_options(smoothing, n_dirs, clips, bounces, source, size) -> None:
     """Every option of :func:`compare` checked before any work (InputError naming it)."""
     from ..sh import preset_names
 
-    check_smoothing(smoothing, SMOOTHING)
+    check_smoothing(smoothing, VIDEO_SMOOTHING)
     for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):
         if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < lo):
             raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
@@ -227,8 +226,8 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         split: which split's clips.
         clips: the first N clips (default: all).
         n_dirs, prt_seed, bounces: the 3D path's PRT directions, their rotation seed, interreflections.
-        smoothing: one of :data:`SMOOTHING` (default ``auto``: ``pooled`` for a network that solves its
-            light, else ``hermite``).
+        smoothing: one of :data:`relightnet.names.VIDEO_SMOOTHING` (default ``auto``: ``pooled`` for a
+            network that solves its light, else ``hermite``).
         device: for the CNN (``"cpu"``, ``"cuda"``); PRT and rasterization run on the CPU.
         progress: show a tqdm bar (frames/s).
         source: preset name of the 2D path's source light.

@@ -2,7 +2,7 @@
 lights, and the clip's numbers.
 
 :func:`compare_clip` runs the stages of one clip — *estimate* (the CNN's light per target frame),
-*smooth* (over the clip, :func:`~relightnet.pipeline.video_lights.smooth_video_lights`), and the two
+*smooth* (over the clip, :func:`~relightnet.temporal.smooth_video_lights`), and the two
 paths: the 2D path's predictions relit by :func:`~relightnet.pipeline.relight_image.relight_prediction`
 (as ``relight-video`` relights), the 3D path's PRT render shaded by :func:`relightnet.render.shade`;
 :func:`clip_metrics` compares the six outputs with the ground truth.
@@ -20,15 +20,16 @@ import torch
 from ..checks import InputError, sh_order_from_count
 from ..color import linear_to_srgb
 from ..io.image import to_uint8
-from ..model.light_solve import stack_evidence
 from ..model.network import Prediction
-from ..render.shading import composite, shade, to_channels_last
+from ..raster.interpolate import to_channels_last
+from ..render.shading import composite, shade
 from ..sh.io import resize_sh
+from ..sh.light_solve import stack_evidence
 from ..temporal import jitter, light_distance, light_error
+from ..temporal.registry import smooth_video_lights
 from . import metrics as M
 from .backends import as_predictor
 from .relight_image import relight_prediction
-from .video_lights import smooth_video_lights
 
 __all__ = ["PATHS", "LIGHTS", "CLIP_FPS", "CLIP_FIELDS", "ClipOutputs", "source_light", "compare_clip",
            "clip_metrics"]
@@ -123,7 +124,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
         n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections; a
             bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default).
-        smoothing: a name of :data:`~relightnet.temporal.registry.VIDEO_SMOOTHING`.
+        smoothing: a name of :data:`~relightnet.names.VIDEO_SMOOTHING`.
         source: preset name of the 2D path's source light.
         tick: optional callable, called after every frame.
         cnn_albedo: the 2D path relights the CNN's albedo, not the photo's (module docstring).
@@ -167,7 +168,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         if tick is not None:
             tick()
     raw = torch.stack(raw)
-    smoothed, outliers, switches = smooth_video_lights(raw, smoothing, *stack_evidence(evs, priors),
+    smoothed, outliers, switches, _ = smooth_video_lights(raw, smoothing, *stack_evidence(evs, priors),
                                                        predict.solve_reg, CLIP_FPS)
     lights = {"true": true, "raw": raw, "smoothed": resize_sh(smoothed, lmax)}
     preds, photos = _stack_predictions(preds), torch.stack(photos)

@@ -32,9 +32,9 @@ import numpy as np
 import torch
 
 from ..checks import InputError
+from ..color import linear_to_srgb
 from ..io import atomic_write
 from ..io.atomic import remove_stale, temp_path
-from ..io.image import linear_to_srgb
 
 __all__ = ["staging_dir", "publish", "summarize", "json_safe", "write_json", "write_lights", "side_by_side", "add_clip",
            "to_uint8_seq", "plot_clip", "plot_summary", "format_report"]

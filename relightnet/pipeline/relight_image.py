@@ -22,7 +22,8 @@ import torch
 from ..checks import check_finite, check_shape, sh_order_from_count
 from ..color import linear_to_srgb, luminance, srgb_to_linear
 from ..model.network import ROW_BAND, Prediction, photo_albedo, shading_map
-from ..render.shading import composite, shade, to_channels_first, to_channels_last
+from ..raster.interpolate import to_channels_first, to_channels_last
+from ..render.shading import composite, shade
 from ..sh.io import resize_sh
 from .backends import as_predictor
 

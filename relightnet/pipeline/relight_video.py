@@ -16,16 +16,16 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from pathlib import Path
 
 import torch
 
 from ..checks import InputError
 from ..io import VideoWriter
+from ..names import STREAMING_SMOOTHING
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
-from ..temporal.registry import STREAMING_SMOOTHING, check_smoothing, make_smoother, resolve_smoothing
+from ..temporal.registry import check_smoothing, make_smoother, resolve_smoothing
 from .backends import as_predictor
 from .relight_image import over_photo, relight_prediction, to_model_order
 
@@ -50,7 +50,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
         smoothing: how the source-light estimate is smoothed, a causal method
-            (:data:`~relightnet.temporal.registry.STREAMING_SMOOTHING`: ``auto``, ``pooled``, ``ema``,
+            (:data:`~relightnet.names.STREAMING_SMOOTHING`: ``auto``, ``pooled``, ``ema``,
             ``one-euro``, ``fir``, ``gated-one-euro``, ``none``). A number is the former spelling
             (deprecated): the EMA weight ``alpha`` with ``auto``, 1 meaning ``none``.
         detail: relight each frame's own albedo (frame / predicted shading under the smoothed
@@ -104,13 +104,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
 
 
 def _smoothing_spelling(smoothing, alpha: float) -> tuple[str, float]:
-    """``(method, alpha)`` from the ``smoothing`` argument; a number is the deprecated spelling."""
-    if isinstance(smoothing, (int, float)) and not isinstance(smoothing, bool):
-        warnings.warn("relight_video(smoothing=<number>) is deprecated: give a method name (smoothing='auto') "
-                      "and the EMA weight as alpha=", DeprecationWarning, stacklevel=3)
-        if not 0 < smoothing <= 1:
-            raise InputError(f"smoothing: expected a weight in (0, 1], got {smoothing}")
-        return ("none" if smoothing == 1 else "auto"), float(smoothing)
+    """``(method, alpha)`` checked: a name of :data:`~relightnet.names.STREAMING_SMOOTHING` and an EMA weight."""
     check_smoothing(smoothing, STREAMING_SMOOTHING)
     if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
         raise InputError(f"alpha: expected a weight in (0, 1], got {alpha!r}")

@@ -2,8 +2,8 @@
 
 :func:`estimate_video_evidence` runs the CNN on every frame (streaming) and keeps what a video
 needs (the per-frame lights, and for a network that solves its light the solve's evidence and
-priors); :func:`smooth_video_lights` smooths them with a method of
-:mod:`relightnet.temporal.registry`. ``avatar``, ``compare`` and ``evaluate --light`` use both.
+priors); :func:`relightnet.temporal.smooth_video_lights` smooths them. ``avatar``, ``compare``
+and ``evaluate --light`` use both.
 
 The estimates of ``avatar`` are kept in its side file ``OUT.lights.npz``
 (:func:`write_video_lights`) with a fingerprint of the inputs (:func:`lights_fingerprint`): when
@@ -19,10 +19,9 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing
 from .backends import as_predictor
 
-__all__ = ["estimate_video_lights", "estimate_video_evidence", "smooth_video_lights", "lights_fingerprint",
+__all__ = ["estimate_video_lights", "estimate_video_evidence", "lights_fingerprint",
            "read_light_estimates", "write_video_lights"]
 
 
@@ -50,14 +49,14 @@ def estimate_video_evidence(model, video, masks=None, progress: bool = True, mas
     Same arguments as :func:`estimate_video_lights`.
 
     Returns:
-        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.model.light_solve.Evidence`
+        ``(raw (T, K, 3), evidence, prior)``: the per-frame :class:`~relightnet.sh.light_solve.Evidence`
         (``M`` (T, 3, K, K), ``r`` (T, 3, K)) and priors (T, K, 3) — None for a network that
         regresses its light (and the prior None for ``light_mode="solve"``).
     """
     from tqdm import tqdm
 
-    from ..model.light_solve import stack_evidence
     from ..segment.sources import video_masks
+    from ..sh.light_solve import stack_evidence
 
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
@@ -73,32 +72,6 @@ def estimate_video_evidence(model, video, masks=None, progress: bool = True, mas
     if not lights:
         raise InputError(f"{video}: the video has no frames")
     return (torch.stack(lights), *stack_evidence(evs, priors))
-
-
-def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
-                        fps: float = 30.0):
-    """Smooth (T, K, 3) lights over time: returns (smoothed, outliers (T,), switches (T,)).
-
-    ``method`` is any name of :data:`~relightnet.temporal.registry.VIDEO_SMOOTHING`
-    (:func:`relightnet.temporal.smooth_sequence`). ``pooled`` shares the light across frames: the
-    per-frame evidence of the light solve (``evidence``, ``prior`` from :func:`estimate_video_evidence`,
-    ``reg`` the network's λ) of the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS`
-    (triangular weights, at the video's ``fps``) and between the same detected light switches is
-    solved jointly; ``hermite``/``poly``/``savgol`` are robust regressions with 3-MAD outlier
-    correction and automatic switch detection (fewer than 3 frames: the raw lights); the causal
-    filters run over the sequence with their default options; ``auto`` is ``pooled`` when there is
-    evidence, else ``hermite``; ``none`` returns the raw lights.
-    """
-    from ..temporal.registry import SMOOTHING_METHODS, resolve_smoothing, smooth_sequence
-
-    check_smoothing(method, VIDEO_SMOOTHING)
-    name = resolve_smoothing(method, evidence is not None)
-    robust = not SMOOTHING_METHODS[name].causal
-    if robust and raw.shape[0] < 3:  # too short to fit: the raw lights
-        name = "none"
-    opts = {"outlier_eps": "3mad", "switches": "auto"} if robust and name != "none" else {}
-    res = smooth_sequence(raw, name, evidence, prior, reg, fps, **opts)
-    return res.smoothed, res.outliers, res.switches
 
 
 def lights_fingerprint(video, masks, predictor_name: str, mask_source: str = "segment") -> str:
@@ -119,7 +92,7 @@ def read_light_estimates(path: Path, fingerprint: str):
     """``(raw, evidence, prior)`` saved by an earlier run with the same inputs, or None (no file,
     another fingerprint, a damaged or foreign file: it is then rewritten)."""
     from ..io.arrays import read_npz
-    from ..model.light_solve import Evidence
+    from ..sh.light_solve import Evidence
 
     if not path.is_file():
         return None

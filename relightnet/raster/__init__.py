@@ -22,6 +22,7 @@ from .camera import (
 )
 from .fragments import Fragments
 from .interpolate import Interpolate, interpolate, interpolate_pixels, to_channels_first, to_channels_last
+from .morphology import erode
 from .rasterize import rasterize
 from .texture import texture, texture_pixels
 
@@ -30,5 +31,5 @@ __all__ = [
     "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
     "Fragments", "rasterize",
     "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
-    "texture", "texture_pixels", "antialias", "silhouette_pixels",
+    "texture", "texture_pixels", "antialias", "silhouette_pixels", "erode",
 ]

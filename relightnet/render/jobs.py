@@ -64,7 +64,7 @@ def load_mesh(path, albedo=(0.8, 0.8, 0.8)) -> LoadedMesh:
     alb = torch.tensor(albedo, dtype=torch.float32).expand(len(v), 3).clone()
     colors = getattr(m.visual, "vertex_colors", None) if m.visual.kind == "vertex" else None
     if colors is not None and len(colors) == len(v):
-        from ..io.image import srgb_to_linear
+        from ..color import srgb_to_linear
 
         alb = srgb_to_linear(torch.as_tensor(np.asarray(colors)[:, :3] / 255.0, dtype=torch.float32))
     return LoadedMesh(v, f, vertex_normals(v, f), alb.clamp(0.0, 1.0))

@@ -17,7 +17,7 @@ from torch import nn
 
 from ..checks import check_finite, check_sh_count, check_shape
 
-__all__ = ["shading", "shade", "composite", "composite_covered", "Shade", "to_channels_last", "to_channels_first"]
+__all__ = ["shading", "shade", "composite", "composite_covered", "Shade"]
 
 #: Rows grouped per GEMM row in :func:`_project_rows` (see there).
 _GROUP = 4
@@ -40,18 +40,6 @@ def _project_rows(t: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
     if head < n:
         torch.mm(t[head:], light, out=out[head:])
     return out
-
-
-def to_channels_last(x: torch.Tensor) -> torch.Tensor:
-    """CNN layout → rasterizer layout: (B, C, H, W) → (B, H, W, C) (a view)."""
-    check_shape(x, ["B", "C", "H", "W"], name="channels-first image")
-    return x.permute(0, 2, 3, 1)
-
-
-def to_channels_first(x: torch.Tensor) -> torch.Tensor:
-    """Rasterizer layout → CNN layout: (B, H, W, C) → (B, C, H, W) (a view)."""
-    check_shape(x, ["B", "H", "W", "C"], name="channels-last image")
-    return x.permute(0, 3, 1, 2)
 
 
 def shading(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:

@@ -4,7 +4,8 @@ Two MediaPipe models (Apache-2.0; ``relightnet/weights/NOTICE``) converted to ON
 ONNX Runtime: the selfie segmentation model finds the person's box in the whole frame, the
 full-body pose model segments a square crop around it and gives 33 landmarks
 (:mod:`.person`); in a video the crop follows the previous frame's mask (:mod:`.video`).
-:mod:`.sources` holds the rule by which every command picks a person mask.
+:mod:`.sources` holds the rule by which every command picks a person mask; :mod:`.jobs` the
+``segment`` job (masks and landmarks of photos and videos, written out).
 
 Example:
     >>> from relightnet.segment import segment_person  # doctest: +SKIP
@@ -12,6 +13,7 @@ Example:
     >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)
 """
 
+from .jobs import IMAGE_SUFFIXES, MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
 from .models import INPUT_SIZE, LANDMARK_NAMES, POSE_FILE, SELFIE_FILE, PersonModels, PoseOutput
 from .person import (
     CROP_SCALE,
@@ -28,6 +30,7 @@ from .sources import MASK_SOURCES, check_mask_source, person_mask, video_masks
 from .video import PersonTracker, track_person
 
 __all__ = [
+    "IMAGE_SUFFIXES", "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
     "INPUT_SIZE", "LANDMARK_NAMES", "POSE_FILE", "SELFIE_FILE", "PersonModels", "PoseOutput",
     "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
     "segment_crop", "segment_person",

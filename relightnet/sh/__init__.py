@@ -1,4 +1,5 @@
-"""Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O.
+"""Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O,
+the light solve.
 
 Conventions are those of docs/design.md ("Conventions"): real orthonormal SH without the
 Condon–Shortley phase, k = l(l+1)+m, directions in the light frame.
@@ -21,6 +22,7 @@ from .frames import (
 )
 from .io import LIGHT_SUFFIXES, load_light, load_light_sequence, resize_sh, save_light, save_light_sequence
 from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
+from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve, stack_evidence
 from .metrics import (
     chromaticity_error,
     direction_error,
@@ -57,6 +59,7 @@ __all__ = [
     "WORLD_TO_LIGHT", "camera_normals_to_light", "light_to_world", "rotation_world_to_light",
     "world_to_light",
     "Irradiance", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
+    "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve", "stack_evidence",
     "project", "project_envmap", "radiance", "sh_to_envmap",
     "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",
     "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",

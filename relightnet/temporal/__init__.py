@@ -1,8 +1,8 @@
 """Light smoothing over time: offline regression (polynomial, Hermite spline, Savitzky–Golay)
 with outlier correction and switch splitting, causal filters for streaming/ONNX (EMA,
 one-euro, FIR, outlier gate), shot pooling of the light solve, the irradiance light distance,
-and quality metrics. :mod:`relightnet.temporal.registry` names every method once (what the
-commands' ``--smoothing`` accepts) and builds them.
+and quality metrics. :mod:`relightnet.temporal.registry` implements the methods of the one
+torch-free table, :data:`relightnet.names.SMOOTHING_METHODS` (what ``--smoothing`` accepts).
 """
 
 from .causal import (
@@ -49,18 +49,15 @@ from .pooling import (
     pooling_weights,
 )
 from .registry import (
-    SEQUENCE_SMOOTHING,
-    SMOOTHING_METHODS,
-    STREAMING_SMOOTHING,
-    VIDEO_SMOOTHING,
-    SmoothingMethod,
+    MIN_FIT_FRAMES,
+    VideoSmoothing,
     check_smoothing,
     make_smoother,
     resolve_smoothing,
     smooth_sequence,
-    smoothing_names,
+    smooth_video_lights,
 )
-from .smoothers import METHODS, hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
+from .smoothers import hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
 
 __all__ = [
     "EMAFilter", "FIRFilter", "OneEuroFilter", "OutlierGate", "ema_matrix", "ema_sequence", "ema_step", "fir_sequence",
@@ -68,10 +65,10 @@ __all__ = [
     "light_distance", "light_norm", "light_weights", "local_outlier_threshold", "outlier_threshold",
     "parse_eps", "robust_scale",
     "jitter", "light_error", "outlier_scores", "step_lag",
-    "METHODS", "SmoothResult", "detect_switches", "frame_noise", "hermite_basis", "hermite_matrix", "poly_matrix",
+    "SmoothResult", "detect_switches", "frame_noise", "hermite_basis", "hermite_matrix", "poly_matrix",
     "running_median", "savgol_matrix", "smooth_hermite", "smooth_lights", "smooth_poly", "smooth_savgol",
     "smoothing_matrix",
-    "SEQUENCE_SMOOTHING", "SMOOTHING_METHODS", "STREAMING_SMOOTHING", "VIDEO_SMOOTHING", "SmoothingMethod",
-    "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence", "smoothing_names",
+    "MIN_FIT_FRAMES", "VideoSmoothing", "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence",
+    "smooth_video_lights",
     "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "pool_shot_lights", "pool_window", "pooled_step", "pooling_weights",
 ]

@@ -43,11 +43,12 @@ from .distance import light_norm, light_weights
 __all__ = [
     "ema_step", "one_euro_step", "fir_step", "fir_taps", "ema_matrix", "ema_sequence", "fir_sequence",
     "EMAFilter", "OneEuroFilter", "FIRFilter", "run_causal",
+    "CausalFilter", "reset_mask", "check_alpha", "check_positive", "filter_weights", "check_filter_input",
 ]
 
 
 
-def _first(is_first: torch.Tensor | None, x: torch.Tensor) -> torch.Tensor:
+def reset_mask(is_first: torch.Tensor | None, x: torch.Tensor) -> torch.Tensor:
     """(B, 1, 1) bool reset mask from (B,) or (B, 1) ``is_first``."""
     if is_first is None:
         return torch.zeros(x.shape[0], 1, 1, dtype=torch.bool, device=x.device)
@@ -60,25 +61,29 @@ def _alpha(cutoff, rate: float):
     return 1.0 / (1.0 + rate / (2 * math.pi * cutoff))
 
 
-def _check_alpha(alpha) -> float:
+def check_alpha(alpha) -> float:
+    """``alpha`` as a float when it is a number in (0, 1], else an :class:`InputError`."""
     if not (isinstance(alpha, (int, float)) and 0 < alpha <= 1):
         raise InputError(f"alpha: expected a number in (0, 1], got {alpha!r}")
     return float(alpha)
 
 
-def _check_positive(value, name: str) -> float:
+def check_positive(value, name: str) -> float:
+    """``value`` as a float when it is a finite number > 0, else an :class:`InputError` naming ``name``."""
     if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
         raise InputError(f"{name}: expected a positive number, got {value!r}")
     return float(value)
 
 
-def _weights(lmax: int) -> torch.Tensor:
+def filter_weights(lmax: int) -> torch.Tensor:
+    """(K,) weights of the light distance for order ``lmax`` (:func:`~relightnet.temporal.distance.light_weights`)."""
     if isinstance(lmax, bool) or int(lmax) != lmax or lmax < 0:
         raise InputError(f"lmax: expected a non-negative integer, got {lmax!r}")
     return light_weights((int(lmax) + 1) ** 2)
 
 
-def _check_k(x: torch.Tensor, weights: torch.Tensor) -> None:
+def check_filter_input(x: torch.Tensor, weights: torch.Tensor) -> None:
+    """Refuse frames ``x`` that are not (B, K, 3) with the K of the filter's (K,) ``weights``."""
     if x.dim() != 3 or x.shape[1] != weights.shape[0] or x.shape[2] != 3:
         raise ShapeError(f"x: expected (B, {weights.shape[0]}, 3) (the filter's lmax), got {tuple(x.shape)}")
 
@@ -98,7 +103,7 @@ def ema_step(x: torch.Tensor, state: torch.Tensor, is_first: torch.Tensor | None
     Returns:
         ``(y (B, K, 3), new_state (B, 1, K, 3))``.
     """
-    y = torch.where(_first(is_first, x), x, alpha * x + (1 - alpha) * state[:, 0])
+    y = torch.where(reset_mask(is_first, x), x, alpha * x + (1 - alpha) * state[:, 0])
     return y, y[:, None]
 
 
@@ -127,7 +132,7 @@ def one_euro_step(
     Returns:
         ``(y (B, K, 3), new_state (B, 2, K, 3))``.
     """
-    first = _first(is_first, x)
+    first = reset_mask(is_first, x)
     dx_prev, y_prev = state[:, 0], state[:, 1]
     a_d = _alpha(d_cutoff, rate)
     edx = a_d * (x - y_prev) * rate + (1 - a_d) * dx_prev
@@ -153,7 +158,7 @@ def fir_step(x: torch.Tensor, state: torch.Tensor, is_first: torch.Tensor | None
     Returns:
         ``(y (B, K, 3), new_state (B, W−1, K, 3))``.
     """
-    hist = torch.where(_first(is_first, x)[:, None], x[:, None].expand_as(state), state)
+    hist = torch.where(reset_mask(is_first, x)[:, None], x[:, None].expand_as(state), state)
     win = torch.cat([hist, x[:, None]], 1)  # (B, W, K, 3), newest last
     y = torch.einsum("w,bwkc->bkc", taps.flip(0).to(x.dtype), win)
     return y, win[:, 1:]
@@ -193,7 +198,7 @@ def ema_matrix(n: int, alpha: float, dtype=torch.float32, device=None) -> torch.
 
     ``M[t, j] = α (1−α)^{t−j}`` for 1 ≤ j ≤ t and ``M[t, 0] = (1−α)^t`` (y_0 = x_0).
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     t = torch.arange(n, dtype=torch.float64, device=device)
     lag = t[:, None] - t[None, :]
     M = torch.where(lag >= 0, alpha * (1 - alpha) ** lag.clamp_min(0), torch.zeros((), dtype=torch.float64))
@@ -232,7 +237,10 @@ def fir_sequence(lights: torch.Tensor, taps: torch.Tensor) -> torch.Tensor:
 # ----------------------------------------------------------------------------- modules
 
 
-class _Causal(nn.Module):
+class CausalFilter(nn.Module):
+    """The base of the streaming filters: ``forward(x (B, K, 3), state (B, S, K, 3), is_first (B,))
+    -> (y, state)``, with ``state_size`` S and a zero :meth:`init_state`."""
+
     state_size: int = 1
 
     def init_state(self, x: torch.Tensor) -> torch.Tensor:
@@ -246,21 +254,21 @@ class _Causal(nn.Module):
         return state, is_first
 
 
-class EMAFilter(_Causal):
+class EMAFilter(CausalFilter):
     """Exponential moving average; ``forward(x (B, K, 3), state (B, 1, K, 3), is_first (B,)) -> (y, state)``."""
 
     state_size = 1
 
     def __init__(self, alpha: float = 0.3) -> None:
         super().__init__()
-        self.alpha = _check_alpha(alpha)
+        self.alpha = check_alpha(alpha)
 
     def forward(self, x, state=None, is_first=None):
         state, is_first = self._prepare(x, state, is_first)
         return ema_step(x, state, is_first, self.alpha)
 
 
-class OneEuroFilter(_Causal):
+class OneEuroFilter(CausalFilter):
     """One-euro filter; ``forward(x (B, K, 3), state (B, 2, K, 3), is_first (B,)) -> (y, state)``.
 
     Args: see :func:`one_euro_step`; ``lmax`` is the SH order of the lights it will filter.
@@ -273,23 +281,23 @@ class OneEuroFilter(_Causal):
         normalize: bool = True, lmax: int = 2,
     ) -> None:
         super().__init__()
-        self.register_buffer("weights", _weights(lmax), persistent=False)
-        self.min_cutoff = _check_positive(min_cutoff, "min_cutoff")
+        self.register_buffer("weights", filter_weights(lmax), persistent=False)
+        self.min_cutoff = check_positive(min_cutoff, "min_cutoff")
         if not (isinstance(beta, (int, float)) and math.isfinite(beta) and beta >= 0):
             raise InputError(f"beta: expected a non-negative number, got {beta!r}")
         self.beta = float(beta)
-        self.d_cutoff = _check_positive(d_cutoff, "d_cutoff")
-        self.rate = _check_positive(rate, "rate")
+        self.d_cutoff = check_positive(d_cutoff, "d_cutoff")
+        self.rate = check_positive(rate, "rate")
         self.normalize = bool(normalize)
 
     def forward(self, x, state=None, is_first=None):
         state, is_first = self._prepare(x, state, is_first)
-        _check_k(x, self.weights)
+        check_filter_input(x, self.weights)
         return one_euro_step(x, state, is_first, self.min_cutoff, self.beta, self.d_cutoff, self.rate,
                              self.normalize, self.weights)
 
 
-class FIRFilter(_Causal):
+class FIRFilter(CausalFilter):
     """Causal FIR; ``forward(x (B, K, 3), state (B, W−1, K, 3), is_first (B,)) -> (y, state)``.
 
     Args:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import torch
 
 from ..checks import InputError
-from .causal import _Causal, _check_alpha, _check_k, _check_positive, _first, _weights
+from .causal import CausalFilter, check_alpha, check_filter_input, check_positive, filter_weights, reset_mask
 from .distance import light_distance, light_norm
 
 __all__ = ["gate_step", "OutlierGate"]
@@ -41,7 +41,7 @@ def gate_step(
         the frame to feed the filter (the previous output for an outlier); the
         filter must restart on ``first | switch``.
     """
-    first = _first(is_first, x).reshape(-1)
+    first = reset_mask(is_first, x).reshape(-1)
     pred, scale, count = gate[:, 0], gate[:, 1, 0, 0], gate[:, 2, 0, 0]
     scale = torch.where(first, torch.full_like(scale, init), scale)
     # Innovation relative to the light's norm: a brighter light's larger errors are not outliers.
@@ -57,7 +57,7 @@ def gate_step(
     return x_in, first, switch, outlier, new_scale, count
 
 
-class OutlierGate(_Causal):
+class OutlierGate(CausalFilter):
     """Causal outlier rejection and switch detection around a causal filter.
 
     ``forward(x (B, K, 3), state (B, S+4, K, 3), is_first (B,)) -> (y, state)``
@@ -68,22 +68,22 @@ class OutlierGate(_Causal):
     (replaced), 2 switch (the filter restarted). ``lmax``: SH order of the lights.
     """
 
-    def __init__(self, filt: _Causal, eps: float = 3.0, persist: int = 2, gamma: float = 0.05,
+    def __init__(self, filt: CausalFilter, eps: float = 3.0, persist: int = 2, gamma: float = 0.05,
                  init: float = 0.05, lmax: int = 2) -> None:
         super().__init__()
-        self.register_buffer("weights", _weights(lmax), persistent=False)
+        self.register_buffer("weights", filter_weights(lmax), persistent=False)
         self.filter = filt
-        self.eps = _check_positive(eps, "eps")
+        self.eps = check_positive(eps, "eps")
         if isinstance(persist, bool) or int(persist) != persist or persist < 1:
             raise InputError(f"persist: expected a positive integer, got {persist!r}")
         self.persist = int(persist)
-        self.gamma = _check_alpha(gamma)
-        self.init = _check_positive(init, "init")
+        self.gamma = check_alpha(gamma)
+        self.init = check_positive(init, "init")
         self.state_size = filt.state_size + 4
 
     def forward(self, x, state=None, is_first=None):
         state, is_first = self._prepare(x, state, is_first)
-        _check_k(x, self.weights)
+        check_filter_input(x, self.weights)
         s = self.filter.state_size
         x_in, first, switch, outlier, scale, count = gate_step(
             x, state[:, s:s + 3], is_first, self.eps, self.persist, self.gamma, self.init, self.weights

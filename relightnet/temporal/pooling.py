@@ -1,8 +1,8 @@
 """A video's light estimated as a video: the per-frame evidence of the light solve, pooled over a shot.
 
 A network that solves its light (``light_mode`` ``solve``/``hybrid``,
-:mod:`relightnet.model.light_solve`) gives, with every frame, the normal equations of its
-solve (:class:`~relightnet.model.light_solve.Evidence`). Frames under the same light add
+:mod:`relightnet.sh.light_solve`) gives, with every frame, the normal equations of its
+solve (:class:`~relightnet.sh.light_solve.Evidence`). Frames under the same light add
 their evidence and share one solve, so a constant light gives a constant estimate however
 the person turns, while a light switch splits the shot:
 
@@ -21,8 +21,8 @@ from __future__ import annotations
 import torch
 
 from ..checks import InputError, check_shape
-from ..model.light_solve import Evidence, pool_evidence, solve_light
-from .causal import _Causal, _check_alpha, _check_positive, _weights
+from ..sh.light_solve import Evidence, pool_evidence, solve_light
+from .causal import CausalFilter, check_alpha, check_positive, filter_weights
 from .gate import gate_step
 from .offline import detect_switches
 
@@ -145,7 +145,7 @@ def pooled_step(light: torch.Tensor, evidence: Evidence, prior: torch.Tensor | N
     return y, new_state
 
 
-class PooledSolve(_Causal):
+class PooledSolve(CausalFilter):
     """Causal shot pooling of the light solve's evidence (module docstring).
 
     ``forward(light (B, K, 3), state (B, K + 6, K, 3), is_first (B,), evidence=..., prior=None) -> (y, state)``.
@@ -157,10 +157,10 @@ class PooledSolve(_Causal):
     def __init__(self, alpha: float = 0.05, reg: float = 1e-2, eps: float = 3.0, persist: int = 2,
                  lmax: int = 2) -> None:
         super().__init__()
-        self.register_buffer("weights", _weights(lmax), persistent=False)
-        self.alpha = _check_alpha(alpha)
-        self.reg = _check_positive(reg, "reg")
-        self.eps = _check_positive(eps, "eps")
+        self.register_buffer("weights", filter_weights(lmax), persistent=False)
+        self.alpha = check_alpha(alpha)
+        self.reg = check_positive(reg, "reg")
+        self.eps = check_positive(eps, "eps")
         if isinstance(persist, bool) or int(persist) != persist or persist < 1:
             raise InputError(f"persist: expected a positive integer, got {persist!r}")
         self.persist = int(persist)

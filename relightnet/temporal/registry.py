@@ -1,93 +1,40 @@
-"""One registry of the light-smoothing methods: their names, options, where they run, and factories.
+"""The light-smoothing methods implemented: resolving a name, building a filter, smoothing a sequence.
 
-Every command that smooths a light sequence takes ``--smoothing NAME`` with a name from here,
-and the library functions take the same names (``smoothing=``):
-
-======================  =======  ======  ========  ===================================================
-name                    offline  causal  evidence  what
-======================  =======  ======  ========  ===================================================
-``hermite``             yes      no      no        robust cubic Hermite spline (:func:`smooth_lights`)
-``poly``                yes      no      no        polynomial regression, global or local
-``savgol``              yes      no      no        Savitzky–Golay
-``ema``                 yes      yes     no        exponential moving average (:class:`EMAFilter`)
-``one-euro``            yes      yes     no        one-euro filter (:class:`OneEuroFilter`)
-``fir``                 yes      yes     no        causal FIR (:class:`FIRFilter`)
-``gated-one-euro``      yes      yes     no        outlier gate + one-euro (:class:`OutlierGate`)
-``pooled``              yes      yes     yes       the light solve's evidence pooled per shot
-``none``                yes      yes     no        the raw per-frame lights
-======================  =======  ======  ========  ===================================================
-
-*offline* methods smooth a whole recorded sequence (``avatar``, ``compare``, ``evaluate --light``,
-``smooth-light``: :func:`smooth_sequence`); *causal* ones run frame by frame with explicit state
-(``relight-video``, ``export``'s ONNX graph: :func:`make_smoother`, all ONNX-exportable).
+The methods — names, whether they are causal or need the light solve's evidence, their options
+and one-line summaries — are one torch-free table, :data:`relightnet.names.SMOOTHING_METHODS`;
+every list a command accepts and every ``--smoothing`` help is derived from it. Every method
+smooths a whole recorded sequence (``smooth-light``: :func:`smooth_sequence`; the offline video
+jobs ``avatar``, ``compare``, ``evaluate --light``: :func:`smooth_video_lights`, which resolves
+the name once and returns the method used); the *causal* ones also run frame by frame with
+explicit state (``relight-video``, ``export``'s ONNX graph: :func:`make_smoother`).
 ``pooled`` needs the per-frame evidence of a network that solves its light
 (:mod:`relightnet.temporal.pooling`). ``auto`` is ``pooled`` when there is evidence, else
 ``hermite`` offline and ``ema`` causally (:func:`resolve_smoothing`).
-
-The video jobs accept :data:`VIDEO_SMOOTHING` (every name), the streaming ones
-:data:`STREAMING_SMOOTHING` (the causal ones), ``smooth-light`` :data:`SEQUENCE_SMOOTHING` (those
-that need no evidence).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+from typing import NamedTuple
 
 import torch
 from torch import nn
 
 from ..checks import InputError, sh_order_from_count
-from ..names import SEQUENCE_SMOOTHING, STREAMING_SMOOTHING, VIDEO_SMOOTHING
+from ..names import SMOOTHING_METHODS, VIDEO_SMOOTHING, smoothing_names
 from .causal import EMAFilter, FIRFilter, OneEuroFilter, run_causal
 from .distance import light_distance
 from .gate import OutlierGate
 from .offline import SmoothResult, smooth_lights
 from .pooling import PooledSolve, pool_shot_lights, pool_window
 
-__all__ = ["SmoothingMethod", "SMOOTHING_METHODS", "VIDEO_SMOOTHING", "STREAMING_SMOOTHING", "SEQUENCE_SMOOTHING",
-           "smoothing_names", "resolve_smoothing", "check_smoothing", "make_smoother", "smooth_sequence",
-           "PassThrough"]
+__all__ = ["resolve_smoothing", "check_smoothing", "make_smoother", "smooth_sequence", "smooth_video_lights",
+           "VideoSmoothing", "PassThrough", "MIN_FIT_FRAMES"]
 
+logger = logging.getLogger("relightnet.temporal")
 
-@dataclass(frozen=True)
-class SmoothingMethod:
-    """One smoothing method: ``offline`` (whole sequences), ``causal`` (streaming, ONNX-exportable),
-    ``evidence`` (needs the light solve's evidence), its keyword ``options`` and a one-line ``summary``."""
-
-    name: str
-    offline: bool
-    causal: bool
-    evidence: bool
-    options: tuple[str, ...]
-    summary: str
-
-
-#: Options every offline regression method takes (:func:`~relightnet.temporal.smooth_lights`).
-_ROBUST = ("outlier_eps", "iterations", "switches", "switch_window", "switch_eps", "scale_window")
-#: The gate's options (causal methods smoothed by :func:`smooth_sequence` with ``outlier_eps``).
-_GATE = ("eps", "persist", "gamma", "init")
-
-#: Every smoothing method by name (``auto`` is not one: :func:`resolve_smoothing` picks one).
-SMOOTHING_METHODS: dict[str, SmoothingMethod] = {m.name: m for m in (
-    SmoothingMethod("hermite", True, False, False, ("knot_spacing", "tangents", *_ROBUST),
-                    "robust cubic Hermite spline with outlier correction and switch splitting"),
-    SmoothingMethod("poly", True, False, False, ("degree", "window", *_ROBUST), "polynomial regression"),
-    SmoothingMethod("savgol", True, False, False, ("window", "degree", *_ROBUST), "Savitzky-Golay"),
-    SmoothingMethod("ema", True, True, False, ("alpha",), "exponential moving average"),
-    SmoothingMethod("one-euro", True, True, False, ("min_cutoff", "beta", "d_cutoff", "rate", "normalize"),
-                    "one-euro filter (cutoff rising with the light's speed)"),
-    SmoothingMethod("fir", True, True, False, ("window", "degree", "taps"), "causal FIR filter"),
-    SmoothingMethod("gated-one-euro", True, True, False, _GATE,
-                    "causal outlier gate in front of a one-euro filter"),
-    SmoothingMethod("pooled", True, True, True, ("alpha", "reg", "eps", "persist", "window"),
-                    "the light solve's evidence pooled per shot (solve/hybrid networks)"),
-    SmoothingMethod("none", True, True, False, (), "the raw per-frame lights"),
-)}
-
-def smoothing_names(causal: bool | None = None, evidence: bool | None = None) -> tuple[str, ...]:
-    """Method names, optionally only the causal (or offline-only) ones, with or without evidence."""
-    return tuple(n for n, m in SMOOTHING_METHODS.items()
-                 if (causal is None or m.causal == causal) and (evidence is None or m.evidence == evidence))
+#: The fewest frames an offline regression fits; a shorter clip keeps its raw lights (``none``).
+MIN_FIT_FRAMES = 3
 
 
 def check_smoothing(name: str, allowed=VIDEO_SMOOTHING, what: str = "smoothing") -> str:
@@ -97,18 +44,24 @@ def check_smoothing(name: str, allowed=VIDEO_SMOOTHING, what: str = "smoothing")
     return name
 
 
-def resolve_smoothing(name: str, has_evidence: bool, causal: bool = False) -> str:
+def resolve_smoothing(name: str, has_evidence: bool, causal: bool = False, frames: int | None = None) -> str:
     """The method ``name`` stands for: ``auto`` → ``pooled`` with evidence, else ``hermite``
-    (offline) or ``ema`` (causal); ``pooled`` without evidence is refused."""
+    (offline) or ``ema`` (causal); ``pooled`` without evidence is refused. With ``frames`` (the
+    length of a recorded sequence), an offline regression of fewer than :data:`MIN_FIT_FRAMES`
+    frames becomes ``none`` (the raw lights), with a warning."""
     if name == "auto":
-        return "pooled" if has_evidence else ("ema" if causal else "hermite")
-    if name not in SMOOTHING_METHODS:
+        name = "pooled" if has_evidence else ("ema" if causal else "hermite")
+    elif name not in SMOOTHING_METHODS:
         raise InputError(f"smoothing: expected auto or one of {', '.join(SMOOTHING_METHODS)}, got {name!r}")
     if SMOOTHING_METHODS[name].evidence and not has_evidence:
         raise InputError(f"smoothing {name}: the model regresses its light (no solve to pool); use another method")
     if causal and not SMOOTHING_METHODS[name].causal:
         raise InputError(f"smoothing {name}: an offline method; streaming takes one of "
                          f"{', '.join(smoothing_names(causal=True))}")
+    if frames is not None and frames < MIN_FIT_FRAMES and not SMOOTHING_METHODS[name].causal:
+        logger.warning("smoothing %s: %d frame(s) are too few to fit (at least %d); the raw lights are used "
+                       "(smoothing none)", name, frames, MIN_FIT_FRAMES)
+        return "none"
     return name
 
 
@@ -174,7 +127,11 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
         :class:`~relightnet.temporal.SmoothResult` ``(smoothed (T, K, 3), outliers (T,), distances
         (T,), switches (T,))``.
     """
-    name = resolve_smoothing(method, evidence is not None)
+    return _smooth(lights, resolve_smoothing(method, evidence is not None), evidence, prior, reg, fps, gate, **opts)
+
+
+def _smooth(lights, name, evidence, prior, reg, fps, gate, **opts):
+    """:func:`smooth_sequence` with a resolved method name."""
     _check_options(name, opts)
     none = torch.zeros(lights.shape[0], dtype=torch.bool)
     if name == "pooled":
@@ -193,3 +150,38 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
     y, states = run_causal(OutlierGate(filt, lmax=lmax, **gate), lights, return_states=True)
     status = states[:, -1, 0, 0].round()
     return SmoothResult(y, status == 1, light_distance(lights, y), status == 2)
+
+
+class VideoSmoothing(NamedTuple):
+    """What :func:`smooth_video_lights` returns: ``smoothed`` (T, K, 3), ``outliers`` and ``switches``
+    (T,) bool, and ``method``, the method actually used (``auto`` resolved, short clips ``none``)."""
+
+    smoothed: torch.Tensor
+    outliers: torch.Tensor
+    switches: torch.Tensor
+    method: str
+
+
+def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
+                        fps: float = 30.0) -> VideoSmoothing:
+    """Smooth a video's (T, K, 3) per-frame lights the way every offline video job does
+    (``avatar``, ``compare``, ``evaluate --light``); the method is resolved here, once.
+
+    ``method`` is ``auto`` or any method of :data:`relightnet.names.SMOOTHING_METHODS`.
+    ``pooled`` shares the light across frames: the per-frame evidence of the light solve
+    (``evidence``, ``prior``: ``M`` (T, 3, K, K), ``r`` (T, 3, K), (T, K, 3); ``reg`` the network's
+    λ) of the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular weights,
+    at the video's ``fps``) and between the same detected light switches is solved jointly;
+    ``hermite``/``poly``/``savgol`` are robust regressions with 3-MAD outlier correction and
+    automatic switch detection (fewer than :data:`MIN_FIT_FRAMES` frames: the raw lights, with a
+    warning, and ``none`` is the method returned); the causal filters run over the sequence with
+    their default options; ``auto`` is ``pooled`` when there is evidence, else ``hermite``.
+
+    Returns:
+        :class:`VideoSmoothing` ``(smoothed (T, K, 3), outliers (T,), switches (T,), method)``.
+    """
+    name = resolve_smoothing(method, evidence is not None, frames=raw.shape[0])  # checks the name too
+    robust = not SMOOTHING_METHODS[name].causal
+    opts = {"outlier_eps": "3mad", "switches": "auto"} if robust else {}
+    res = _smooth(raw, name, evidence, prior, reg, fps, None, **opts)
+    return VideoSmoothing(res.smoothed, res.outliers, res.switches, name)

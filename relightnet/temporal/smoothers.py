@@ -29,11 +29,8 @@ from ..checks import InputError
 from ..names import OFFLINE_METHODS
 
 __all__ = [
-    "METHODS", "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
+    "poly_matrix", "savgol_matrix", "hermite_basis", "hermite_matrix", "smoothing_matrix",
 ]
-
-#: Offline methods: keys of :func:`smoothing_matrix`.
-METHODS = OFFLINE_METHODS
 
 _F64 = torch.float64
 
@@ -176,7 +173,7 @@ _BUILDERS = {
 
 def _check_method(method: str) -> None:
     if method not in _BUILDERS:
-        raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+        raise InputError(f"method: expected one of {', '.join(OFFLINE_METHODS)}, got {method!r}")
 
 
 def smoothing_matrix(n: int, method: str = "hermite", switches=None, **opts) -> torch.Tensor:
@@ -184,7 +181,7 @@ def smoothing_matrix(n: int, method: str = "hermite", switches=None, **opts) -> 
 
     Args:
         n: number of frames T.
-        method: one of :data:`METHODS`.
+        method: one of :data:`relightnet.names.OFFLINE_METHODS`.
         switches: None, or (T,) bool marking the first frame of each new segment.
         **opts: the method's options (``degree``/``window`` for poly and savgol,
             ``knot_spacing``/``tangents`` for hermite).

@@ -37,6 +37,7 @@ def test_walk_is_periodic_and_advances():
     assert (dz > 0).all() and abs(fwd["trans"][30, 2] - fwd["trans"][0, 2] - 1.3) < 1e-5
 
 
+@pytest.mark.slow
 def test_walk_is_smooth_and_plausible(anny_body):
     out = anny_body(make_motion("walk", 40, fps=30, seed=2))
     j = out.joints

@@ -5,6 +5,7 @@ import torch
 import torch.nn.functional as F
 
 from relightnet.checks import InputError
+from relightnet.color import linear_to_srgb
 from relightnet.data.augment import (
     Augment,
     crop,
@@ -16,7 +17,6 @@ from relightnet.data.augment import (
     sh_mirror_signs,
     white_balance,
 )
-from relightnet.io import linear_to_srgb
 from relightnet.sh import irradiance, sh_basis
 
 

@@ -127,6 +127,7 @@ def test_determinism(assets, samples):
     assert not np.array_equal(other.arrays["image"], samples[2].arrays["image"])
 
 
+@pytest.mark.slow
 def test_test_split_uses_only_the_test_maps(assets):
     cfg = CFG.replace(res=32, n_dirs=8, synthetic_light_prob=0.0)
     for split, allowed in (("test", set(cfg.hdri_test)), ("train", set(cfg.hdri_train)), ("val", set(cfg.hdri_train))):
@@ -155,6 +156,7 @@ def test_partial_crops_and_views(assets):
     assert modes == {"upper", "head"}
 
 
+@pytest.mark.slow
 def test_variety_of_bodies_poses_lights_and_views(samples, assets):
     metas = [s.meta for s in samples] + [generate_sample(CFG.replace(res=16, n_dirs=8), "train", i, assets).meta
                                          for i in range(N, 3 * N)]
@@ -223,6 +225,7 @@ def test_exposure_is_sane(samples):
         assert (s.arrays["image_srgb"][s.arrays["mask"] > 0] == 255).mean() < 0.2
 
 
+@pytest.mark.slow
 def test_sequence(assets):
     cfg = CFG.replace(res=32, n_dirs=8)
     T = 5

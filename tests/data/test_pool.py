@@ -1,7 +1,15 @@
+import dataclasses
+
+import pytest
+
 from relightnet.data import SynthConfig
-from relightnet.data.pool import FAULT_ENV, LocalPool
+from relightnet.data.fault_hook import FAULT_ENV
+from relightnet.data.pool import LocalPool
 from relightnet.data.shards import verify_dataset
 from relightnet.data.synth import run_synth
+from relightnet.distributed.records import ShardFailure, ShardTask
+
+pytestmark = pytest.mark.slow  # process pools whose workers build the body assets and die on purpose
 
 CFG = SynthConfig(res=32, n_dirs=16, shard_size=2, counts={"train": 4, "val": 0, "test": 0})
 
@@ -24,11 +32,11 @@ def test_a_dying_worker_is_replaced_and_its_shard_retried(tmp_path, monkeypatch,
 
 def test_a_shard_that_keeps_killing_its_worker_fails_alone(tmp_path):
     failures, done = [], []
-    task = (CFG.to_dict(), "train", 0, str(tmp_path), "store")
+    task = ShardTask(CFG.to_dict(), "train", 0, str(tmp_path), "store")
     with LocalPool(1, max_retries=0, fault="train-00000.npz") as pool:  # every attempt dies
-        pool.run([task, (*task[:2], 1, *task[3:])], lambda r: (failures if "error" in r else done).append(r),
-                 lambda n: None)
+        pool.run([task, dataclasses.replace(task, index=1)],
+                 lambda r: (failures if isinstance(r, ShardFailure) else done).append(r), lambda n: None)
     assert [r["index"] for r in done] == [1] and (tmp_path / "train-00001.npz").is_file()
-    assert failures == [{"split": "train", "index": 0, "attempts": 1, "error": "WorkerCrashedError: the worker "
-                         "process died (killed or out of memory) while making the shard"}]
+    assert failures == [ShardFailure("train", 0, "WorkerCrashedError: the worker process died (killed or out of "
+                                     "memory) while making the shard", attempts=1)]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["train-00001.npz"]  # nothing half-written

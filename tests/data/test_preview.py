@@ -5,9 +5,10 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
+from relightnet.color import srgb_to_linear
 from relightnet.data.preview import contact_sheet, preview, preview_columns
 from relightnet.data.shards import read_shard
-from relightnet.io import read_image, srgb_to_linear
+from relightnet.io import read_image
 
 COLUMNS = ["image", "composite", "albedo", "shading", "mask", "normals", "T dc", "T l=1", "T l=2", "occlusion"]
 

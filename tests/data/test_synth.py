@@ -14,6 +14,8 @@ from relightnet.data import SynthConfig
 from relightnet.data.shards import load_manifest, read_shard, verify_dataset, write_shard
 from relightnet.data.synth import make_shard, run_synth
 
+pytestmark = pytest.mark.slow  # generator runs (Anny, PRT) with process pools
+
 CFG = SynthConfig(res=32, n_dirs=16, shard_size=2, counts={"train": 4, "val": 1, "test": 1})
 
 

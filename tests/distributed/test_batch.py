@@ -5,6 +5,9 @@ import subprocess
 import sys
 import time
 
+import pytest
+
+from relightnet.cli import command_table
 from relightnet.distributed import RayOptions
 from relightnet.distributed.batch import run_batch
 
@@ -21,6 +24,7 @@ def _summary(folder):
     return json.loads((folder / "jobs.summary.json").read_text())
 
 
+@pytest.mark.slow
 def test_killed_driver_resumes_and_a_bad_job_fails_alone(tmp_path):
     (tmp_path / "out").mkdir()
     (tmp_path / "jobs.yaml").write_text(
@@ -66,12 +70,12 @@ def test_one_bad_one_good_job_on_ray(ray_cluster, tmp_path, monkeypatch):
     (tmp_path / "out").mkdir()
     (tmp_path / "jobs.yaml").write_text("jobs:\n" + BAD + GOOD + "- {command: light, args: [show, city, --out, "
                                         "out/c.png], resources: {cpus: 64}}\n")
-    s = run_batch(tmp_path / "jobs.yaml", ray=RayOptions(), progress=False)
+    s = run_batch(tmp_path / "jobs.yaml", command_table(), ray=RayOptions(), progress=False)
     assert s == _summary(tmp_path) and s["runner"] == "ray"
     assert [j["status"] for j in s["jobs"]] == ["failed", "done", "failed"]
     assert s["jobs"][0]["error"] == "InputError: missing.npz: no such light file"
     assert s["jobs"][2]["error"] == "needs 64 CPU(s) and 0 GPU(s) on one node; no node of the cluster has them"
     assert (tmp_path / "out" / "sunset.png").read_bytes()[:8] == PNG
     # Run again: the finished job is skipped, the bad one fails again, nothing is redone.
-    s = run_batch(tmp_path / "jobs.yaml", ray=RayOptions(), progress=False)
+    s = run_batch(tmp_path / "jobs.yaml", command_table(), ray=RayOptions(), progress=False)
     assert [j["status"] for j in s["jobs"]] == ["failed", "skipped", "failed"]

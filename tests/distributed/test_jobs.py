@@ -1,15 +1,17 @@
 import pytest
 
 from relightnet.checks import InputError
-from relightnet.cli import build_parser
+from relightnet.cli import build_parser, command_table
 from relightnet.distributed.jobs import _why, batchable_commands, load_jobs
 
 
 def test_batchable_commands_are_the_cli_table():
     parser = build_parser()
     table = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction").choices
-    assert batchable_commands() == [c for c in table if c != "batch"]
-    assert {"relight-image", "relight-video", "avatar", "estimate-light", "render-body"} <= set(batchable_commands())
+    assert list(command_table(parser)) == list(table)
+    assert batchable_commands(table) == [c for c in table if c != "batch"]
+    assert {"relight-image", "relight-video", "avatar", "estimate-light", "render-body"} <= set(
+        batchable_commands(table))
 
 
 def test_entries_are_checked_one_by_one(tmp_path):
@@ -25,7 +27,7 @@ jobs:
   - {command: render-body, args: [--frames, 10, --light, city, --out, out/w.mp4, --motion, walk], resources: {gpus: 1}}
   - just a string
 """)
-    jobs = load_jobs(f)
+    jobs = load_jobs(f, command_table())
     assert [j.error for j in jobs[:1] + jobs[6:7]] == [None, None]
     assert jobs[0].out == "out/a.png" and jobs[0].cpus == 2 and jobs[0].extra == {"note": "kept"}
     assert jobs[6].args == ("--frames", "10", "--light", "city", "--out", "out/w.mp4", "--motion", "walk")
@@ -48,7 +50,7 @@ def test_bad_jobs_files(tmp_path, text, match):
     if text is not None:
         f.write_text(text)
     with pytest.raises(InputError, match=match):
-        load_jobs(f)
+        load_jobs(f, command_table())
 
 
 def test_why_a_job_failed():

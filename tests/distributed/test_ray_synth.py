@@ -5,7 +5,7 @@ import pytest
 
 from relightnet import cli
 from relightnet.data import SynthConfig
-from relightnet.data.pool import FAULT_ENV
+from relightnet.data.fault_hook import FAULT_ENV
 from relightnet.data.shards import load_manifest, verify_dataset
 from relightnet.data.synth import ShardsFailed, run_synth
 from relightnet.distributed import RayOptions

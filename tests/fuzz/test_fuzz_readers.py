@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # the whole malformed-file corpus in a watched child process
+
 RUNNER = Path(__file__).with_name("runner.py")
 READERS = ("light-npz", "light-json", "light-npy", "light-exr", "light-hdr", "motion-npz", "motion-pkl", "smpl-npz",
            "smpl-pkl", "image", "mask", "video", "synth-config", "train-config", "shard", "manifest", "checkpoint",

@@ -58,6 +58,7 @@ def _killed_writer(path, tag=""):
     return Path(out.stdout.strip())
 
 
+@pytest.mark.slow
 def test_next_writer_removes_temp_files_of_dead_writers_only(tmp_path):
     from relightnet.io.atomic import remove_stale, temp_path
 

@@ -5,7 +5,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.io import linear_to_srgb, read_image, srgb_to_linear, to_uint8, write_image
+from relightnet.color import linear_to_srgb, srgb_to_linear
+from relightnet.io import read_image, to_uint8, write_image
 
 
 def test_srgb_known_values_and_inverse():

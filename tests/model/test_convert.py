@@ -32,7 +32,7 @@ def test_older_checkpoint_with_numpy_and_config_objects_converts(tmp_path, capsy
     assert state["format"] == FORMAT and state["step"] == 7 and type(state["step"]) is int
     assert state["net_config"] == dataclasses.asdict(CFG) and torch.equal(state["stats"], torch.arange(3.0).double())
     m = load_model(tmp_path / "new.pt")
-    assert m.input_size == 32 and all(torch.equal(a, b) for a, b in zip(m.state_dict().values(),
+    assert m.config.input_size == 32 and all(torch.equal(a, b) for a, b in zip(m.state_dict().values(),
                                                                          net.state_dict().values(), strict=True))
 
 

@@ -1,18 +1,9 @@
-"""relightnet.model.losses: the masked image losses, erosion, and the loss weights of the configs."""
+"""relightnet.model.losses: the masked image losses and the loss weights of the configs."""
 
 import pytest
 import torch
 
-from relightnet.model.losses import LossWeights, erode, masked_l1, total_variation
-
-
-def test_erode_is_min_pooling_over_a_square():
-    m = torch.zeros(1, 1, 9, 9)
-    m[..., 2:7, 2:7] = 1
-    e = erode(m, 1)
-    assert e.sum() == 9 and e[..., 3:6, 3:6].all()  # a 5x5 square loses its 1-pixel rim
-    assert erode(m, 2).sum() == 1 and torch.equal(erode(m, 0), m)
-    assert erode(torch.ones(2, 1, 4, 4), 1).sum() == 32  # the image border does not erode
+from relightnet.model.losses import LossWeights, masked_l1, total_variation
 
 
 def test_masked_l1_counts_only_masked_pixels_and_channels():

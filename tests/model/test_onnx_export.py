@@ -9,8 +9,10 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.onnx_export import SMOOTHERS, StreamingRelighter, export_onnx, make_smoother
+from relightnet.model.onnx_export import StreamingRelighter, export_onnx
 from relightnet.model.onnx_serving import OnnxRelighter
+from relightnet.names import STREAMING_SMOOTHING
+from relightnet.temporal import make_smoother
 
 from .conftest import NET, TRAIN_CONFIG
 from .conftest import make_inputs as _inputs
@@ -33,6 +35,7 @@ def test_ort_matches_torch_at_several_sizes_and_batches(exported):
             assert np.abs(o - e.numpy()).max() <= 1e-4
 
 
+@pytest.mark.slow
 def test_pooled_solve_in_the_graph_equals_torch_over_12_frames(tmp_path):
     """A hybrid network exported with the 'pooled' smoother: evidence outputs and the pooled light match torch
     frame by frame, and the predictor hands the evidence to the video jobs."""
@@ -85,4 +88,4 @@ def test_bad_exports_write_nothing(tmp_path):
     with pytest.raises(InputError):
         export_onnx(net, tmp_path / "m.onnx", smoothing="no-such-smoother")
     assert list(tmp_path.iterdir()) == []
-    assert "ema" in SMOOTHERS and "pooled" in SMOOTHERS
+    assert "ema" in STREAMING_SMOOTHING and "pooled" in STREAMING_SMOOTHING

@@ -6,12 +6,13 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.model import normalize_input
-from relightnet.model.onnx_export import make_smoother
 from relightnet.model.onnx_serving import OnnxRelighter, calibration_set, quantize_int8, run_video
+from relightnet.temporal import make_smoother
 
 from .conftest import make_inputs as _inputs
 
 
+@pytest.mark.slow
 def test_smoothing_layer_in_ort_equals_torch_over_50_frames(exported):
     net, path = exported
     smoother = make_smoother("ema", alpha=0.4)
@@ -72,6 +73,7 @@ def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
         quantize_int8(path, tmp_path / "x.onnx", mode="int4")
 
 
+@pytest.mark.slow
 def test_calibration_set_draws_generated_people():
     pairs = calibration_set(n=2, size=32)
     assert len(pairs) == 2

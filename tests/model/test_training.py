@@ -13,6 +13,8 @@ from relightnet.model.losses import relight_losses
 from relightnet.model.network import Prediction, shading_map
 from relightnet.model.training import TrainConfig, load_train_config, train
 
+pytestmark = pytest.mark.slow  # training steps on a generated dataset; torchrun with two processes
+
 REPO = Path(__file__).resolve().parents[2]
 NET = {"width": 8, "max_width": 32, "light_hidden": 32}
 

@@ -13,6 +13,8 @@ from relightnet.pipeline.avatar import avatar
 from relightnet.render import render_body_frames
 from relightnet.sh import save_light
 
+pytestmark = pytest.mark.slow  # avatar video jobs: Anny posed per frame, PRT, rendering, encoding
+
 N, RES = 4, 64
 
 
@@ -59,7 +61,7 @@ def test_avatar_writes_video_lights_and_plot(target, model, anny_body, tmp_path)
 def test_avatar_given_light_is_the_render_composited(target, anny_body, tmp_path):
     """With a given light the avatar pixels are exactly the PRT render under it (sRGB-encoded)."""
     from relightnet.body import make_motion
-    from relightnet.io.image import linear_to_srgb
+    from relightnet.color import linear_to_srgb
     from relightnet.pipeline.scene import avatar_albedo
 
     video, _, true = target
@@ -247,7 +249,8 @@ def test_killed_avatar_leaves_no_temp_file_after_a_rerun(target, tmp_path, kill_
 def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
     """The job converts only the covered pixels; the bytes equal compositing the whole float frame."""
     from relightnet.body import make_motion
-    from relightnet.io.image import linear_to_srgb, to_uint8
+    from relightnet.color import linear_to_srgb
+    from relightnet.io.image import to_uint8
     from relightnet.pipeline.avatar import _composite_covered
     from relightnet.pipeline.scene import avatar_albedo
     from relightnet.sh import preset_light

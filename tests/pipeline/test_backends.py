@@ -13,6 +13,7 @@ def _photo():
     return img, mask
 
 
+@pytest.mark.slow
 def test_torch_predictor_light_is_the_prediction_light():
     net = RelightNet(NetConfig(width=8, levels=2, mask_head=True)).eval()
     p = as_predictor(net)
@@ -41,6 +42,7 @@ def test_make_predictor_and_bad_choices(tmp_path):
         as_predictor("model.pt")
 
 
+@pytest.mark.slow
 def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
     from relightnet.model.onnx_export import export_onnx
     from relightnet.pipeline.backends import OnnxPredictor
@@ -59,6 +61,7 @@ def test_onnx_predictor_needs_masks_and_matches_torch(tmp_path):
     torch.testing.assert_close(onnx.light(img, mask), want.light[0], rtol=1e-4, atol=1e-4)
 
 
+@pytest.mark.slow
 def test_predictors_follow_the_protocol_and_take_their_size_from_the_config(tmp_path):
     from relightnet.model import save_checkpoint
     from relightnet.pipeline.backends import Predictor

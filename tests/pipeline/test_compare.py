@@ -11,6 +11,8 @@ from relightnet.io import read_image, read_video, video_info
 from relightnet.model import NetConfig, RelightNet, save_checkpoint
 from relightnet.pipeline.compare import compare
 
+pytestmark = pytest.mark.slow  # whole 2D-vs-3D comparisons on generated clips (CNN, PRT, renders), 1-2 min each
+
 T = 3
 RES = 32
 

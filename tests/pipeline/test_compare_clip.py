@@ -12,6 +12,8 @@ from relightnet.pipeline.compare_report import json_safe
 
 from .conftest import RES, T
 
+pytestmark = pytest.mark.slow  # one clip through both paths with PRT, about a minute
+
 
 def test_3d_path_with_the_truths_prt_reproduces_the_ground_truth(clip0, model):
     # With the ground truth's own directions (count and seed), the 3D path is the generator's renderer.
@@ -79,7 +81,7 @@ def test_clip_metrics_are_exact_for_a_perfect_output(clip0):
     r = rows[("2d", "true")]
     assert r["rmse"] == 0 and math.isinf(r["psnr"]) and r["ssim"] == 1 and r["temporal"] == 0
     assert len(r["per_frame"]["rmse"]) == T and len(r["per_frame"]["temporal"]) == T - 1
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
 
     err = linear_to_srgb((gt + 0.5).clamp(0, 1)) - linear_to_srgb(gt.clamp(0, 1))
     per_frame = [math.sqrt(float((err[t][mask[t] > 0] ** 2).mean())) for t in range(T)]

@@ -1,10 +1,13 @@
 import json
 
+import pytest
+
 from relightnet.cli import main
 from relightnet.io import read_video, video_info
 from relightnet.sh import preset_names
 
 
+@pytest.mark.slow
 def test_demo_runs_on_embedded_defaults(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--size", "64", "--frames", "5", "--n-dirs", "8",

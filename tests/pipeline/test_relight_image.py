@@ -9,6 +9,8 @@ from relightnet.model import load_model
 from relightnet.pipeline import relight_image
 from relightnet.sh import load_light, preset_light
 
+pytestmark = pytest.mark.slow  # the CNN on real photos, relighting, the CLI; 8-17 s each on a loaded machine
+
 
 @pytest.fixture(scope="module")
 def photo(anny_body):

@@ -1,7 +1,10 @@
 import numpy as np
+import pytest
 
 from relightnet.cli import main
 from relightnet.io import read_video, video_info
+
+pytestmark = pytest.mark.slow  # video jobs through the CLI (segmentation, CNN per frame, encoding)
 
 
 def test_relight_video_streams_all_frames(tmp_path, masked_clip):
@@ -106,18 +109,12 @@ def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys)
     # auto is ema for the shipped model (it regresses its light); ema at 0.3 is the default
     for a, b in zip(read_video(outs["ema"]), read_video(outs["auto"]), strict=True):
         np.testing.assert_array_equal(a, b)
-    old = tmp_path / "old.mkv"
-    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--smoothing", "0.3",
-                 "--out", str(old)]) == 0
-    assert "deprecated" in capsys.readouterr().err
-    for a, b in zip(read_video(outs["ema"]), read_video(old), strict=True):
-        np.testing.assert_array_equal(a, b)
     with pytest.raises(SystemExit) as e:  # an offline method: refused by the parser
         main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--smoothing", "hermite",
               "--out", str(tmp_path / "x.mkv")])
     assert e.value.code == 2 and "hermite" in capsys.readouterr().err
     with pytest.raises(InputError, match="alpha"):
         relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "y.mkv", alpha=0)
-    with pytest.warns(DeprecationWarning):
+    with pytest.raises(InputError, match="smoothing"):  # the EMA weight is alpha=, no longer a number here
         relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "z.mkv",
                       smoothing=1.0, progress=False)

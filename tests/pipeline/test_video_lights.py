@@ -1,4 +1,4 @@
-"""The light of a video: per-frame estimates (estimate_video_evidence), smoothing, the reusable side file."""
+"""The light of a video: per-frame estimates (estimate_video_evidence), the reusable side file."""
 
 import numpy as np
 import pytest
@@ -6,37 +6,17 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.light_solve import Evidence
 from relightnet.pipeline.video_lights import (
     estimate_video_evidence,
     estimate_video_lights,
     lights_fingerprint,
     read_light_estimates,
-    smooth_video_lights,
     write_video_lights,
 )
-from relightnet.sh import preset_light
+from relightnet.sh.light_solve import Evidence
 
 
-def test_smoothing_none_and_short_clips():
-    raw = torch.randn(5, 9, 3)
-    sm, out, sw = smooth_video_lights(raw, "none")
-    assert torch.equal(sm, raw) and not out.any() and not sw.any()
-    sm, _, _ = smooth_video_lights(raw[:2], "hermite")
-    assert torch.equal(sm, raw[:2])
-
-
-def test_robust_smoothing_replaces_a_spike():
-    L = preset_light("studio")
-    raw = L[None].repeat(12, 1, 1)
-    raw[5] = 3 * L  # one bad frame
-    sm, out, sw = smooth_video_lights(raw, "hermite")
-    assert out.tolist() == [t == 5 for t in range(12)] and not sw.any()
-    torch.testing.assert_close(sm[5], L, atol=1e-3, rtol=1e-3)
-    with pytest.raises(InputError):
-        smooth_video_lights(raw, "no-such-method")
-
-
+@pytest.mark.slow
 def test_estimates_of_a_video_per_frame(masked_clip, tmp_path):
     torch.manual_seed(0)
     net = RelightNet(NetConfig(width=4, max_width=8, levels=2, light_hidden=8, mask_head=False, input_size=32)).eval()

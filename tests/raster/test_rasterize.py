@@ -230,6 +230,7 @@ def test_fragments_dense_round_trip():
     assert np.isclose(frags.mask.sum().item(), 0.5 * abs((20 - 2) * (20 - 2) - (8 - 2) * (3 - 2)), rtol=0.1)
 
 
+@pytest.mark.slow
 def test_compiled_kernels_match_eager():
     """compile=True (torch.compile, or its eager fallback) gives bit-identical fragments."""
     g = torch.Generator().manual_seed(7)

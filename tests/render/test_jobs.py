@@ -61,6 +61,7 @@ def test_shadow_under_the_sphere(tmp_path):
     assert bounced.image[0][ground].mean() > occ.image[0][ground].mean()
 
 
+@pytest.mark.slow
 def test_render_body_frames_streams_a_motion(anny_body):
     motion = make_motion("walk", 3, seed=1)
     alb = default_albedo(anny_body, texture_size=64)
@@ -77,6 +78,7 @@ def test_render_body_frames_streams_a_motion(anny_body):
         list(render_body_frames(anny_body, motion, seq, alb.vertex, size=32, n_dirs=8))
 
 
+@pytest.mark.slow
 def test_visible_only_transport_gives_the_same_frames(anny_body):
     """Transport at the vertices the camera sees only: the same images, chunked posing too.
 

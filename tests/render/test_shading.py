@@ -96,21 +96,10 @@ def test_shade_and_composite_gradcheck(device):
     assert torch.autograd.gradcheck(lambda t, light: shading(t, light), (t3, lb))
 
 
-def test_channel_layout_pair_is_a_view_and_round_trips():
-    from relightnet.render import to_channels_first, to_channels_last
-
-    x = torch.randn(2, 5, 4, 3)
-    y = to_channels_last(x)
-    assert y.shape == (2, 4, 3, 5) and y.data_ptr() == x.data_ptr()
-    assert torch.equal(to_channels_first(y), x)
-    with pytest.raises(ShapeError, match="channels-first"):
-        to_channels_last(torch.zeros(3, 4, 5))
-
-
 @pytest.mark.parametrize("batched", [False, True])
 def test_shading_of_a_cnn_map_equals_the_per_pixel_sum(batched):
     """A channels-last view of (B, K, H, W) memory goes through the transposed product: same values."""
-    from relightnet.render import to_channels_last
+    from relightnet.raster import to_channels_last
 
     g = torch.Generator().manual_seed(1)
     T = torch.randn(3, 9, 6, 5, generator=g, dtype=torch.float64)

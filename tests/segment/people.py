@@ -42,7 +42,7 @@ def person_cutout(arrays: dict, exposure: float = 0.25, crop: tuple[slice, slice
 
     The linear render is scaled so that the person's median luminance is ``exposure``.
     """
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
 
     img = torch.as_tensor(np.asarray(arrays["image"])).float()
     mask = torch.as_tensor(np.asarray(arrays["mask"])).float()

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 from people import background, iou
 
 from relightnet.cli import main
 from relightnet.io import VideoWriter, read_mask, read_masks, write_image
+
+pytestmark = pytest.mark.slow  # segmentation of photos and a video through the CLI
 
 
 def test_segment_photo_folder_and_video(person_scene, walking_clip, tmp_path, capsys):

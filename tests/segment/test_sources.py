@@ -24,6 +24,7 @@ def test_photo_rule(person_scene, person_models):
         person_mask(img, source="magic")
 
 
+@pytest.mark.slow
 def test_video_rule(walking_clip, masked_clip, person_models, tmp_path):
     frames, truth = walking_clip
     video = tmp_path / "walk.mkv"

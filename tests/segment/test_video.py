@@ -9,6 +9,8 @@ from people import flip_rate, iou
 from relightnet.checks import InputError
 from relightnet.segment import PersonTracker, track_person
 
+pytestmark = pytest.mark.slow  # person tracking over a rendered walking clip
+
 
 def test_tracked_masks_are_accurate_and_as_stable_as_the_true_ones(walking_clip, person_models):
     frames, truth = walking_clip

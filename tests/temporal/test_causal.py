@@ -110,6 +110,7 @@ def test_batches_are_independent():
         torch.testing.assert_close(yab[1], run_causal(filt, b))
 
 
+@pytest.mark.slow
 def test_forward_exports_as_one_graph():
     # torch.export refuses data-dependent Python control flow and records no frame loop: the
     # exported step, fed its own state, must equal the eager filter (is_first flips in the run).
@@ -126,6 +127,7 @@ def test_forward_exports_as_one_graph():
 
 
 @pytest.mark.filterwarnings("ignore")
+@pytest.mark.slow
 def test_onnx_export_runs_a_stream_in_onnxruntime():
     """The streaming contract: one step exported (dynamic batch), the state fed back by the caller."""
     import numpy as np

@@ -115,6 +115,7 @@ def test_batched_equals_one_by_one_and_dtype_kept():
     assert res.switches[1].nonzero().flatten().tolist() == [30] and not res.switches[[0, 2]].any()
 
 
+@pytest.mark.slow
 def test_differentiable_in_the_lights():
     _, noisy = rotating(t_len=24, noise=0.05, dtype=torch.float64)
     x = noisy.clone().requires_grad_(True)

@@ -2,7 +2,7 @@
 
 import torch
 
-from relightnet.model.light_solve import Evidence, light_evidence, solve_light
+from relightnet.sh.light_solve import Evidence, light_evidence, solve_light
 from relightnet.temporal import PooledSolve, pool_shot_lights, pooling_weights
 from relightnet.temporal.distance import light_distance, light_norm
 

@@ -2,6 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
+from relightnet.names import SEQUENCE_SMOOTHING, SMOOTHING_METHODS, STREAMING_SMOOTHING, VIDEO_SMOOTHING
+from relightnet.sh import preset_light
 from relightnet.temporal import (
     EMAFilter,
     OneEuroFilter,
@@ -11,16 +13,12 @@ from relightnet.temporal import (
     smooth_lights,
 )
 from relightnet.temporal.registry import (
-    SEQUENCE_SMOOTHING,
-    SMOOTHING_METHODS,
-    STREAMING_SMOOTHING,
-    VIDEO_SMOOTHING,
     PassThrough,
     check_smoothing,
     make_smoother,
     resolve_smoothing,
     smooth_sequence,
-    smoothing_names,
+    smooth_video_lights,
 )
 
 
@@ -30,14 +28,18 @@ def _lights(t=24, seed=0):
     return base + 0.05 * torch.randn(t, 9, 3, generator=g)
 
 
-def test_every_name_is_listed_once_and_the_job_lists_agree():
-    names = tuple(SMOOTHING_METHODS)
-    assert len(set(names)) == len(names)
-    assert set(VIDEO_SMOOTHING) == {"auto", *names}
-    assert set(STREAMING_SMOOTHING) == {"auto", *smoothing_names(causal=True)}
+def test_every_method_of_the_table_is_implemented_with_its_options():
+    x = _lights(8)
     assert "pooled" not in SEQUENCE_SMOOTHING and "hermite" in SEQUENCE_SMOOTHING
-    assert all(SMOOTHING_METHODS[n].offline for n in names)
-    assert set(smoothing_names(causal=False)) == {"hermite", "poly", "savgol"}
+    assert set(VIDEO_SMOOTHING) == {"auto", *SMOOTHING_METHODS}
+    for name, m in SMOOTHING_METHODS.items():
+        if m.causal:
+            make_smoother(name)
+        if not m.evidence:
+            assert smooth_sequence(x, name).smoothed.shape == x.shape
+        if m.options and not m.evidence:  # an option not in the table is refused, naming the ones it takes
+            with pytest.raises(InputError, match=m.options[0]):
+                smooth_sequence(x, name, no_such_option=1)
 
 
 def test_resolve_auto_and_refusals():
@@ -52,6 +54,34 @@ def test_resolve_auto_and_refusals():
         resolve_smoothing("kalman", False)
     with pytest.raises(InputError, match="--smoothing: expected one of"):
         check_smoothing("hermite", STREAMING_SMOOTHING, "--smoothing")
+    assert resolve_smoothing("hermite", False, frames=3) == "hermite"
+    assert resolve_smoothing("ema", False, frames=1) == "ema"  # a filter runs on any length
+
+
+def test_a_short_clip_falls_back_to_none_with_a_warning(caplog):
+    with caplog.at_level("WARNING", logger="relightnet.temporal"):
+        assert resolve_smoothing("auto", False, frames=2) == "none"
+    assert "too few to fit" in caplog.text
+
+
+def test_smoothing_none_and_short_clips():
+    raw = torch.randn(5, 9, 3)
+    sm, out, sw, used = smooth_video_lights(raw, "none")
+    assert torch.equal(sm, raw) and not out.any() and not sw.any()
+    sm, _, _, used = smooth_video_lights(raw[:2], "hermite")  # too short to fit: the raw lights, reported
+    assert torch.equal(sm, raw[:2]) and used == "none"
+    assert smooth_video_lights(raw, "auto").method == "hermite"
+
+
+def test_robust_smoothing_replaces_a_spike():
+    L = preset_light("studio")
+    raw = L[None].repeat(12, 1, 1)
+    raw[5] = 3 * L  # one bad frame
+    sm, out, sw, _ = smooth_video_lights(raw, "hermite")
+    assert out.tolist() == [t == 5 for t in range(12)] and not sw.any()
+    torch.testing.assert_close(sm[5], L, atol=1e-3, rtol=1e-3)
+    with pytest.raises(InputError):
+        smooth_video_lights(raw, "no-such-method")
 
 
 def test_make_smoother_builds_the_causal_modules():

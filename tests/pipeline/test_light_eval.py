@@ -6,7 +6,9 @@ import pytest
 import torch
 
 from relightnet.model import NetConfig, RelightNet
-from relightnet.model.light_eval import clip_metrics, evaluate_light, format_light_report, still_metrics
+from relightnet.pipeline.light_eval import clip_metrics, evaluate_light, format_light_report, still_metrics
+
+pytestmark = pytest.mark.slow  # a generated clip dataset, then the CNN over every frame
 
 
 @pytest.fixture(scope="module")

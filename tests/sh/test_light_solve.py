@@ -3,9 +3,9 @@
 import pytest
 import torch
 
-from relightnet.model.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 from relightnet.model.network import NetConfig, RelightNet, normalize_input
 from relightnet.sh import directional_light, irradiance
+from relightnet.sh.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 
 
 def _scene(b=2, k=9, h=24, w=20, seed=0):
@@ -127,7 +127,7 @@ def test_solve_network_reads_the_image_it_was_given():
     amplified by √cond(M) ≈ 130 for a zero-residual least squares: ≈ 1e-5. Neither depends on the
     order in which a CPU's kernels sum the pixels (the float32 solve erred by 2e-3 here and by
     1e-2 on an AVX2-only CPU)."""
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
 
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=16, levels=2, light_mode="solve", solve_reg=1e-9))
     image, albedo, T, inside, light = _front_of_sphere()

@@ -25,8 +25,8 @@ import torch
 
 from ..checks import InputError
 from ..data.lights import LIGHT_SOURCES
+from ..sh.light_solve import stack_evidence
 from ..sh.metrics import chromaticity_error, direction_error, scale_invariant_light_error
-from .light_solve import stack_evidence
 
 __all__ = ["split_lights", "still_metrics", "clip_lights", "clip_metrics", "evaluate_light", "format_light_report"]
 
@@ -50,7 +50,7 @@ def split_lights(model, data_dir, split: str = "test", batch: int = 16):
         ``(est (N, K, 3), true (N, K, 3), sources: list of N source names)``.
     """
     from ..data.dataset import SynthDataset
-    from .training import batch_to_input
+    from ..model.training import batch_to_input
 
     ds = SynthDataset(data_dir, split, fields=("image", "mask", "light"), cache_shards=1)
     if ds.sequence:
@@ -104,15 +104,15 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
         predictor: a model or predictor (:mod:`relightnet.pipeline.backends`).
         data_dir: a dataset of clips (``sequence_frames`` > 0).
         split: which split.
-        smoothing: as the video jobs (:data:`relightnet.temporal.registry.VIDEO_SMOOTHING`).
+        smoothing: as the video jobs (:data:`relightnet.names.VIDEO_SMOOTHING`).
 
     Returns:
         One dict per clip: ``raw``, ``smoothed`` (T, K, 3), ``true`` (T, K, 3), ``switch`` (the
         first frame of the new light, or None).
     """
     from ..data.dataset import SynthDataset
-    from ..pipeline.avatar import smooth_video_lights
-    from ..pipeline.backends import as_predictor
+    from ..temporal.registry import smooth_video_lights
+    from .backends import as_predictor
 
     predict = as_predictor(predictor)
     ds = SynthDataset(data_dir, split, fields=("image_composite", "mask", "light"), cache_shards=1)

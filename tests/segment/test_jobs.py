@@ -1,0 +1,31 @@
+"""relightnet.segment.jobs: the segment job as a library call (the CLI only parses; test_cli_segment runs it)."""
+
+from __future__ import annotations
+
+import pytest
+
+from relightnet.checks import InputError
+from relightnet.io import read_mask, write_image
+from relightnet.segment import segment_files
+
+
+def test_segment_files_of_a_photo_writes_its_mask(astronaut, person_models, tmp_path):
+    write_image(tmp_path / "a.png", astronaut.permute(1, 2, 0), srgb=False)
+    res = segment_files(tmp_path / "a.png", tmp_path / "m.png", person_models, landmarks=tmp_path / "lm.npz")
+    assert len(res) == 1 and res[0] is not None
+    mask = read_mask(tmp_path / "m.png")
+    assert mask.shape == astronaut.shape[1:] and mask.any() and (tmp_path / "lm.npz").is_file()
+
+
+@pytest.mark.parametrize("src, out, match", [
+    ("empty", "masks", "no photos"),
+    ("empty", "masks.png", "no photos"),
+    ("a.png", "m.mkv", "expected a .png path"),
+    ("clip.mkv", "m.avi", "expected a mask video"),
+])
+def test_segment_files_refuses_outputs_of_the_wrong_kind(astronaut, person_models, tmp_path, src, out, match):
+    (tmp_path / "empty").mkdir()
+    write_image(tmp_path / "a.png", astronaut.permute(1, 2, 0), srgb=False)
+    with pytest.raises(InputError, match=match):
+        segment_files(tmp_path / src, tmp_path / out, person_models)
+    assert not (tmp_path / out).exists()
