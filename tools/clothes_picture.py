@@ -18,7 +18,8 @@ import torch
 
 from relightnet.data import SynthConfig, generate_sample
 from relightnet.data.generate import prepare_assets
-from relightnet.io import linear_to_srgb, write_image
+from relightnet.color import linear_to_srgb
+from relightnet.io import write_image
 
 #: (upper, lower, head, hair) per column.
 LOOKS = [("loose_top", "wide_trousers", "none", "long"), ("open_coat", "skirt", "hood", "volume"),

@@ -19,7 +19,7 @@ import torch
 from ..checks import InputError, check_finite, check_shape
 from ..color import linear_to_srgb, luminance, srgb_to_linear
 from ..model.network import Prediction, photo_albedo
-from ..render.shading import to_channels_last
+from ..raster.interpolate import to_channels_last
 from ..sh.io import resize_sh
 
 __all__ = ["Photo", "load_photo", "RelightSession"]
