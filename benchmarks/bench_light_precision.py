@@ -29,8 +29,8 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import table  # noqa: E402
 
-from relightnet.sh.light_solve import light_evidence, solve_light  # noqa: E402
 from relightnet.sh import cosine_lobe_per_coeff, directional_light, irradiance, sh_basis  # noqa: E402
+from relightnet.sh.light_solve import light_evidence, solve_light  # noqa: E402
 
 
 def _old_solve(image, albedo, transport, weight, reg):

@@ -29,8 +29,8 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "relight", "avatar", "compare",
-    "blender", "demo", "batch", "app",
+    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "relight", "avatar",
+    "compare", "blender", "demo", "batch", "app",
 ]
 
 

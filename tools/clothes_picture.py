@@ -16,9 +16,9 @@ import math
 import numpy as np
 import torch
 
+from relightnet.color import linear_to_srgb
 from relightnet.data import SynthConfig, generate_sample
 from relightnet.data.generate import prepare_assets
-from relightnet.color import linear_to_srgb
 from relightnet.io import write_image
 
 #: (upper, lower, head, hair) per column.
