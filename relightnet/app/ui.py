@@ -5,8 +5,8 @@ Photo tab: open a photo (or make the example person) → the CNN runs once
 by direction (drag it on the sphere pad, click the lit sphere, or move the sliders: azimuth,
 elevation, size, power, colour, ambient), a preset, an HDRI file or a background plate; the
 relit photo is redrawn beside the original on every change (re-shading only) with the
-diffuse-sphere preview and the light in words; download the relit PNG and the light (.npz). Video tab: ``relight-video`` with a
-progress bar.
+diffuse-sphere preview and the light in words; download the relit PNG and the light (.npz).
+Video tab: ``relight-video`` with a progress bar.
 
 Everything the app writes goes under its own temporary folder (``workdir``), which Gradio also
 uses for its uploads and cache; nothing else is written. Errors (a photo over the pixel
