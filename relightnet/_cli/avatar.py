@@ -39,7 +39,9 @@ def run(args: argparse.Namespace) -> int:
         if args.motion or args.body != "anny":
             raise InputError("--motion-from: the motion comes from the source video; it drives Anny "
                              "(drop --motion and --body)")
-        motion = _motion_from(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
+        from ..fit import motion_for_avatar
+
+        motion = motion_for_avatar(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
     if args.light and args.light_from != "person":
         raise InputError(f"--light-from {args.light_from}: give --light or --light-from, not both")
     light = load_light(args.light) if args.light else None
@@ -59,27 +61,6 @@ def run(args: argparse.Namespace) -> int:
                  mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
-
-
-def _motion_from(source):
-    """Fit the source, retarget to the default avatar: body parameters for the avatar job."""
-    import torch
-
-    from ..body import PHENOTYPES
-    from ..fit import FitBody
-    from ..fit.job import fit_file
-    from ..fit.metrics import foot_skating
-    from ..fit.retarget import retarget_motion
-
-    fb = FitBody()
-    fitted = fit_file(source, fb=fb)
-    moved = retarget_motion(fitted.motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))
-    with torch.no_grad():
-        out = fb.body(pose=moved.pose, trans=moved.trans, phenotype=moved.phenotype[None])
-        skate = foot_skating(fb.landmarks(out.verts, out.joints))
-    logger.info("%s: fitted %d frame(s) in %.1f s; retargeted to the avatar, foot skating %.1f mm/frame", source,
-                moved.n_frames, fitted.raw.seconds, skate)
-    return moved.body_params()
 
 
 def register(sub) -> None:

@@ -17,7 +17,16 @@ Example:
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics, project_points
 from .init import CORE_SLOTS, TORSO_SLOTS, initial_orientation, initial_translation, kabsch
-from .job import PHOTO_SUFFIXES, FitOptions, FitOutput, fit_file, media_frames, write_fit_masks, write_preview
+from .job import (
+                  PHOTO_SUFFIXES,
+                  FitOptions,
+                  FitOutput,
+                  fit_file,
+                  media_frames,
+                  motion_for_avatar,
+                  write_fit_masks,
+                  write_preview,
+)
 from .landmarks import LANDMARK_SOURCES, AnnyLandmarks, landmark_weights
 from .metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
 from .observe import Observations, fill_missing, observe_frames, world_to_view_axes
@@ -27,22 +36,23 @@ from .retarget import leg_length, retarget_motion
 from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
 from .solve import FitResult, FitWeights, fit_observations
 from .terms import (
-    HIP_SLOTS,
-    WORLD_UNIT,
-    SilhouetteTargets,
-    acceleration_term,
-    person_scale,
-    reprojection_term,
-    silhouette_targets,
-    silhouette_term,
-    world_term,
+                  HIP_SLOTS,
+                  WORLD_UNIT,
+                  SilhouetteTargets,
+                  acceleration_term,
+                  person_scale,
+                  reprojection_term,
+                  silhouette_targets,
+                  silhouette_term,
+                  world_term,
 )
 
 __all__ = [
     "SHAPE_NAMES", "FitBody", "phenotype_from_free",
     "DEFAULT_FOV_DEG", "default_intrinsics", "exif_intrinsics", "project_points",
     "CORE_SLOTS", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
-    "PHOTO_SUFFIXES", "FitOptions", "FitOutput", "fit_file", "media_frames", "write_fit_masks", "write_preview",
+    "PHOTO_SUFFIXES", "FitOptions", "FitOutput", "fit_file", "media_frames", "motion_for_avatar", "write_fit_masks",
+    "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",
     "acceleration_error", "foot_skating", "landmark_error", "mask_iou", "mpjpe", "pa_mpjpe",
     "Observations", "fill_missing", "observe_frames", "world_to_view_axes",

@@ -22,8 +22,8 @@ from .solve import FitResult, FitWeights, fit_observations
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["PHOTO_SUFFIXES", "FitOptions", "FitOutput", "media_frames", "fit_file", "write_preview",
-           "write_fit_masks"]
+__all__ = ["PHOTO_SUFFIXES", "FitOptions", "FitOutput", "media_frames", "fit_file", "motion_for_avatar",
+           "write_preview", "write_fit_masks"]
 
 #: Inputs read as a photo; anything else is read as a video.
 PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
@@ -138,3 +138,27 @@ def write_fit_masks(path: str | Path, result: FitResult, fb: FitBody, fps: float
         for m in rgb:
             w.write(m.numpy())
     return path
+
+
+def motion_for_avatar(source: str | Path, options: FitOptions = FitOptions()) -> dict:
+    """The motion of the person in ``source`` (a video or a photo), for the default avatar: fitted
+    (:func:`fit_file`), retargeted to the avatar's body with its feet held
+    (:func:`~relightnet.fit.retarget.retarget_motion`); foot skating is logged.
+
+    Returns:
+        The avatar body's parameters (``AnnyMotion.body_params()``): pose (T, J, 3), trans (T, 3),
+        phenotype (1, 6).
+    """
+    from ..body import PHENOTYPES
+    from .metrics import foot_skating
+    from .retarget import retarget_motion
+
+    fb = FitBody()
+    fitted = fit_file(source, options, fb=fb)
+    moved = retarget_motion(fitted.motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))
+    with torch.no_grad():
+        out = fb.body(pose=moved.pose, trans=moved.trans, phenotype=moved.phenotype[None])
+        skate = foot_skating(fb.landmarks(out.verts, out.joints))
+    logger.info("%s: fitted %d frame(s) in %.1f s; retargeted to the avatar, foot skating %.1f mm/frame", source,
+                moved.n_frames, fitted.raw.seconds, skate)
+    return moved.body_params()
