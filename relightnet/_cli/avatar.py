@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
-                 mask_source=args.mask_source)
+                 mask_source=args.mask_source, replace_person=args.replace_person)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -55,6 +55,7 @@ def register(sub) -> None:
         "  relightnet avatar --target clip.mp4 --target-masks masks/ --motion walk --out avatar.mp4\n"
         "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
         "--albedo skin.png --out a.mp4\n"
+        "  relightnet avatar --target clip.mp4 --replace-person --outfit casual --out avatar.mp4\n"
         "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n",
     )
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
@@ -63,6 +64,10 @@ def register(sub) -> None:
     add_mask_source_arg(p)
     p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
                    "target's frames")
+    p.add_argument("--replace-person", action="store_true",
+                   help="put the avatar in place of the target's person: composite over the target's clean plate "
+                   "(temporal median of the background where the person's mask uncovers it; never-uncovered pixels "
+                   "inpainted; OUT.plate.png) with the avatar standing where the person stood")
     p.add_argument("--motion", default="walk",
                    help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video) or an SMPL-style motion "
                    "file (.npz/.pkl) for --body smpl:PATH (default: walk)")

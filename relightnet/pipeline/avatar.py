@@ -26,6 +26,7 @@ estimates instead of running the CNN again) and ``OUT.lights.png`` (light curves
 
 from __future__ import annotations
 
+import itertools
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,8 +93,6 @@ class _TargetLight:
 
 def _plate_frames(plate, target, size):
     """uint8 (H, W, 3) frames to composite over: the target's, a clean-plate video's, or one image."""
-    import itertools
-
     if plate is None:
         return read_video(target)
     p = Path(plate)
@@ -230,6 +229,7 @@ def avatar(
     model_name: str = "model",
     progress: bool = True,
     mask_source: str = "segment",
+    replace_person: bool = False,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -256,6 +256,9 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
+        replace_person: put the avatar in place of the target's person: composite over the target's
+            clean plate (written as ``OUT.plate.png``) with the camera placing the avatar where the
+            person stood (:func:`relightnet.pipeline.clean_plate.stand_in`); excludes ``plate`` and ``camera``.
 
     Returns:
         :class:`AvatarResult`.
@@ -264,6 +267,8 @@ def avatar(
     if out.suffix.lower() not in (".mp4", ".mkv"):
         raise InputError(f"{out}: expected an .mp4 or .mkv output path")
     check_smoothing(smoothing, SMOOTHING)
+    if replace_person and (plate is not None or camera is not None):
+        raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
     info = video_info(target)
     body_model = load_body(body)
     tex = avatar_albedo(body_model, albedo)
@@ -280,6 +285,11 @@ def avatar(
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
+    if replace_person:
+        from .clean_plate import stand_in
+
+        clean, camera = stand_in(target, out, n, body_model, target_masks, mask_source)
+        backgrounds = itertools.repeat(clean.plate)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,
