@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..names import MOTION_KINDS, VIDEO_SMOOTHING
+from ..names import MOTION_KINDS, OUTFITS, VIDEO_SMOOTHING
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -40,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
-                 mask_source=args.mask_source, replace_person=args.replace_person)
+                 mask_source=args.mask_source, replace_person=args.replace_person,
+                 outfit=args.outfit)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -73,6 +74,9 @@ def register(sub) -> None:
                    "file (.npz/.pkl) for --body smpl:PATH (default: walk)")
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
+    p.add_argument("--outfit", metavar="NAME|random:SEED",
+                   help=f"dress the avatar in clothes and hair as geometry, with their own albedo: {', '.join(OUTFITS)}, "
+                   "or random:SEED (a drawn outfit)")
     p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP
                    + "; or a light sequence file with one light per frame")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '

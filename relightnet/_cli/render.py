@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..names import OUTFITS
 from .common import (
     LIGHT_HELP,
     add_body_args,
@@ -123,6 +124,11 @@ def run_render_body(args: argparse.Namespace) -> int:
     light = load_light(args.light, lmax=args.lmax)
     body, params = _body_and_params(args)
     albedo, vertex_albedo = _albedo(body)
+    if args.outfit:
+        from ..pipeline.outfits import dressed_body
+
+        body = dressed_body(body, args.outfit)
+        albedo, vertex_albedo = body.albedo, None
     frames = render_body_frames(body, params, light, albedo, size=args.res, n_dirs=args.n_dirs,
                                 occlusion=args.occlusion, bounces=args.bounces, seed=args.seed,
                                 maps=maps is not None, vertex_albedo=vertex_albedo)
@@ -185,6 +191,7 @@ def register(sub) -> None:
                     "  relightnet render-body --phenotype gender=0 --phenotype weight=0.8 --light studio "
                     "--out b.png --mask-out m.png --save-maps maps/\n"
                     "  relightnet render-body --motion walk --frames 60 --light courtyard --res 256 --out walk.mp4\n"
+                    "  relightnet render-body --outfit dress --pose apose --light studio --res 512 --out dressed.png\n"
                     "  relightnet render-body --body smpl:SMPL_NEUTRAL.npz --motion clip.npz "
                     "--light city --out c.mp4\n")
     add_body_args(p)

@@ -230,6 +230,7 @@ def avatar(
     progress: bool = True,
     mask_source: str = "segment",
     replace_person: bool = False,
+    outfit: str | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -259,6 +260,8 @@ def avatar(
         replace_person: put the avatar in place of the target's person: composite over the target's
             clean plate (written as ``OUT.plate.png``) with the camera placing the avatar where the
             person stood (:func:`relightnet.pipeline.clean_plate.stand_in`); excludes ``plate`` and ``camera``.
+        outfit: dress the avatar (Anny): ``NAME`` (:data:`relightnet.names.OUTFITS`) or ``random:SEED``, with
+            the outfit's own albedo (:mod:`relightnet.pipeline.outfits`); excludes a non-default ``albedo``.
 
     Returns:
         :class:`AvatarResult`.
@@ -270,10 +273,16 @@ def avatar(
     if replace_person and (plate is not None or camera is not None):
         raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
     info = video_info(target)
-    body_model = load_body(body)
-    tex = avatar_albedo(body_model, albedo)
+    body_model = base = load_body(body)
+    if outfit is not None:
+        from .outfits import dressed_body
+
+        if not (isinstance(albedo, str) and albedo == "default"):
+            raise InputError("--outfit brings its own albedo: drop --albedo")
+        body_model = dressed_body(body_model, outfit)
+    tex = body_model.albedo if outfit is not None else avatar_albedo(body_model, albedo)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
-    motion_frames = open_motion(motion, body_model, info.fps)
+    motion_frames = open_motion(motion, base, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     if light is None:
