@@ -199,5 +199,7 @@ def register(sub) -> None:
     p.add_argument("--mask-out", help="also write the coverage mask: a PNG for a still pose, a mask video "
                    "(.mkv lossless, .mp4) with --motion")
     p.add_argument("--save-maps", metavar="DIR", help="also write transport/albedo/normal/depth maps here")
+    p.add_argument("--outfit", metavar="NAME|random:SEED",
+                   help=f"dress Anny in clothes and hair as geometry: {', '.join(OUTFITS)}, or random:SEED")
     _prt_options(p, 64)
     p.set_defaults(func=run_render_body)
