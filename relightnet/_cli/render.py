@@ -88,11 +88,11 @@ def _albedo(body):
     import torch
 
     from ..body import AnnyBody, default_albedo
-    from ..render.frame import TexturedAlbedo
 
     if isinstance(body, AnnyBody):
-        a = default_albedo(body)
-        return TexturedAlbedo(a.texture, body.uv, body.uv_faces), a.vertex
+        from ..pipeline.smooth_albedo import smooth_default_albedo
+
+        return smooth_default_albedo(body), default_albedo(body, texture_size=None).vertex
     v = torch.full((body.num_verts, 3), 0.6)
     return v, v
 
