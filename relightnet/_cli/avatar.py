@@ -75,8 +75,8 @@ def register(sub) -> None:
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
     p.add_argument("--outfit", metavar="NAME|random:SEED",
-                   help=f"dress the avatar in clothes and hair as geometry, with their own albedo: {', '.join(OUTFITS)}, "
-                   "or random:SEED (a drawn outfit)")
+                   help="dress the avatar in clothes and hair as geometry, with their own albedo: "
+                   f"{', '.join(OUTFITS)}, or random:SEED (a drawn outfit)")
     p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP
                    + "; or a light sequence file with one light per frame")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '

@@ -26,7 +26,6 @@ estimates instead of running the CNN again) and ``OUT.lights.png`` (light curves
 
 from __future__ import annotations
 
-import itertools
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +40,9 @@ from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import VIDEO_SMOOTHING, check_smoothing, resolve_smoothing
 from .backends import as_predictor
-from .scene import avatar_albedo, load_body, open_motion
+from .clean_plate import check_stand_in, stand_in_frames
+from .outfits import avatar_look
+from .scene import load_body, open_motion
 from .video_lights import (
     estimate_video_evidence,
     estimate_video_lights,
@@ -93,6 +94,8 @@ class _TargetLight:
 
 def _plate_frames(plate, target, size):
     """uint8 (H, W, 3) frames to composite over: the target's, a clean-plate video's, or one image."""
+    import itertools
+
     if plate is None:
         return read_video(target)
     p = Path(plate)
@@ -209,6 +212,14 @@ def _camera_for(camera: Camera | None, size) -> Camera:
     return camera
 
 
+def _check_options(out: Path, smoothing: str, replace_person: bool, plate, camera) -> None:
+    """The checks that need nothing read: the output's type, the smoothing, --replace-person's exclusions."""
+    if out.suffix.lower() not in (".mp4", ".mkv"):
+        raise InputError(f"{out}: expected an .mp4 or .mkv output path")
+    check_smoothing(smoothing, SMOOTHING)
+    check_stand_in(replace_person, plate, camera)
+
+
 @torch.no_grad()
 def avatar(
     target,
@@ -229,8 +240,7 @@ def avatar(
     model_name: str = "model",
     progress: bool = True,
     mask_source: str = "segment",
-    replace_person: bool = False,
-    outfit: str | None = None,
+    replace_person: bool = False, outfit: str | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -257,30 +267,15 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
-        replace_person: put the avatar in place of the target's person: composite over the target's
-            clean plate (written as ``OUT.plate.png``) with the camera placing the avatar where the
-            person stood (:func:`relightnet.pipeline.clean_plate.stand_in`); excludes ``plate`` and ``camera``.
-        outfit: dress the avatar (Anny): ``NAME`` (:data:`relightnet.names.OUTFITS`) or ``random:SEED``, with
-            the outfit's own albedo (:mod:`relightnet.pipeline.outfits`); excludes a non-default ``albedo``.
+        replace_person, outfit: take the person's place (:func:`.clean_plate.stand_in`); dress (:func:`.avatar_look`).
 
     Returns:
         :class:`AvatarResult`.
     """
     out = Path(out)
-    if out.suffix.lower() not in (".mp4", ".mkv"):
-        raise InputError(f"{out}: expected an .mp4 or .mkv output path")
-    check_smoothing(smoothing, SMOOTHING)
-    if replace_person and (plate is not None or camera is not None):
-        raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
+    _check_options(out, smoothing, replace_person, plate, camera)
     info = video_info(target)
-    body_model = base = load_body(body)
-    if outfit is not None:
-        from .outfits import dressed_body
-
-        if not (isinstance(albedo, str) and albedo == "default"):
-            raise InputError("--outfit brings its own albedo: drop --albedo")
-        body_model = dressed_body(body_model, outfit)
-    tex = body_model.albedo if outfit is not None else avatar_albedo(body_model, albedo)
+    base, body_model, tex = avatar_look(load_body(body), albedo, outfit)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, base, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
@@ -294,11 +289,8 @@ def avatar(
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
-    if replace_person:
-        from .clean_plate import stand_in
-
-        clean, camera = stand_in(target, out, n, body_model, target_masks, mask_source)
-        backgrounds = itertools.repeat(clean.plate)
+    if replace_person:  # over the clean plate, standing where the person stood
+        backgrounds, camera = stand_in_frames(target, out, n, body_model, target_masks, mask_source)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,

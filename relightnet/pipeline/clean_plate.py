@@ -42,7 +42,8 @@ from ..raster import Camera, look_at, perspective_camera
 logger = logging.getLogger(__name__)
 
 __all__ = ["WARN_SHARE", "CleanPlate", "sample_indices", "dilate_masks", "masked_median", "push_pull_fill",
-           "clean_plate", "Placement", "person_placement", "placed_camera", "plate_psnr"]
+           "clean_plate", "Placement", "person_placement", "placed_camera", "plate_psnr", "check_stand_in", "stand_in",
+           "stand_in_frames"]
 
 #: The avatar job warns when more than this share of the person's area had to be inpainted.
 WARN_SHARE = 0.02
@@ -282,3 +283,17 @@ def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: s
         rest = body().verts[0]
     camera = placed_camera(info.size, where, float(rest[:, 1].max() - rest[:, 1].min()), fov_deg)
     return plate, camera
+
+
+def check_stand_in(replace_person: bool, plate, camera) -> None:
+    """``--replace-person`` makes its own plate and camera: refuse it with ``plate`` or ``camera``."""
+    if replace_person and (plate is not None or camera is not None):
+        raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
+
+
+def stand_in_frames(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment"):
+    """:func:`stand_in` for the avatar job: (the plate repeated as the frames to composite over, the camera)."""
+    import itertools
+
+    plate, camera = stand_in(target, out, n_frames, body, target_masks, mask_source)
+    return itertools.repeat(plate.plate), camera

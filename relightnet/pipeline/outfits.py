@@ -29,7 +29,8 @@ from ..body.base import BodyOutput
 from ..checks import InputError
 from ..names import OUTFITS
 
-__all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody", "dressed_body"]
+__all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody", "dressed_body",
+           "avatar_look"]
 
 #: What each named outfit wears (upper, lower, head, hair) and the seed of its look.
 OUTFIT_SLOTS = {
@@ -164,6 +165,20 @@ class DressedBody:
             ns.append(torch.cat([out.normals[b], *[p[1].normals for p in pieces]]))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
                           out.joints, out.joint_names)
+
+
+def avatar_look(body, albedo="default", outfit: str | None = None) -> tuple:
+    """The avatar job's body and albedo: (``body``, the body to render, its albedo). With an ``outfit``
+    (``NAME`` or ``random:SEED``) the body to render is a :class:`DressedBody` with the outfit's albedo, and
+    ``albedo`` must be ``"default"``; without, ``body`` and :func:`~relightnet.pipeline.scene.avatar_albedo`."""
+    from .scene import avatar_albedo
+
+    if outfit is None:
+        return body, body, avatar_albedo(body, albedo)
+    if not (isinstance(albedo, str) and albedo == "default"):
+        raise InputError("--outfit brings its own albedo: drop --albedo")
+    dressed = dressed_body(body, outfit)
+    return body, dressed, dressed.albedo
 
 
 def dressed_body(body, outfit: str | None) -> object:
