@@ -89,7 +89,8 @@ def register(sub) -> None:
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
     p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")
-    p.add_argument("--antialias", action="store_true", help="smooth the avatar's silhouette (~24 ms per 512² frame)")
+    p.add_argument("--antialias", action=argparse.BooleanOptionalAction, default=True,
+                   help="smooth the avatar's silhouette against the background (default: on; ~24 ms per 512² frame)")
     p.add_argument("--out", required=True, help="output video (.mp4/.mkv); OUT.lights.npz/.png are written beside it")
     add_model_args(p)
     p.set_defaults(func=run)

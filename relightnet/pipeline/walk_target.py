@@ -18,7 +18,7 @@ import torch
 
 from ..checks import InputError
 
-__all__ = ["WalkingTarget", "walking_target"]
+__all__ = ["WalkingTarget", "walking_target", "replaced_person_demo"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,3 +106,28 @@ def walking_target(out_dir, size=(256, 256), n_frames: int = 48, fps: float = 30
             always &= m
             vm.write(np.repeat(m[..., None].astype(np.uint8) * 255, 3, -1))
     return WalkingTarget(paths[0], paths[1], truth, n_frames, fps, ever, always)
+
+
+def replaced_person_demo(out_dir, size: int, n_frames: int, body, n_dirs: int = 64, outfit: str = "casual",
+                         progress: bool = True) -> dict:
+    """The demo's replaced person: a walking target with a known background (``replace/target.mp4``),
+    ``avatar --replace-person --outfit`` on it under the target's light (``replace/avatar.mp4``, the plate
+    ``replace/avatar.plate.png``; the person's masks are the generator's, as in the demo's main clip), and the
+    plate's PSNR against the true background over the pixels the
+    person covered and uncovered. Returns the paths and figures by name."""
+    from ..io import read_image
+    from ..sh import ambient_light, directional_light
+    from .avatar import avatar
+    from .clean_plate import plate_psnr
+
+    out = Path(out_dir)
+    wt = walking_target(out, size=(size, size), n_frames=n_frames, suffix=".mp4", body=body)
+    light = ambient_light(0.35) + directional_light(torch.tensor([1.0, 0.5, 0.8]), 2.0)  # the target's own light
+    avatar(wt.video, out / "avatar.mp4", light=light, body=body, target_masks=wt.masks, replace_person=True,
+           outfit=outfit, n_dirs=n_dirs, progress=progress)
+    plate = (read_image(out / "avatar.plate.png") * 255).round().to(torch.uint8).numpy()
+    # Over the pixels the person covered in some frame and uncovered in another (true masks); what the job
+    # had to inpaint there (its segmentation masks are dilated) counts against the plate.
+    psnr = plate_psnr(plate, wt.background, wt.ever & ~wt.always)
+    return {"replace_target": wt.video, "replace_avatar": out / "avatar.mp4", "replace_plate": out / "avatar.plate.png",
+            "plate_psnr_db": psnr, "never_uncovered_share": float(wt.always.sum()) / max(int(wt.ever.sum()), 1)}
