@@ -12,11 +12,14 @@ Run: ``.venv/bin/python benchmarks/bench_synth.py [--n 16] [--res 256]`` (ANNY_C
    written, W = 1 and 2 side by side, and the ratio. Goal: ≥ 2 samples/s with 2 workers on 2 cores.
 3. One whole ``run_synth`` call with 2 workers (pool start-up, manifest, checksums included).
 
-``--clothes`` runs instead, side by side in one run (interleaved repeats, 2 workers, 128² and
-256²): the painted generator without PRT reuse (what version 1 made: every garment painted on
-the body, one PRT per sample), clothed without reuse, and clothed with ``prt_reuse`` 4 and 8
-(one posed, clothed body's PRT turned into 4 or 8 cameras' light frames); samples/s and the
-ratio to the painted, unshared run. Then, over ``--n`` stills at 64², the garment types worn
+``--clothes`` runs instead, side by side in one run (interleaved repeats, 128² and 256²): the
+painted generator without PRT reuse (what version 1 made: every garment painted on the body,
+one PRT per sample), clothed without reuse, and clothed with ``prt_reuse`` 4 and 8 (one posed,
+clothed body's PRT turned into 4 or 8 cameras' light frames). It measures *CPU* seconds per
+sample of one single-threaded process generating and writing a shard, as a pool worker does:
+on a loaded machine wall-clock rates say more about the neighbours than about the generator,
+while the workers share nothing, so 2 workers on 2 free cores make 2 / (CPU s per sample)
+samples/s (pool start-up aside). Then, over ``--n`` stills at 64², the garment types worn
 and, per type, the share of samples where body shows through cloth (``hidden_body_share`` >
 1 % of the cloth's pixels) and its mean.
 """
@@ -116,35 +119,50 @@ def bench_pool(cfg: SynthConfig, workers: int, n: int) -> tuple[float, float]:
 _PAINTED = {"upper": {"none": 1}, "lower": {"none": 1}, "head": {"none": 1}, "hair": {"painted": 1}}
 
 
+def _cpu_per_sample(cfg: SynthConfig, start: int, n: int, assets) -> float:
+    """CPU seconds per sample of this process generating stills start … start + n − 1 group by group (as a
+    worker does) and writing them as one shard (stack + deflate + sha256)."""
+    from relightnet.data.generate import generate_samples
+
+    t0 = time.process_time()
+    samples = generate_samples(cfg, "train", range(start, start + n), assets)
+    with tempfile.TemporaryDirectory() as d:
+        write_shard(Path(d) / "train-00000.npz", stack_samples(samples))
+    return (time.process_time() - t0) / n
+
+
 def bench_clothes(args) -> None:
-    """Painted vs clothed, PRT reuse 1 / 4 / 8: pool samples/s side by side, then body-through-cloth per type."""
+    """Painted vs clothed, PRT reuse 1 / 4 / 8: CPU s per sample side by side, then body-through-cloth per type."""
+    torch.set_num_threads(1)
+    assets = prepare_assets()
     setups = [("painted, no reuse (v1)", dict(garment_probs=_PAINTED, prt_reuse=1)),
               ("clothed, no reuse", dict(prt_reuse=1)), ("clothed, reuse 4", dict(prt_reuse=4)),
               ("clothed, reuse 8", dict(prt_reuse=8))]
     for res in (128, 256):
+        for _, kw in setups:  # warm-up: env maps, region labels of common variants
+            _cpu_per_sample(SynthConfig(res=res, **kw), 10**6, 8, assets)
         runs = {name: [] for name, _ in setups}
-        for _ in range(args.repeat):
+        for rep in range(args.repeat):  # interleaved, so every setup sees the same machine noise
             for name, kw in setups:
-                runs[name].append(bench_pool(SynthConfig(res=res, shard_size=8, **kw), 2, args.n)[0])
+                runs[name].append(_cpu_per_sample(SynthConfig(res=res, **kw), 1000 * (rep + 1), args.n, assets))
         med = {k: statistics.median(v) for k, v in runs.items()}
         base = med[setups[0][0]]
-        print(f"\n### {res}², 2 workers, {args.n} samples per run, median of {args.repeat}\n")
-        print(table(["generator", "samples/s (steady, median)", "runs", "vs painted v1", "vs goal 10/s"],
-                    [[k, v, " ".join(f"{x:.2f}" for x in runs[k]), f"{v / base:.2f}x", f"{v / 10:.2f}x"]
-                     for k, v in med.items()]))
-    torch.set_num_threads(1)
+        print(f"\n### {res}², one process, one thread, {args.n} samples per run, median of {args.repeat}\n")
+        print(table(["generator", "CPU ms / sample", "samples per CPU-s", "2 workers on 2 free cores, samples/s",
+                     "vs painted v1", "vs goal 10/s"],
+                    [[k, 1e3 * v, 1 / v, 2 / v, f"{base / v:.2f}x", f"{2 / v / 10:.2f}x"] for k, v in med.items()]))
+    from relightnet.data.garments import GARMENT_TYPES
     from relightnet.data.generate import generate_samples
 
-    metas = [s.meta for s in generate_samples(SynthConfig(res=64), "train", range(args.n_quality), prepare_assets())]
+    metas = [s.meta for s in generate_samples(SynthConfig(res=64, prt_reuse=1), "train", range(args.n_quality),
+                                              assets)]
     rows = []
-    from relightnet.data.garments import GARMENT_TYPES
-
     for t in GARMENT_TYPES:
         share = [m["garments"]["hidden_body_share"] for m in metas if t in m["garments"]["types"]]
         rows.append([t, len(share), f"{100 * len(share) / len(metas):.0f}%",
                      f"{100 * sum(x > 0.01 for x in share) / max(len(share), 1):.1f}%",
                      f"{100 * statistics.mean(share) if share else 0:.2f}%"])
-    print(f"\n### Garments in {len(metas)} default stills (64²)\n")
+    print(f"\n### Garments in {len(metas)} default stills (64², one person each)\n")
     print(table(["type", "samples", "share of samples", "body through cloth > 1 %", "mean through-share"], rows))
 
 

@@ -175,20 +175,12 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     pos = c[None, None] * torch.tensor([1.0, 0.0, 1.0], dtype=torch.float64) + rr[..., None] * dirs[None]
     pos[..., 1] = ys[:, None]
     m = n_theta + 1
-    ii, jj = torch.meshgrid(torch.arange(n_rings - 1), torch.arange(n_theta), indexing="ij")
-    a0, a1 = ii * m + jj, ii * m + jj + 1
-    b0, b1 = a0 + m, a1 + m
-    keep = torch.ones_like(ii, dtype=torch.bool)
-    if open_rows is not None:
-        mid = torch.remainder(theta + math.pi / n_theta + math.pi, 2 * math.pi) - math.pi  # face centre angle
-        below = torch.arange(n_rings - 1) >= int(open_rows)
-        keep = ~(below[:, None] & (mid.abs() < open_halfwidth)[None])
-    quads = torch.stack([a0, a1, b0, b1], -1)[keep]  # (Q, 4)
-    faces = torch.cat([quads[:, [0, 2, 1]], quads[:, [1, 2, 3]]])
+    faces = _grid_faces(n_rings, n_theta, open_rows, open_halfwidth)
     verts = pos.reshape(-1, 3)
     u = (th / (2 * math.pi))[None].expand(n_rings, -1)
     v = (1 - t).expand(-1, m)
     uv = torch.stack([u, v], -1).reshape(-1, 2)
+    faces = _outward(verts, faces, c)
     if cap:
         top = c.clone()
         top[1] = float(y_top) + 0.3 * float(r[0].mean())  # a low dome over the first ring
@@ -196,8 +188,8 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
                           -1)
         verts = torch.cat([verts, top[None]])
         uv = torch.cat([uv, torch.tensor([[0.5, 1.0]], dtype=torch.float64)])
-        faces = torch.cat([faces, fan])
-    faces = _outward(verts, faces, c)
+        e1_, e2_ = verts[fan[0, 1]] - verts[fan[0, 0]], verts[fan[0, 2]] - verts[fan[0, 0]]
+        faces = torch.cat([faces, fan if float(torch.linalg.cross(e1_, e2_)[1]) > 0 else fan[:, [0, 2, 1]]])
     # Normals as if the seam were joined: duplicated seam vertices take the same normal.
     join = torch.arange(verts.shape[0])
     seam = torch.arange(n_rings) * m + n_theta
@@ -206,6 +198,22 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     nrm = nrm[join]
     used, faces = torch.unique(faces, return_inverse=True)  # drop the vertices an opening left unused
     return GarmentPiece(verts[used].float(), nrm[used], faces.reshape(-1, 3), uv=uv[used].float())
+
+
+def _grid_faces(n_rings: int, n_theta: int, open_rows: int | None, open_halfwidth: float) -> torch.Tensor:
+    """(Fg, 3) two triangles per quad of an (R, nθ + 1) ring grid, less the front opening's quads."""
+    m = n_theta + 1
+    ii, jj = torch.meshgrid(torch.arange(n_rings - 1), torch.arange(n_theta), indexing="ij")
+    a0, a1 = ii * m + jj, ii * m + jj + 1
+    b0, b1 = a0 + m, a1 + m
+    keep = torch.ones_like(ii, dtype=torch.bool)
+    if open_rows is not None:
+        theta = torch.arange(n_theta, dtype=torch.float64) * (2 * math.pi / n_theta)
+        mid = torch.remainder(theta + math.pi / n_theta + math.pi, 2 * math.pi) - math.pi  # face centre angle
+        below = torch.arange(n_rings - 1) >= int(open_rows)
+        keep = ~(below[:, None] & (mid.abs() < open_halfwidth)[None])
+    quads = torch.stack([a0, a1, b0, b1], -1)[keep]  # (Q, 4)
+    return torch.cat([quads[:, [0, 2, 1]], quads[:, [1, 2, 3]]])
 
 
 def _outward(verts: torch.Tensor, faces: torch.Tensor, centre: torch.Tensor) -> torch.Tensor:

@@ -12,6 +12,9 @@ panel holds the hanging surfaces in three rows (0: skirt or dress, 1: hat or hoo
 hair), each texel painted at a nominal cylinder point (u around, v down) so that the
 generator's solid patterns continue around them.
 
+Every piece is two-sided (:data:`THICKNESS`): an inner copy faces the body, so looking into
+a sleeve, under a skirt or into a hood shows a surface facing the camera with its own PRT.
+
 Covered faces: body faces under a shell (its copied faces, less two rings of vertices at
 its edges, where the body shows through openings by design) or inside a skirt between
 waist and hem. A pixel that shows one is body showing through cloth;
@@ -26,6 +29,7 @@ import numpy as np
 import torch
 
 from ..body import REGIONS
+from ..body.garments import GarmentPiece
 from .garments import GarmentTables, dress_frame
 from .textures import ALBEDO_MAX, ALBEDO_MIN, garment_texels, hair_texels
 
@@ -59,6 +63,30 @@ class ClothedMesh:
     hidden: torch.Tensor
     n_body_faces: int
     types: list
+
+
+#: Cloth thickness (metres): every piece gets an inner side this far in, facing the body.
+THICKNESS = 0.002
+
+
+def _two_sided(piece: GarmentPiece) -> GarmentPiece:
+    """The piece with an inner side: its vertices moved ``THICKNESS`` against the normals, normals
+    flipped, faces wound the other way (so a look into a sleeve, a skirt or a hood sees a surface
+    facing it, shaded with its own transport). Source faces and UVs are repeated."""
+    nv = len(piece.verts)
+    return GarmentPiece(
+        torch.cat([piece.verts, piece.verts - THICKNESS * piece.normals]), torch.cat([piece.normals, -piece.normals]),
+        torch.cat([piece.faces, piece.faces[:, [0, 2, 1]] + nv]),
+        None if piece.source is None else torch.cat([piece.source, piece.source]),
+        None if piece.source_faces is None else torch.cat([piece.source_faces, piece.source_faces]),
+        None if piece.uv is None else torch.cat([piece.uv, piece.uv]))
+
+
+def _uv_faces(piece: GarmentPiece, uv_faces: torch.Tensor) -> torch.Tensor:
+    """(Fg, 3) UV faces of a two-sided shell: its source faces' UVs, the inner half wound like its faces."""
+    f = uv_faces[piece.source_faces]
+    half = len(f) // 2
+    return torch.cat([f[:half], f[half:][:, [0, 2, 1]]])
 
 
 def _erode(faces: torch.Tensor, fsel: torch.Tensor, n_verts: int, rings: int = 2) -> torch.Tensor:
@@ -124,7 +152,7 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     frames, topo = [], None
     for t in range(T):
         pieces, topo = dress_frame(g, verts[t], normals[t], faces, joints[t], tab, body, outfit, topo)
-        frames.append(pieces)
+        frames.append([(k, _two_sided(p), r, w) for k, p, r, w in pieces])
     S = body_tex.shape[0]
     outer = any(p[3] == "outer" for p in frames[0])
     slots = {p[3]: p[0] for p in frames[0] if isinstance(p[3], int)}
@@ -146,7 +174,7 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     for _kind, piece, region, where in frames[0]:
         fcs.append(piece.faces + nv)
         if piece.source is not None:
-            uv_faces.append(body.uv_faces[piece.source_faces] + (len(body_uv) if where == "outer" else 0))
+            uv_faces.append(_uv_faces(piece, body.uv_faces) + (len(body_uv) if where == "outer" else 0))
             sel = torch.zeros(faces.shape[0], dtype=torch.bool)
             sel[piece.source_faces] = True
             covered |= _erode(faces, sel, V)

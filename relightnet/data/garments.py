@@ -37,12 +37,14 @@ from ..checks import InputError
 __all__ = ["GARMENT_SLOTS", "DEFAULT_GARMENT_PROBS", "GARMENT_TYPES", "garment_probs", "sample_garments",
            "GarmentTables", "garment_tables", "dress_frame", "garment_types"]
 
+#: The four slots a person fills and the choices of each (the first: nothing as geometry).
 GARMENT_SLOTS = {
     "upper": ("none", "loose_top", "jacket", "open_coat", "dress"),
     "lower": ("none", "trousers", "wide_trousers", "skirt"),
     "head": ("none", "hat", "hood"),
     "hair": ("painted", "volume", "long"),
 }
+#: Default weights of each slot's choices (``SynthConfig.garment_probs`` overrides slots).
 DEFAULT_GARMENT_PROBS = {
     "upper": {"none": 0.25, "loose_top": 0.3, "jacket": 0.17, "open_coat": 0.15, "dress": 0.13},
     "lower": {"none": 0.3, "trousers": 0.3, "wide_trousers": 0.2, "skirt": 0.2},

@@ -57,7 +57,8 @@ def test_ring_surface_encloses_the_body_and_hangs(anny_body, posed):
     front = torch.tensor([0.0, 0.0, 1.0])
     y0, y1, clearance = float(root[1]) + 0.05, float(root[1]) - 0.55, 0.015
     piece = ring_surface(verts, root, front, y0, y1, 25, 48, clearance, flare=0.05)
-    assert piece.verts.shape == (25 * 49, 3) and piece.faces.shape == (2 * 24 * 48, 3) and piece.uv.shape == (25 * 49, 2)
+    assert piece.verts.shape == (25 * 49, 3) and piece.faces.shape == (2 * 24 * 48, 3)
+    assert piece.uv.shape == (25 * 49, 2)
     assert float(piece.uv.min()) >= 0 and float(piece.uv.max()) <= 1
     assert torch.allclose(piece.normals.norm(dim=1), torch.ones(len(piece.verts)), atol=1e-5)
     c = root.double().numpy()
@@ -66,7 +67,6 @@ def test_ring_surface_encloses_the_body_and_hangs(anny_body, posed):
     # Every body point between two rings lies inside the surface, clearance and all: the radius at
     # its angle (rings interpolated) exceeds its own distance from the axis.
     r = np.hypot(rel_v[:, 0], rel_v[:, 2]).reshape(25, 49)[:, :48]
-    ys = np.linspace(y0, y1, 25)
     p = verts.double().numpy() - c
     inside = (p[:, 1] + c[1] < y0) & (p[:, 1] + c[1] > y1)
     p = p[inside]
@@ -97,7 +97,11 @@ def test_ring_surface_opening_and_cap(anny_body, posed):
     low = cen[:, 1] + float(head[1]) < top + 0.02 - 4.5 * (0.42 / 11)
     ang = torch.atan2(cen[:, 0], cen[:, 2]).abs()
     assert not bool((low & (ang < math.radians(50))).any())
-    # The cap closes the top above the first ring.
+    # The cap closes the top above the first ring, facing up (its normal and its winding).
     assert float(closed.verts[:, 1].max()) > top + 0.02
+    cap = closed.faces[-40:]
+    v = closed.verts
+    assert (torch.linalg.cross(v[cap[:, 1]] - v[cap[:, 0]], v[cap[:, 2]] - v[cap[:, 0]])[:, 1] > 0).all()
+    assert float(closed.normals[-1, 1]) > 0.99
     with pytest.raises(InputError, match="ring_surface"):
         ring_surface(verts, head, front, 1.0, 1.2, 12, 40, 0.02)

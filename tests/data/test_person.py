@@ -14,8 +14,8 @@ from relightnet.data.person import group_seed, person_stage, person_transport, t
 from relightnet.data.render_sample import _streams, clip_geometry
 from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import vertex_transport
-from relightnet.render import light_in_world
 from relightnet.raster import perspective_camera
+from relightnet.render import light_in_world
 from relightnet.sh import cosine_lobe_per_coeff, sh_basis
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tests/data/conftest.py
@@ -111,7 +111,10 @@ def test_person_transport_skips_only_hidden_vertices(assets):
     T, hidden = p.transport[0], p.mesh.hidden
     assert T.shape == (p.mesh.verts.shape[1], 9) and p.transport_unoccluded.shape[1:] == T.shape
     assert hidden.any() and not hidden[assets.body.num_verts:].any()
-    assert (T[hidden] == 0).all() and (T[assets.body.num_verts:, 0] > 0).float().mean() > 0.9  # cloth is lit
+    assert (T[hidden] == 0).all()
+    # Cloth is lit: its outer sides (the first half of each two-sided piece) mostly see the sky.
+    cloth = T[assets.body.num_verts:, 0]
+    assert (cloth > 0).float().mean() > 0.5 and float(cloth.max()) > 0.5
     assert (T[:, 0] <= p.transport_unoccluded[0, :, 0] + 1e-5).all()
 
 
