@@ -135,11 +135,30 @@ class DressedBody:
         pieces = self._pieces(rest.verts[0], rest.normals[0], rest.joints[0])
         m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
                          body, self._tab, tex, self._field, assets.atlas)
-        if m.verts.shape[1] != body.num_verts + sum(len(p[1].verts) for p in pieces):
-            raise InputError("--outfit: the garment pieces disagree with the clothed mesh (a bug)")
+        n_pieces = sum(len(p[1].verts) for p in pieces)
+        self._inner = self._thickness(m, pieces, n_pieces)
         self.faces, self.types, self.n_body_verts = m.faces, m.types, body.num_verts
         self.uv, self.uv_faces = m.uv, m.uv_faces
         self.albedo = TexturedAlbedo(m.tex, m.uv, m.uv_faces)
+
+    def _thickness(self, m, pieces: list, n_pieces: int) -> float | None:
+        """How the clothed mesh lays out each piece: its vertices alone (None), or followed by an inner side
+        moved this far against the normals (two-sided cloth); read off the rest frame."""
+        V = self.body.num_verts
+        if m.verts.shape[1] == V + n_pieces:
+            return None
+        if m.verts.shape[1] != V + 2 * n_pieces:
+            raise InputError("--outfit: the garment pieces disagree with the clothed mesh (a bug)")
+        p = pieces[0][1]
+        return float((m.verts[0, V:V + len(p.verts)] - m.verts[0, V + len(p.verts):V + 2 * len(p.verts)]).norm(dim=1)
+                     .median())
+
+    def _piece_arrays(self, piece) -> tuple[torch.Tensor, torch.Tensor]:
+        """One piece's (verts, normals) as the clothed mesh lays them out (:meth:`_thickness`)."""
+        if self._inner is None:
+            return piece.verts, piece.normals
+        return (torch.cat([piece.verts, piece.verts - self._inner * piece.normals]),
+                torch.cat([piece.normals, -piece.normals]))
 
     @property
     def num_verts(self) -> int:
@@ -160,9 +179,9 @@ class DressedBody:
             out = self.body(params, **kwargs)
         vs, ns = [], []
         for b in range(out.batch_size):
-            pieces = self._pieces(out.verts[b], out.normals[b], out.joints[b])
-            vs.append(torch.cat([out.verts[b], *[p[1].verts for p in pieces]]))
-            ns.append(torch.cat([out.normals[b], *[p[1].normals for p in pieces]]))
+            arrays = [self._piece_arrays(p[1]) for p in self._pieces(out.verts[b], out.normals[b], out.joints[b])]
+            vs.append(torch.cat([out.verts[b], *[a[0] for a in arrays]]))
+            ns.append(torch.cat([out.normals[b], *[a[1] for a in arrays]]))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
                           out.joints, out.joint_names)
 

@@ -53,6 +53,22 @@ def test_dressed_mesh_is_the_body_then_its_garments_every_frame(coat, anny_body)
     assert float(d.max()) < 0.25
 
 
+def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
+    from relightnet.data.clothed import clothed_mesh
+    from relightnet.data.sample import prepare_assets
+    from relightnet.data.textures import paint_albedo
+
+    a = prepare_assets(anny_body)
+    look, g = coat.outfit.look, coat.outfit.garments
+    field = a.region_field(look["sleeves"], look["legs"], "short")
+    r = anny_body()
+    m = clothed_mesh(g, look, r.verts, r.normals, r.joints, anny_body, a.garment_tables(),
+                     paint_albedo(a.atlas, field, look), field, a.atlas)
+    out = coat()
+    assert torch.equal(out.faces, m.faces) and torch.allclose(out.verts[0], m.verts[0], atol=1e-6)
+    assert torch.allclose(out.normals[0], m.normals[0], atol=1e-5) and torch.equal(coat.albedo.tex, m.tex)
+
+
 def test_cloth_shadows_the_body_in_the_one_prt(coat, anny_body):
     out = coat()
     V = anny_body.num_verts
