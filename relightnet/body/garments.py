@@ -130,7 +130,7 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     """A hanging surface of rings around the vertical axis through ``centre``.
 
     Ring i (of ``n_rings``, from ``y_top`` down to ``y_bottom``) has, at angle θ (0 at
-    ``front``, increasing toward front × up... i.e. to the body's left when it faces ``front``),
+    ``front``, 90° at front × up, the body's right when it faces ``front``),
     the radius ``max(r_body + clearance, min_radius + flare · t)`` (t: 0 at the top, 1 at
     the bottom; r_body the points' extent near the ring, :func:`_ring_radii`), then the
     running maximum down the rings (hanging), then folds ``Σ a·t·r·(½ + ½ sin(kθ + φ))``
@@ -158,7 +158,7 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     up = torch.tensor([0.0, 1.0, 0.0], dtype=torch.float64)
     e1 = front.double() - (front.double() @ up) * up
     e1 = e1 / e1.norm().clamp_min(1e-9)
-    e2 = torch.linalg.cross(e1, up)  # θ = 90° points to the body's left... (right-handed, y up)
+    e2 = torch.linalg.cross(e1, up)  # θ = 90°: the body's right
     c = centre.double().clone()
     ys = torch.linspace(float(y_top), float(y_bottom), int(n_rings), dtype=torch.float64)
     t = torch.linspace(0.0, 1.0, int(n_rings), dtype=torch.float64)[:, None]

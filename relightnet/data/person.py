@@ -18,6 +18,7 @@ and noise from its own seed. Clips are their own group (the pose changes every f
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -117,7 +118,7 @@ def person_transport(cfg: SynthConfig, person: PersonStage) -> PersonStage:
         occ.append(vertex_transport(v, m.faces, n, occlusion=True, bounces=int(person.bounce), albedo=grey,
                                     vertices=keep, **kw))
         un.append(vertex_transport(v, m.faces, n, occlusion=False, **kw))
-    return PersonStage(**{**person.__dict__, "transport": torch.stack(occ), "transport_unoccluded": torch.stack(un)})
+    return dataclasses.replace(person, transport=torch.stack(occ), transport_unoccluded=torch.stack(un))
 
 
 def transport_to_camera(transport: torch.Tensor, world_to_camera: torch.Tensor, lmax: int) -> torch.Tensor:

@@ -66,6 +66,11 @@ def test_a_group_shares_its_person_and_equals_single_samples(assets):
     for i, s in zip((4, 5, 6), both, strict=True):
         one = generate_sample(CFG, "train", i, assets)
         assert one.meta == s.meta and all(one.arrays[k].tobytes() == v.tobytes() for k, v in s.arrays.items())
+    for s in both:  # exact ground truth of the clothed person: image = albedo ⊙ (T · L) within 1e-6 of its range
+        x, m = s.arrays, s.arrays["mask"] > 0
+        shading = np.einsum("hwk,kc->hwc", x["transport"].astype(np.float64), x["light"].astype(np.float64))
+        assert np.abs(x["image"] - x["albedo"] * shading)[m].max() <= 1e-6 * x["image"][m].max()
+        assert (s.arrays["parts"][m] > 0).all() and len(s.meta["garments"]["types"]) >= 3
     a, b = both[0].meta, both[1].meta
     assert a["prt"]["reuse"] == {"group": 1, "member": 0, "size": 4} and b["prt"]["reuse"]["member"] == 1
     assert a["phenotype"] == b["phenotype"] and a["garments"]["types"] == b["garments"]["types"]

@@ -34,7 +34,7 @@ def generated_people(anny_body):
     from relightnet.data import SynthConfig
     from relightnet.data.generate import generate_sample
 
-    cfg = SynthConfig(res=256, n_dirs=16)
+    cfg = SynthConfig(res=256, n_dirs=16, prt_reuse=1)  # two people, not one seen twice
     return [person_cutout(generate_sample(cfg, "test", i, body=anny_body).arrays) for i in (0, 1)]
 
 
