@@ -17,6 +17,7 @@ __all__ = [
     "OFFLINE_METHODS",
     "LIGHT_FROM",
     "LIGHT_WORD_KINDS",
+    "OUTFITS",
     "POSE_PRESETS",
     "SEQUENCE_SMOOTHING",
     "SMOOTHING_METHODS",
@@ -104,6 +105,8 @@ MASK_SOURCES = ("segment", "head")
 POSE_PRESETS = ("rest", "tpose", "apose", "arms_down", "arms_crossed")
 #: Procedural motions of the Anny body (:func:`relightnet.body.make_motion`).
 MOTION_KINDS = ("walk", "turn", "idle", "arm_raise")
+#: Named outfits of the dressed avatar (:data:`relightnet.pipeline.outfits.OUTFIT_SLOTS`); also ``random:SEED``.
+OUTFITS = ("casual", "dress", "jacket", "coat", "skirt", "hood")
 
 
 def envmap_dir() -> Path:

@@ -6,7 +6,7 @@ import argparse
 import logging
 
 from ..errors import InputError
-from ..names import LIGHT_FROM, MOTION_KINDS, VIDEO_SMOOTHING, smoothing_help
+from ..names import LIGHT_FROM, MOTION_KINDS, OUTFITS, VIDEO_SMOOTHING, smoothing_help
 from .common import (
     LIGHT_HELP,
     add_command,
@@ -58,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
                  target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
-                 mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None)
+                 mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None,
+                 replace_person=args.replace_person, outfit=args.outfit)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -74,6 +75,7 @@ def register(sub) -> None:
         "  relightnet avatar --target clip.mp4 --body smpl:SMPL_NEUTRAL.npz --motion dance.npz "
         "--albedo skin.png --out a.mp4\n"
         "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n"
+        "  relightnet avatar --target clip.mp4 --replace-person --outfit casual --out avatar.mp4\n"
         "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n"
         "  relightnet avatar --target empty_room.mp4 --light-from plate --out a.mp4   # no person to read\n"
         "  relightnet avatar --target clip.mp4 --plate room.jpg --light-from both --out a.mp4\n",
@@ -84,6 +86,10 @@ def register(sub) -> None:
     add_mask_source_arg(p)
     p.add_argument("--plate", help="composite over this clean-plate video (or image) of the scene instead of the "
                    "target's frames")
+    p.add_argument("--replace-person", action="store_true",
+                   help="put the avatar in place of the target's person: composite over the target's clean plate "
+                   "(temporal median of the background where the person's mask uncovers it; never-uncovered pixels "
+                   "inpainted; OUT.plate.png) with the avatar standing where the person stood")
     p.add_argument("--motion", default=None,
                    help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video), an Anny motion file from "
                    "`relightnet fit`, or an SMPL-style motion file (.npz/.pkl) for --body smpl:PATH (default: walk)")
@@ -92,6 +98,9 @@ def register(sub) -> None:
                    "the motion (retargeted to its body, feet held on the ground)")
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
+    p.add_argument("--outfit", metavar="NAME|random:SEED",
+                   help="dress the avatar in clothes and hair as geometry, with their own albedo: "
+                   f"{', '.join(OUTFITS)}, or random:SEED (a drawn outfit)")
     p.add_argument("--light", help="skip the estimation and use this light: " + LIGHT_HELP
                    + "; or a light sequence file with one light per frame")
     p.add_argument("--light-from", choices=LIGHT_FROM, default="person",
@@ -107,7 +116,8 @@ def register(sub) -> None:
     p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
     p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
     p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")
-    p.add_argument("--antialias", action="store_true", help="smooth the avatar's silhouette (~24 ms per 512² frame)")
+    p.add_argument("--antialias", action=argparse.BooleanOptionalAction, default=True,
+                   help="smooth the avatar's silhouette against the background (default: on; ~24 ms per 512² frame)")
     p.add_argument("--out", required=True, help="output video (.mp4/.mkv); OUT.lights.npz/.png are written beside it")
     add_model_args(p)
     p.set_defaults(func=run)

@@ -24,6 +24,7 @@ def run(args: argparse.Namespace) -> int:
         f"  avatar lit by the target's estimated light:  {p['avatar']}",
         f"  target | avatar, side by side:               {p['side_by_side']}",
         f"  light curves raw/smoothed/true:              {p['lights_plot']}",
+        f"  dressed avatar in place of a walking person: {p['replace_avatar']} (plate: {p['replace_plate']})",
         f"  2D vs 3D vs ground truth report:             {p['compare']}/report.md",
         f"  preset light previews:                       {out}/lights/*.png",
     ]

@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..names import OUTFITS
 from .common import (
     LIGHT_HELP,
     add_body_args,
@@ -87,11 +88,11 @@ def _albedo(body):
     import torch
 
     from ..body import AnnyBody, default_albedo
-    from ..render.frame import TexturedAlbedo
 
     if isinstance(body, AnnyBody):
-        a = default_albedo(body)
-        return TexturedAlbedo(a.texture, body.uv, body.uv_faces), a.vertex
+        from ..pipeline.smooth_albedo import smooth_default_albedo
+
+        return smooth_default_albedo(body), default_albedo(body, texture_size=None).vertex
     v = torch.full((body.num_verts, 3), 0.6)
     return v, v
 
@@ -123,6 +124,11 @@ def run_render_body(args: argparse.Namespace) -> int:
     light = load_light(args.light, lmax=args.lmax)
     body, params = _body_and_params(args)
     albedo, vertex_albedo = _albedo(body)
+    if args.outfit:
+        from ..pipeline.outfits import dressed_body
+
+        body = dressed_body(body, args.outfit)
+        albedo, vertex_albedo = body.albedo, None
     frames = render_body_frames(body, params, light, albedo, size=args.res, n_dirs=args.n_dirs,
                                 occlusion=args.occlusion, bounces=args.bounces, seed=args.seed,
                                 maps=maps is not None, vertex_albedo=vertex_albedo)
@@ -185,6 +191,7 @@ def register(sub) -> None:
                     "  relightnet render-body --phenotype gender=0 --phenotype weight=0.8 --light studio "
                     "--out b.png --mask-out m.png --save-maps maps/\n"
                     "  relightnet render-body --motion walk --frames 60 --light courtyard --res 256 --out walk.mp4\n"
+                    "  relightnet render-body --outfit dress --pose apose --light studio --res 512 --out dressed.png\n"
                     "  relightnet render-body --body smpl:SMPL_NEUTRAL.npz --motion clip.npz "
                     "--light city --out c.mp4\n")
     add_body_args(p)
@@ -192,5 +199,7 @@ def register(sub) -> None:
     p.add_argument("--mask-out", help="also write the coverage mask: a PNG for a still pose, a mask video "
                    "(.mkv lossless, .mp4) with --motion")
     p.add_argument("--save-maps", metavar="DIR", help="also write transport/albedo/normal/depth maps here")
+    p.add_argument("--outfit", metavar="NAME|random:SEED",
+                   help=f"dress Anny in clothes and hair as geometry: {', '.join(OUTFITS)}, or random:SEED")
     _prt_options(p, 64)
     p.set_defaults(func=run_render_body)

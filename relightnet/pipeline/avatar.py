@@ -41,7 +41,9 @@ from ..raster import antialias as aa
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
-from .scene import avatar_albedo, load_body, open_motion
+from .clean_plate import check_stand_in, stand_in_frames
+from .outfits import avatar_look
+from .scene import load_body, open_motion
 from .video_lights import estimate_video_evidence, lights_fingerprint, read_light_estimates, write_video_lights
 
 logger = logging.getLogger(__name__)
@@ -206,6 +208,14 @@ def _camera_for(camera: Camera | None, size) -> Camera:
     return camera
 
 
+def _check_options(out: Path, smoothing: str, replace_person: bool, plate, camera) -> None:
+    """The checks that need nothing read: the output's type, the smoothing, --replace-person's exclusions."""
+    if out.suffix.lower() not in (".mp4", ".mkv"):
+        raise InputError(f"{out}: expected an .mp4 or .mkv output path")
+    check_smoothing(smoothing, VIDEO_SMOOTHING)
+    check_stand_in(replace_person, plate, camera)
+
+
 @torch.no_grad()
 def avatar(
     target,
@@ -226,6 +236,7 @@ def avatar(
     model_name: str = "model",
     progress: bool = True,
     mask_source: str = "segment", plate_light: torch.Tensor | None = None,
+    replace_person: bool = False, outfit: str | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -253,19 +264,17 @@ def avatar(
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
         plate_light: (K, 3) the plate's light, combined with the estimates (``relightnet.sh.combine_person_plate``).
+        replace_person, outfit: take the person's place (:func:`.clean_plate.stand_in`); dress (:func:`.avatar_look`).
 
     Returns:
         :class:`AvatarResult`.
     """
     out = Path(out)
-    if out.suffix.lower() not in (".mp4", ".mkv"):
-        raise InputError(f"{out}: expected an .mp4 or .mkv output path")
-    check_smoothing(smoothing, VIDEO_SMOOTHING)
+    _check_options(out, smoothing, replace_person, plate, camera)
     info = video_info(target)
-    body_model = load_body(body)
-    tex = avatar_albedo(body_model, albedo)
+    base, body_model, tex = avatar_look(load_body(body), albedo, outfit)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
-    motion_frames = open_motion(motion, body_model, info.fps)
+    motion_frames = open_motion(motion, base, info.fps)
     backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
     lights_file, plot = _side_paths(out)
     if light is None:
@@ -277,6 +286,8 @@ def avatar(
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
+    if replace_person:  # over the clean plate, standing where the person stood
+        backgrounds, camera = stand_in_frames(target, out, n, body_model, target_masks, mask_source)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,

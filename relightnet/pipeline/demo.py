@@ -9,7 +9,10 @@
    ``lights.png`` compares raw, smoothed and true light curves;
 3. ``compare/`` (job 4, :func:`~relightnet.pipeline.compare`): 2D vs 3D path against the
    ground truth on generated test sequences (``sequences/``): report.md, plots, side-by-side video;
-4. ``lights/<preset>.png``: previews of the preset lights.
+4. ``lights/<preset>.png``: previews of the preset lights;
+5. ``replace/``: the dressed avatar (``--outfit casual``) in place of a person walking across a
+   generated scene (``avatar --replace-person``), with the clean plate's PSNR against the true
+   background in ``summary.json``.
 """
 
 from __future__ import annotations
@@ -78,6 +81,7 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     from ..temporal.plot import light_curves_png
     from .avatar import avatar
     from .backends import TorchPredictor
+    from .walk_target import replaced_person_demo
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -102,6 +106,10 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
         f.write(png)
     paths["lights_plot"] = out / "lights.png"
 
+    logger.info("demo 2/4: the dressed avatar in place of a walking person (clean plate with a known truth)")
+    replaced = replaced_person_demo(out / "replace", size, frames, body, n_dirs, progress=progress)
+    paths.update({k: v for k, v in replaced.items() if isinstance(v, Path)})
+
     logger.info("demo 3/4: 2D vs 3D comparison on %d generated sequences", compare_clips)
     paths["compare"] = _run_compare(out / "compare", body, compare_clips, compare_size, compare_frames,
                                     n_dirs, progress)
@@ -109,7 +117,8 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     logger.info("demo 4/4: preset light previews")
     paths["lights"] = render_presets(out / "lights", size=128)
     summary = {"target_clip": {"split": "test", "index": DEMO_CLIP, "frames": frames, "size": size,
-                               "light": sample.meta["lights"]}, "light_error": errors}
+                               "light": sample.meta["lights"]}, "light_error": errors,
+               "replaced_person": {k: v for k, v in replaced.items() if not isinstance(v, Path)}}
     with atomic_write(out / "summary.json", "w") as f:
         f.write(json.dumps(summary, indent=1) + "\n")
     paths["summary"] = out / "summary.json"

@@ -109,10 +109,11 @@ def avatar_albedo(body, albedo="default"):
 
     Args:
         body: the body model.
-        albedo: ``"default"`` (Anny's plain-coloured outfit; grey 0.6 for SMPL), a texture
+        albedo: ``"default"`` (Anny's plain-coloured outfit with smooth garment boundaries,
+            :func:`~relightnet.pipeline.smooth_albedo.smooth_default_albedo`; grey 0.6 for SMPL), a texture
             image path (sRGB, in the body's UV layout), a (V, 3) tensor or a TexturedAlbedo.
     """
-    from ..body import AnnyBody, default_albedo
+    from ..body import AnnyBody
     from ..io.image import read_image
     from ..render.frame import TexturedAlbedo
 
@@ -124,8 +125,9 @@ def avatar_albedo(body, albedo="default"):
         return albedo.float()
     if albedo == "default":
         if isinstance(body, AnnyBody):
-            a = default_albedo(body)
-            return TexturedAlbedo(a.texture, body.uv, body.uv_faces)
+            from .smooth_albedo import smooth_default_albedo
+
+            return smooth_default_albedo(body)
         return torch.full((body.num_verts, 3), 0.6)
     path = Path(albedo)
     if not path.is_file():

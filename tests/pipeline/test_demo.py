@@ -25,5 +25,8 @@ def test_demo_runs_on_embedded_defaults(tmp_path, capsys):
     assert (out / "lights.png").stat().st_size > 1000
     summary = json.loads((out / "summary.json").read_text())
     assert summary["light_error"]["raw"] >= 0 and summary["target_clip"]["frames"] == 5
+    replaced = summary["replaced_person"]
+    assert replaced["plate_psnr_db"] > 25 and 0 <= replaced["never_uncovered_share"] < 1
+    assert video_info(out / "replace" / "avatar.mp4").n_frames == 5 and (out / "replace" / "avatar.plate.png").is_file()
     report = (out / "compare" / "report.md").read_text()
     assert "| 3D | true L_t |" in report and video_info(out / "compare" / "side_by_side.mp4").n_frames == 4

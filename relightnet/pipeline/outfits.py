@@ -1,0 +1,205 @@
+"""The dressed avatar: the generator's clothes and hair, as geometry, skinned to the avatar's body.
+
+An outfit is ``NAME`` (one of :data:`relightnet.names.OUTFITS`) or ``random:SEED``:
+
+- a named outfit fixes what is worn in each of the generator's garment slots
+  (:data:`relightnet.data.garments.GARMENT_SLOTS`) and a seed for its look (colours and
+  patterns, :func:`relightnet.data.textures.sample_outfit`);
+- ``random:SEED`` draws the slots with the generator's probabilities and the look, from SEED.
+
+:class:`DressedBody` wraps the avatar's :class:`~relightnet.body.AnnyBody`: calling it poses
+the body and dresses every frame (:func:`relightnet.data.garments.dress_frame`: shells follow
+their body vertices, hanging surfaces are rebuilt around the pelvis or head joint), so the
+renderer sees one mesh — body first, then the garment pieces — with the topology of the first
+frame in every frame. Its :attr:`DressedBody.albedo` is the generator's texture of the outfit
+(:func:`relightnet.data.clothed.clothed_mesh`: the painted body plus garment panels). The PRT
+is that of the whole mesh, so cloth shadows the body and the body the cloth. Anything that
+renders a body model (:func:`relightnet.render.jobs.render_body_frames`, the avatar job,
+``render-body``) takes a DressedBody in its place.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..body.base import BodyOutput
+from ..checks import InputError
+from ..names import OUTFITS
+
+__all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody", "dressed_body",
+           "avatar_look"]
+
+#: What each named outfit wears (upper, lower, head, hair) and the seed of its look.
+OUTFIT_SLOTS = {
+    "casual": (("loose_top", "trousers", "none", "volume"), 11),
+    "dress": (("dress", "none", "none", "long"), 12),
+    "jacket": (("jacket", "wide_trousers", "none", "volume"), 13),
+    "coat": (("open_coat", "trousers", "hat", "volume"), 14),
+    "skirt": (("loose_top", "skirt", "none", "long"), 15),
+    "hood": (("jacket", "trousers", "hood", "painted"), 16),
+}
+
+#: sRGB colours of the named outfits' pieces (plain fabric; the rest of the look is drawn from the seed).
+OUTFIT_COLORS = {
+    "casual": {"top": (0.86, 0.85, 0.8), "bottom": (0.25, 0.33, 0.5), "shoes": (0.12, 0.12, 0.13)},
+    "dress": {"top": (0.5, 0.13, 0.18), "shoes": (0.1, 0.08, 0.08)},
+    "jacket": {"outer": (0.14, 0.17, 0.3), "top": (0.85, 0.85, 0.85), "bottom": (0.72, 0.64, 0.48),
+               "shoes": (0.3, 0.2, 0.13)},
+    "coat": {"outer": (0.62, 0.47, 0.32), "top": (0.92, 0.88, 0.8), "bottom": (0.2, 0.2, 0.22),
+             "shoes": (0.1, 0.1, 0.1), "hat": (0.25, 0.22, 0.2)},
+    "skirt": {"top": (0.92, 0.88, 0.8), "bottom": (0.38, 0.4, 0.25), "shoes": (0.4, 0.28, 0.2)},
+    "hood": {"outer": (0.45, 0.45, 0.47), "bottom": (0.25, 0.33, 0.5), "shoes": (0.85, 0.85, 0.85)},
+}
+
+
+def _paint_named(name: str, look: dict, g: dict) -> None:
+    """Give a named outfit's pieces their plain colours (:data:`OUTFIT_COLORS`), in place."""
+    from ..color import srgb_to_linear_np
+
+    for part, srgb in OUTFIT_COLORS[name].items():
+        d = g[part] if part in ("outer", "hat") else look[part]
+        c = srgb_to_linear_np(np.asarray(srgb, dtype=np.float64))
+        d.update(color=c.tolist(), color2=(c * 0.75).tolist(), pattern="plain")
+
+
+@dataclass(frozen=True)
+class OutfitDraw:
+    """An outfit: ``look`` (the painted look, :func:`~relightnet.data.textures.sample_outfit`) and
+    ``garments`` (:func:`~relightnet.data.garments.sample_garments`), both JSON-serialisable; ``spec`` as given."""
+
+    spec: str
+    look: dict
+    garments: dict
+
+
+def draw_outfit(spec: str) -> OutfitDraw:
+    """Parse ``NAME`` or ``random:SEED`` and draw the outfit (deterministic for a spec)."""
+    from ..data.garments import GARMENT_SLOTS, garment_probs, sample_garments
+    from ..data.textures import sample_outfit
+
+    spec = str(spec)
+    if spec.startswith("random:"):
+        try:
+            seed = int(spec[7:])
+        except ValueError:
+            raise InputError(f"--outfit {spec}: expected random:SEED with an integer SEED") from None
+        if seed < 0:
+            raise InputError(f"--outfit {spec}: the seed must be >= 0")
+        probs = garment_probs({})
+    elif spec in OUTFIT_SLOTS:
+        slots, seed = OUTFIT_SLOTS[spec]
+        probs = garment_probs({s: {c: 1.0} for s, c in zip(GARMENT_SLOTS, slots, strict=True)})
+    else:
+        raise InputError(f"--outfit {spec}: expected one of {', '.join(OUTFITS)} or random:SEED")
+    rng = np.random.default_rng([seed, 28])
+    look = sample_outfit(rng)
+    if spec in OUTFIT_SLOTS and look["hair"] is None:  # a named outfit's hair is worn: not bald
+        look["hair"] = [0.05, 0.03, 0.02]
+    g = sample_garments(rng, probs, look)
+    if spec in OUTFIT_SLOTS:
+        _paint_named(spec, look, g)
+    return OutfitDraw(spec, look, g)
+
+
+class DressedBody:
+    """An Anny body wearing an outfit (module docstring); call it like the body model.
+
+    Attributes:
+        body: the wrapped :class:`~relightnet.body.AnnyBody`. outfit: the :class:`OutfitDraw`.
+        faces: (F', 3) the dressed mesh's faces (body faces first). albedo: the outfit's
+            :class:`~relightnet.render.TexturedAlbedo`. types: the garment types worn.
+        n_body_verts: V, the body's vertex count (its vertices come first).
+    """
+
+    def __init__(self, body, outfit: OutfitDraw) -> None:
+        from ..body import AnnyBody
+        from ..data.clothed import clothed_mesh
+        from ..data.sample import prepare_assets
+        from ..data.textures import paint_albedo
+        from ..render.frame import TexturedAlbedo
+
+        if not isinstance(body, AnnyBody):
+            raise InputError(f"--outfit: outfits dress the Anny body, not {type(body).__name__}")
+        self.body, self.outfit = body, outfit
+        assets = prepare_assets(body)
+        look = outfit.look
+        self._field = assets.region_field(look["sleeves"], look["legs"], "none" if look["hair"] is None else "short")
+        self._tab = assets.garment_tables()
+        tex = paint_albedo(assets.atlas, self._field, look)
+        with torch.no_grad():
+            rest = body()
+        self._topo = None
+        pieces = self._pieces(rest.verts[0], rest.normals[0], rest.joints[0])
+        m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
+                         body, self._tab, tex, self._field, assets.atlas)
+        n_pieces = sum(len(p[1].verts) for p in pieces)
+        self._inner = self._thickness(m, pieces, n_pieces)
+        self.faces, self.types, self.n_body_verts = m.faces, m.types, body.num_verts
+        self.uv, self.uv_faces = m.uv, m.uv_faces
+        self.albedo = TexturedAlbedo(m.tex, m.uv, m.uv_faces)
+
+    def _thickness(self, m, pieces: list, n_pieces: int) -> float | None:
+        """How the clothed mesh lays out each piece: its vertices alone (None), or followed by an inner side
+        moved this far against the normals (two-sided cloth); read off the rest frame."""
+        V = self.body.num_verts
+        if m.verts.shape[1] == V + n_pieces:
+            return None
+        if m.verts.shape[1] != V + 2 * n_pieces:
+            raise InputError("--outfit: the garment pieces disagree with the clothed mesh (a bug)")
+        p = pieces[0][1]
+        return float((m.verts[0, V:V + len(p.verts)] - m.verts[0, V + len(p.verts):V + 2 * len(p.verts)]).norm(dim=1)
+                     .median())
+
+    def _piece_arrays(self, piece) -> tuple[torch.Tensor, torch.Tensor]:
+        """One piece's (verts, normals) as the clothed mesh lays them out (:meth:`_thickness`)."""
+        if self._inner is None:
+            return piece.verts, piece.normals
+        return (torch.cat([piece.verts, piece.verts - self._inner * piece.normals]),
+                torch.cat([piece.normals, -piece.normals]))
+
+    @property
+    def num_verts(self) -> int:
+        """V', the dressed mesh's vertex count."""
+        return int(self.faces.max()) + 1
+
+    def _pieces(self, verts, normals, joints) -> list:
+        from ..data.garments import dress_frame
+
+        pieces, self._topo = dress_frame(self.outfit.garments, verts, normals, self.body.faces, joints, self._tab,
+                                         self.body, self.outfit.look, self._topo)
+        return pieces
+
+    def __call__(self, params=None, **kwargs) -> BodyOutput:
+        """Pose the body (arguments as the body model's) and dress each frame: a :class:`BodyOutput` of
+        the dressed mesh (verts, normals (B, V', 3); faces (F', 3); joints of the body)."""
+        with torch.no_grad():
+            out = self.body(params, **kwargs)
+        vs, ns = [], []
+        for b in range(out.batch_size):
+            arrays = [self._piece_arrays(p[1]) for p in self._pieces(out.verts[b], out.normals[b], out.joints[b])]
+            vs.append(torch.cat([out.verts[b], *[a[0] for a in arrays]]))
+            ns.append(torch.cat([out.normals[b], *[a[1] for a in arrays]]))
+        return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
+                          out.joints, out.joint_names)
+
+
+def avatar_look(body, albedo="default", outfit: str | None = None) -> tuple:
+    """The avatar job's body and albedo: (``body``, the body to render, its albedo). With an ``outfit``
+    (``NAME`` or ``random:SEED``) the body to render is a :class:`DressedBody` with the outfit's albedo, and
+    ``albedo`` must be ``"default"``; without, ``body`` and :func:`~relightnet.pipeline.scene.avatar_albedo`."""
+    from .scene import avatar_albedo
+
+    if outfit is None:
+        return body, body, avatar_albedo(body, albedo)
+    if not (isinstance(albedo, str) and albedo == "default"):
+        raise InputError("--outfit brings its own albedo: drop --albedo")
+    dressed = dressed_body(body, outfit)
+    return body, dressed, dressed.albedo
+
+
+def dressed_body(body, outfit: str | None) -> object:
+    """``body`` itself when ``outfit`` is None, else a :class:`DressedBody` wearing ``draw_outfit(outfit)``."""
+    return body if outfit is None else DressedBody(body, draw_outfit(outfit))

@@ -1,0 +1,94 @@
+"""Draw the README's picture of the dressed avatar and the replaced person: ``docs/avatar_look.png``.
+
+Run: ``.venv/bin/python tools/avatar_look_picture.py [--out docs/avatar_look.png]`` (ANNY_CACHE_DIR set by make).
+
+Top row: the named outfits (``--outfit NAME``) and ``random:3`` on the walking avatar, PRT-lit by
+the ``studio`` preset. Bottom row: the neckline and sleeves of the default albedo, face-wise
+(before) and through the smooth field (now), then a generated target (a person walking across a
+known background), its clean plate, and ``avatar --replace-person --outfit casual`` on it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import torch
+
+
+def _u8(img: torch.Tensor) -> np.ndarray:
+    from relightnet.io import linear_to_srgb
+
+    return (linear_to_srgb(img.clamp(0, 1)) * 255).round().to(torch.uint8).numpy()
+
+
+def _outfits(body, light) -> np.ndarray:
+    from relightnet.body import make_motion
+    from relightnet.names import OUTFITS
+    from relightnet.pipeline.outfits import dressed_body
+    from relightnet.render import render_body_frames
+
+    cols = []
+    for spec in (*OUTFITS, "random:3"):
+        d = dressed_body(body, spec)
+        fr = list(render_body_frames(d, make_motion("walk", 12), light, d.albedo, size=(320, 192), n_dirs=64,
+                                     n_frames=12, visible_only=True))[9]
+        cols.append(_u8(fr.render.image[0] + 0.93 * (1 - fr.render.alpha[0][..., None])))
+    return np.concatenate(cols, 1)
+
+
+def _closeups(body, light) -> list[np.ndarray]:
+    from relightnet.body import default_albedo
+    from relightnet.pipeline.smooth_albedo import smooth_default_albedo
+    from relightnet.prt import vertex_transport
+    from relightnet.raster import look_at, perspective_camera
+    from relightnet.render import TexturedAlbedo, render_mesh
+
+    out = body({"pose": body.pose("apose")})
+    cam = perspective_camera(look_at(torch.tensor([0.0, 1.3, 0.95]), torch.tensor([0.0, 1.3, 0.0])), (320, 320),
+                             fov_deg=35)
+    T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+    old = default_albedo(body)
+    panels = []
+    for alb in (TexturedAlbedo(old.texture, body.uv, body.uv_faces), smooth_default_albedo(body)):
+        r = render_mesh(out.verts[0], out.faces, T, alb, light, cam)
+        panels.append(_u8(r.image[0] + 0.93 * (1 - r.alpha[0][..., None])))
+    return panels
+
+
+def _replaced(body, tmp: Path) -> list[np.ndarray]:
+    from relightnet.io import read_image, read_video
+    from relightnet.pipeline.avatar import avatar
+    from relightnet.pipeline.walk_target import walking_target
+    from relightnet.sh import preset_light
+
+    wt = walking_target(tmp, size=(320, 320), n_frames=16, suffix=".mp4", body=body)
+    avatar(wt.video, tmp / "av.mp4", light=preset_light("studio"), body=body, replace_person=True, outfit="casual",
+           n_dirs=32, progress=False)
+    target = list(read_video(wt.video))[8]
+    plate = (read_image(tmp / "av.plate.png") * 255).round().byte().numpy()
+    return [target, plate, list(read_video(tmp / "av.mp4"))[8]]
+
+
+def main() -> None:
+    from relightnet.body import AnnyBody
+    from relightnet.io import write_image
+    from relightnet.sh import preset_light
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="docs/avatar_look.png")
+    args = ap.parse_args()
+    body = AnnyBody()
+    light = preset_light("studio")
+    top = _outfits(body, light)
+    with tempfile.TemporaryDirectory() as d:
+        bottom = np.concatenate([*_closeups(body, light), *_replaced(body, Path(d))], 1)
+    w = max(top.shape[1], bottom.shape[1])
+    pad = [np.pad(x, ((0, 0), (0, w - x.shape[1]), (0, 0)), constant_values=255) for x in (top, bottom)]
+    write_image(args.out, torch.from_numpy(np.concatenate(pad, 0)).float() / 255, srgb=False)
+
+
+if __name__ == "__main__":
+    main()
