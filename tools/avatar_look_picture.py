@@ -19,7 +19,7 @@ import torch
 
 
 def _u8(img: torch.Tensor) -> np.ndarray:
-    from relightnet.io import linear_to_srgb
+    from relightnet.color import linear_to_srgb
 
     return (linear_to_srgb(img.clamp(0, 1)) * 255).round().to(torch.uint8).numpy()
 

@@ -208,12 +208,14 @@ def _camera_for(camera: Camera | None, size) -> Camera:
     return camera
 
 
-def _check_options(out: Path, smoothing: str, replace_person: bool, plate, camera) -> None:
+def _check_options(out, smoothing: str, replace_person: bool, plate, camera) -> Path:
     """The checks that need nothing read: the output's type, the smoothing, --replace-person's exclusions."""
+    out = Path(out)
     if out.suffix.lower() not in (".mp4", ".mkv"):
         raise InputError(f"{out}: expected an .mp4 or .mkv output path")
     check_smoothing(smoothing, VIDEO_SMOOTHING)
     check_stand_in(replace_person, plate, camera)
+    return out
 
 
 @torch.no_grad()
@@ -269,8 +271,7 @@ def avatar(
     Returns:
         :class:`AvatarResult`.
     """
-    out = Path(out)
-    _check_options(out, smoothing, replace_person, plate, camera)
+    out = _check_options(out, smoothing, replace_person, plate, camera)
     info = video_info(target)
     base, body_model, tex = avatar_look(load_body(body), albedo, outfit)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
