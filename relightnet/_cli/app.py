@@ -6,7 +6,7 @@ import argparse
 import logging
 
 from ..errors import InputError
-from .common import add_command
+from .options import add_command
 
 logger = logging.getLogger("relightnet.app")
 

@@ -7,16 +7,9 @@ import logging
 
 from ..errors import InputError
 from ..names import LIGHT_FROM, MOTION_KINDS, OUTFITS, VIDEO_SMOOTHING, smoothing_help
-from .common import (
-    LIGHT_HELP,
-    add_command,
-    add_mask_source_arg,
-    add_model_args,
-    in_path,
-    nonneg_int,
-    out_file,
-    pos_int,
-)
+from .argtypes import nonneg_int, pos_int
+from .options import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args
+from .paths import in_path, out_file
 
 logger = logging.getLogger("relightnet.avatar")
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_command, nonneg_int
+from .argtypes import nonneg_int
+from .options import add_command
 
 _DESCRIPTION = """\
 Run the jobs of a YAML (or JSON) file, each an existing relightnet command with its

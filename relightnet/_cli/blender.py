@@ -5,16 +5,9 @@ from __future__ import annotations
 import argparse
 import logging
 
-from .common import (
-    LIGHT_HELP,
-    add_body_args,
-    add_command,
-    exposure_arg,
-    nonneg_int,
-    out_dir,
-    out_file,
-    pos_int,
-)
+from .argtypes import exposure_arg, nonneg_int, pos_int
+from .options import LIGHT_HELP, add_body_args, add_command
+from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.blender")
 
@@ -62,7 +55,7 @@ def _camera(spec: str, size: int):
 def run_export(args: argparse.Namespace) -> int:
     from ..blender import export_body_scene
     from ..pipeline.scene import avatar_albedo, load_body
-    from .common import load_single_light
+    from .inputs import load_single_light
 
     out = out_file(args.out, suffixes=(".blend",))
     load_single_light(args.light)  # fail fast on a bad light, before building the body

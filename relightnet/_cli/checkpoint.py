@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 
-from .common import add_command, out_file
+from .options import add_command
+from .paths import out_file
 
 logger = logging.getLogger("relightnet.checkpoint")
 

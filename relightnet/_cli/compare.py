@@ -6,7 +6,9 @@ import argparse
 import logging
 
 from ..names import VIDEO_SMOOTHING, smoothing_help
-from .common import add_command, add_model_args, in_path, nonneg_int, out_dir, pos_int, work_size
+from .argtypes import nonneg_int, pos_int, work_size
+from .options import add_command, add_model_args
+from .paths import in_path, out_dir
 
 logger = logging.getLogger("relightnet.compare")
 

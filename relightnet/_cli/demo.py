@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
-from .common import add_command, out_dir, pos_int
+from .argtypes import pos_int
+from .options import add_command
+from .paths import out_dir
 
 
 def run(args: argparse.Namespace) -> int:

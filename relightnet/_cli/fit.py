@@ -6,7 +6,9 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, in_path, out_file, pos_float, pos_int
+from .argtypes import pos_float, pos_int
+from .options import add_command
+from .paths import in_path, out_file
 
 logger = logging.getLogger("relightnet.fit")
 

@@ -6,7 +6,9 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import LIGHT_HELP, add_command, exposure_arg, image_size, nonneg_int, out_file
+from .argtypes import exposure_arg, image_size, nonneg_int
+from .options import LIGHT_HELP, add_command
+from .paths import out_file
 
 logger = logging.getLogger("relightnet.light")
 

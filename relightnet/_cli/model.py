@@ -8,15 +8,10 @@ import logging
 from pathlib import Path
 
 from ..errors import InputError
-from .common import (
-    add_command,
-    add_mask_source_arg,
-    add_model_args,
-    out_dir,
-    out_file,
-    read_photo,
-    work_size,
-)
+from .argtypes import work_size
+from .inputs import read_photo
+from .options import add_command, add_mask_source_arg, add_model_args
+from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.model")
 

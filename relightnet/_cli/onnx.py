@@ -7,16 +7,9 @@ import logging
 from pathlib import Path
 
 from ..names import STREAMING_SMOOTHING, smoothing_help
-from .common import (
-    add_command,
-    add_model_args,
-    check_method_options,
-    in_path,
-    method_options,
-    out_dir,
-    out_file,
-    work_size,
-)
+from .argtypes import work_size
+from .options import add_command, add_model_args, check_method_options, method_options
+from .paths import in_path, out_dir, out_file
 
 logger = logging.getLogger("relightnet.onnx")
 

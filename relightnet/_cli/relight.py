@@ -6,18 +6,10 @@ import argparse
 import logging
 
 from ..names import STREAMING_SMOOTHING, smoothing_help
-from .common import (
-    LIGHT_HELP,
-    add_command,
-    add_mask_source_arg,
-    add_model_args,
-    in_path,
-    load_single_light,
-    out_dir,
-    out_file,
-    pos_float,
-    read_photo,
-)
+from .argtypes import pos_float
+from .inputs import load_single_light, read_photo
+from .options import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args
+from .paths import in_path, out_dir, out_file
 
 logger = logging.getLogger("relightnet.relight")
 

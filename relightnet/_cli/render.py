@@ -7,17 +7,10 @@ import logging
 from pathlib import Path
 
 from ..names import OUTFITS
-from .common import (
-    LIGHT_HELP,
-    add_body_args,
-    add_command,
-    exposure_arg,
-    load_single_light,
-    nonneg_int,
-    out_dir,
-    out_file,
-    pos_int,
-)
+from .argtypes import exposure_arg, nonneg_int, pos_int
+from .inputs import load_single_light
+from .options import LIGHT_HELP, add_body_args, add_command
+from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.render")
 

@@ -6,7 +6,9 @@ import argparse
 import logging
 from pathlib import Path
 
-from .common import add_command, in_path, nonneg_int, out_dir, out_file
+from .argtypes import nonneg_int
+from .options import add_command
+from .paths import in_path, out_dir, out_file
 
 logger = logging.getLogger("relightnet.segment")
 

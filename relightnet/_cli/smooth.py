@@ -7,7 +7,9 @@ import logging
 from pathlib import Path
 
 from ..names import OFFLINE_METHODS, SEQUENCE_SMOOTHING, SMOOTHING_METHODS, smoothing_help, smoothing_names
-from .common import add_command, check_method_options, method_options, nonneg_int, out_file, pos_float, pos_int
+from .argtypes import nonneg_int, pos_float, pos_int
+from .options import add_command, check_method_options, method_options
+from .paths import out_file
 
 logger = logging.getLogger("relightnet.smooth")
 

@@ -7,7 +7,9 @@ import logging
 import math
 import sys
 
-from .common import add_command, key_value_arg, nonneg_int, out_dir, out_file, pos_float
+from .argtypes import key_value_arg, nonneg_int, pos_float
+from .options import add_command
+from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.synth")
 

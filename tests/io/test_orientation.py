@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet._cli.common import read_photo
+from relightnet._cli.inputs import read_photo
 from relightnet.io import VideoWriter, read_alpha, read_image, read_mask, read_masks, read_video, video_info
 from relightnet.io.image import _encode
 
