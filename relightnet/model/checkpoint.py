@@ -2,8 +2,8 @@
 
 A checkpoint is a ``torch.save`` dict of tensors and plain Python values only (dicts, lists,
 tuples, strings, numbers, booleans, None; configs as dicts): ``format`` (a version tag),
-``net_config``, ``model`` (state dict), ``step``, ``input_size`` (side of the training
-images, also ``net_config["input_size"]``), and for training runs ``optimizer``, ``scheduler``,
+``net_config`` (with ``input_size``, the side of the training images), ``model`` (state dict),
+``step``, and for training runs ``optimizer``, ``scheduler``,
 ``train_config`` and ``rng`` (torch's CPU RNG state). :func:`save_checkpoint` refuses anything else, and
 :func:`load_checkpoint` reads with ``torch.load(weights_only=True)``: a file that names any
 other Python object is refused by name and nothing in it runs. A checkpoint of your own
@@ -52,12 +52,10 @@ def save_checkpoint(path, model: RelightNet, net_config: NetConfig, step: int = 
                     train_config: dict | None = None, **extra) -> Path:
     """Write a checkpoint atomically (a crash never leaves a truncated file).
 
-    The working size is stored twice, as ``net_config["input_size"]`` and as the top-level
-    ``input_size`` that older readers use; an ``input_size`` in ``extra`` sets both.
+    The working size is ``net_config["input_size"]``; an ``input_size`` in ``extra`` sets it.
     """
     if "input_size" in extra:
-        net_config = dataclasses.replace(net_config, input_size=extra["input_size"])
-    extra["input_size"] = net_config.input_size
+        net_config = dataclasses.replace(net_config, input_size=extra.pop("input_size"))
     state = {
         "format": FORMAT,
         "net_config": dataclasses.asdict(net_config),
@@ -228,8 +226,8 @@ def load_model(path=None, device="cpu") -> RelightNet:
     path = shipped_checkpoint() if path is None else Path(path)
     state = load_checkpoint(path, map_location="cpu")
     cfg = _net_config(state, path)
-    # The side of the square crops it was trained on (its working size): the top-level key that
-    # every checkpoint written by training has, else the configuration's (default) value.
+    # The side of the square crops it was trained on (its working size): the configuration's, or the
+    # top-level key of a checkpoint written before it was part of the configuration (the shipped one).
     size = state.get("input_size", cfg.input_size)
     if type(size) is not int or not 16 <= size <= _MAX_CONFIG_INT:
         raise InputError(f"{path}: 'input_size' {size!r} is not a size in pixels")
