@@ -40,4 +40,5 @@ def test_smoothing_and_motion_choices():
     with pytest.raises(SystemExit):
         parser.parse_args(["avatar", "--target", "t.mp4", "--out", "a.mp4", "--smoothing", "kalman"])
     a = parser.parse_args(["avatar", "--target", "t.mp4", "--out", "a.mp4"])
-    assert (a.motion, a.smoothing, a.backend, a.mask_source) == ("walk", "auto", "torch", "segment")
+    # --motion unset (None) means walk, unless --motion-from gives the motion
+    assert (a.motion, a.smoothing, a.backend, a.mask_source) == (None, "auto", "torch", "segment")

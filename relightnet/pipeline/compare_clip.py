@@ -113,6 +113,22 @@ def _render_3d(maps: dict, light: torch.Tensor) -> torch.Tensor:
     return composite(fg, maps["alpha"], torch.zeros_like(fg))
 
 
+def _clip_transport(geometry, t: int, lmax: int, n_dirs: int, bounces: int, prt_seed) -> torch.Tensor:
+    """Frame ``t``'s PRT (V, K) in the camera's light frame, cast in the frame the generator casts it in
+    (the person's world frame, before the view's yaw: the same directions there) and turned into the
+    camera's (:func:`relightnet.data.person.transport_to_camera`)."""
+    from ..data.person import transport_to_camera
+    from ..prt import vertex_transport
+
+    w2c = geometry.world_to_camera.double()
+    R, tr = w2c[:3, :3], w2c[:3, 3]
+    v_world = ((geometry.verts[t].double() - tr) @ R).float()  # v_cam = R v_world + tr
+    n_world = (geometry.normals[t].double() @ R).float()
+    Tw = vertex_transport(v_world, geometry.faces, n_world, lmax=lmax, n_dirs=n_dirs, occlusion=True,
+                          bounces=bounces, seed=prt_seed, threads=torch.get_num_threads())
+    return transport_to_camera(Tw, R, lmax)
+
+
 def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "auto",
                  source: str = "studio", bounces: int = 0, tick=None, cnn_albedo: bool = False) -> ClipOutputs:
     """Run both paths on one clip (module docstring of :mod:`relightnet.pipeline.compare`).
@@ -153,9 +169,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         photos.append(to_uint8(src[t]).permute(2, 0, 1))  # the 2D path's input photo
         preds.append(predict(photos[-1], mask[t]))
         c1 = time.perf_counter()
-        Tv = vertex_transport(geometry.verts[t], geometry.faces, geometry.normals[t], lmax=lmax,
-                              n_dirs=n_dirs, occlusion=True, bounces=bounces, seed=prt_seed,
-                              threads=torch.get_num_threads())
+        Tv = _clip_transport(geometry, t, lmax, n_dirs, bounces, prt_seed)
         c2 = time.perf_counter()
         rend = render_mesh(geometry.verts[t], geometry.faces, Tv, geometry.albedo, true[t], geometry.camera,
                            maps=True)
