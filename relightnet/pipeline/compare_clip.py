@@ -148,7 +148,6 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
     Returns:
         :class:`ClipOutputs`.
     """
-    from ..prt import vertex_transport
     from ..render.frame import render_mesh
 
     true = torch.from_numpy(np.asarray(clip["light"], np.float32))

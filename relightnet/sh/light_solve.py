@@ -74,11 +74,18 @@ def light_evidence(image: torch.Tensor, albedo: torch.Tensor, transport: torch.T
     check_shape(weight, [b, 1, h, w], name="weight")
     image, albedo, transport, weight = (t.double() for t in (image, albedo, transport, weight))
     n = (weight > 0).double().sum((2, 3)).clamp_min(1.0)[:, :, None]  # (B, 1, 1)
-    a = (albedo[:, :, None] * transport[:, None]).flatten(3)  # (B, 3, K, P)
-    aw = a * weight.flatten(2)[:, :, None]  # (B, 3, K, P)
-    M = aw @ a.transpose(-1, -2) / n[..., None]
-    r = (aw @ image.flatten(2)[..., None])[..., 0] / n
+    # Sums over the pixels without flattening them (an ONNX graph then keeps every shape inferable).
+    u = weight * albedo * albedo  # (B, 3, H, W)
+    M = torch.einsum("bchw,bkhw,blhw->bckl", u, transport, transport) / n[..., None]
+    r = torch.einsum("bchw,bkhw->bck", weight * albedo * image, transport) / n
     return Evidence(M, r)
+
+
+def _diagonal(A: torch.Tensor) -> torch.Tensor:
+    """(..., K, K) → (..., K), through a constant identity: exported to ONNX as a product and a sum
+    whose shapes inference can follow (``Tensor.diagonal`` exports as a shape computed at run time)."""
+    k = int(A.shape[-1])
+    return (A * torch.eye(k, dtype=A.dtype, device=A.device)).sum(-1)
 
 
 def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
@@ -98,7 +105,7 @@ def spd_solve(A: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         (..., K).
     """
     k = A.shape[-1]
-    d = A.diagonal(dim1=-2, dim2=-1).clamp_min(torch.finfo(A.dtype).tiny).rsqrt()  # (..., K)
+    d = _diagonal(A).clamp_min(torch.finfo(A.dtype).tiny).rsqrt()  # (..., K)
     A = A * d[..., :, None] * d[..., None, :]
     b = b * d
     cols: list[torch.Tensor] = []  # columns of the lower factor G (A = G Gᵀ)
@@ -141,7 +148,7 @@ def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: floa
     check_shape(r, [dims["B"], 3, dims["K"]], name="evidence r")
     k = dims["K"]
     eye = torch.eye(k, dtype=M.dtype, device=M.device)
-    s = M.diagonal(dim1=-2, dim2=-1).mean(-1, keepdim=True).clamp_min(1e-8)  # (B, 3, 1)
+    s = _diagonal(M).mean(-1, keepdim=True).clamp_min(1e-8)  # (B, 3, 1)
     rhs = r
     if prior is not None:
         check_shape(prior, [dims["B"], k, 3], name="prior")
