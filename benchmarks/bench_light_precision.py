@@ -27,10 +27,11 @@ from pathlib import Path
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import table  # noqa: E402
 
-from relightnet.sh import cosine_lobe_per_coeff, directional_light, irradiance, sh_basis  # noqa: E402
 from relightnet.sh.light_solve import light_evidence, solve_light  # noqa: E402
+from tests.sh.test_light_solve import front_of_sphere  # noqa: E402  (the test's cases, measured here)
 
 
 def _old_solve(image, albedo, transport, weight, reg):
@@ -52,21 +53,10 @@ def _new_solve(image, albedo, transport, weight, reg):
     return solve_light(light_evidence(image, albedo, transport, weight), None, reg)
 
 
-def _sphere_case(max_angle_deg: float | None, h: int = 32):
-    """Exact float32 maps of a sphere seen from the front. ``None``: the test's disc of radius √0.8
-    on the unit sphere (normals up to 63° from the view); else a cap of normals within that angle."""
-    ys, xs = torch.meshgrid(torch.linspace(-0.9, 0.9, h), torch.linspace(-0.9, 0.9, h), indexing="ij")
-    inside = (xs**2 + ys**2 < 0.8).float()[None, None]
-    if max_angle_deg is not None:
-        scale = torch.sin(torch.deg2rad(torch.tensor(float(max_angle_deg)))) / 0.8**0.5
-        xs, ys = xs * scale, ys * scale
-    n = torch.stack([(1 - xs**2 - ys**2).clamp_min(0.05).sqrt(), xs, -ys], -1)
-    n = n / n.norm(dim=-1, keepdim=True)
-    light = directional_light([0.6, 0.5, 0.62], [0.9, 0.8, 0.7], sharpness=5.0) + 0.1 * torch.eye(9, 3)[:, :1] * 3
-    T = (sh_basis(n, 2) * cosine_lobe_per_coeff(2)).permute(2, 0, 1)[None]
-    albedo = torch.full((1, 3, h, h), 0.5)
-    image = albedo * irradiance(light, n).permute(2, 0, 1)[None]
-    return image * inside, albedo * inside, T * inside, inside, light[None]
+def _sphere_case(max_angle_deg: float | None):
+    """The test's front of a sphere (``None``: normals up to 63° from the view) or a cone of normals."""
+    image, albedo, T, inside, light = front_of_sphere(max_angle_deg=max_angle_deg)
+    return image, albedo, T, inside, light[None]
 
 
 def _generated_items(n: int, res: int):

@@ -85,8 +85,7 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
     Returns:
         ``(pooled (T, K, 3), per_frame (T, K, 3), switches (T,) bool)``.
     """
-    M, r = evidence
-    dims = check_shape(M, ["T", 3, "K", "K"], name="evidence M")
+    dims = check_shape(evidence.M, ["T", 3, "K", "K"], name="evidence M")
     per_frame = solve_light(evidence, prior, reg)
     if isinstance(switches, str) and switches == "auto":
         switches = detect_switches(per_frame.double(), eps=None, noise=SWITCH_NOISE)
@@ -99,7 +98,7 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
     pooled_prior = None
     if prior is not None:
         pooled_prior = (w @ prior.double().flatten(1) / w.sum(1, keepdim=True)).view_as(prior).float()
-    pooled = solve_light(pool_evidence(Evidence(M.double(), r.double()), w), pooled_prior, reg)
+    pooled = solve_light(pool_evidence(evidence, w), pooled_prior, reg)  # pooled and solved in float64
     return pooled.float(), per_frame, switches
 
 

@@ -98,9 +98,14 @@ def test_network_modes(mode):
         assert q.light.dtype == torch.float32
 
 
-def _front_of_sphere(h=32, max_angle_deg=None):
+def front_of_sphere(h=32, max_angle_deg=None):
     """Exact float32 maps of the front of a sphere (normals up to 63° from the view, or within
-    ``max_angle_deg``: a narrower cone is worse conditioned), one albedo, the image they render."""
+    ``max_angle_deg``: a narrower cone is worse conditioned), one albedo, the image they render.
+    Also the cases of ``benchmarks/bench_light_precision.py``.
+
+    Returns:
+        ``(image (1, 3, h, h), albedo (1, 3, h, h), transport (1, 9, h, h), inside (1, 1, h, h), light (9, 3))``.
+    """
     from relightnet.sh import cosine_lobe_per_coeff, sh_basis
 
     ys, xs = torch.meshgrid(torch.linspace(-0.9, 0.9, h), torch.linspace(-0.9, 0.9, h), indexing="ij")
@@ -130,7 +135,7 @@ def test_solve_network_reads_the_image_it_was_given():
     from relightnet.color import linear_to_srgb
 
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=16, levels=2, light_mode="solve", solve_reg=1e-9))
-    image, albedo, T, inside, light = _front_of_sphere()
+    image, albedo, T, inside, light = front_of_sphere()
     cond = torch.linalg.cond(light_evidence(image, albedo, T, inside).M[0, 0])
     assert 1e3 < cond < 1e5
     assert 0 < image.min() and image.max() < 1
@@ -147,7 +152,7 @@ def test_the_order_of_summation_does_not_change_the_light(cone):
     the pixels does the same here. In float64 the sums differ by at most P·ε₆₄ relative, and the
     solve amplifies that by at most cond(M): the light moves by ≤ cond(M)·P·ε₆₄·max|L| (≈ 1e-8 for
     the front view, 5e-6 for the 30° cone, cond ≈ 1e7), where the float32 solve moved by 3e-3 and 0.5."""
-    image, albedo, T, inside, light = _front_of_sphere(max_angle_deg=cone)
+    image, albedo, T, inside, light = front_of_sphere(max_angle_deg=cone)
     ev = light_evidence(image, albedo, T, inside)
     M = ev.M[0, 0]
     cond = float(torch.linalg.cond(M + 1e-6 * M.diagonal().mean() * torch.eye(9, dtype=torch.float64)))
