@@ -15,9 +15,11 @@ from .losses import LossWeights, masked_l1, relight_losses, total_variation
 from .network import (
     DEFAULT_INPUT_SIZE,
     LIGHT_MODES,
+    TRANSPORT_HEADS,
     NetConfig,
     Prediction,
     RelightNet,
+    cone_maps,
     normalize_input,
     pad_to_multiple,
     photo_albedo,
@@ -31,6 +33,6 @@ __all__ = [
     "CropBox", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person", "mask_crop_box",
     "paste_from_box", "predict_image",
     "LossWeights", "masked_l1", "relight_losses", "total_variation",
-    "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "NetConfig", "Prediction", "RelightNet", "normalize_input", "pad_to_multiple",
-    "photo_albedo", "relight", "shade_map", "shading_map",
+    "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "TRANSPORT_HEADS", "NetConfig", "Prediction", "RelightNet", "cone_maps",
+    "normalize_input", "pad_to_multiple", "photo_albedo", "relight", "shade_map", "shading_map",
 ]

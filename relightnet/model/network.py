@@ -2,7 +2,11 @@
 
 An encoder–decoder with skip connections reads a masked image of a person and predicts
 
-- ``transport`` (B, K, H, W): per-pixel SH transport, occlusion included, unbounded;
+- ``transport`` (B, K, H, W): per-pixel SH transport, occlusion included. ``transport_head`` chooses
+  its form: ``"free"`` predicts the K channels directly (KE18, unbounded); ``"cone"`` predicts per
+  pixel a bent normal and the cosine of a visibility cone's half-angle and forms the transport in
+  closed form (:func:`relightnet.sh.cone_transport`: the clamped cosine seen through a cone is
+  zonal), so every prediction is the transport of *some* surface orientation and occlusion;
 - ``albedo`` (B, 3, H, W): linear albedo in (0, 1) (sigmoid);
 - ``light`` (B, K, 3): the scene's SH light (camera-relative light frame). ``light_mode``
   chooses how: ``"head"`` regresses it from the pooled bottleneck and decoder features (KE18);
@@ -31,14 +35,18 @@ from ..checks import InputError, ShapeError, check_shape
 from ..color import srgb_to_linear
 from ..raster.interpolate import to_channels_first, to_channels_last
 from ..render.shading import shade, shading
+from ..sh.irradiance import cone_transport
 from ..sh.light_solve import Evidence, light_evidence, solve_light
 
-__all__ = ["LIGHT_MODES", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input", "relight",
+__all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
+           "RelightNet", "normalize_input", "relight",
            "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
 
 
 #: How the network gets its light (see the module docstring).
 LIGHT_MODES = ("head", "solve", "hybrid")
+#: How the network forms its transport (see the module docstring).
+TRANSPORT_HEADS = ("free", "cone")
 #: Working size of a network whose checkpoint does not say what it was trained at.
 DEFAULT_INPUT_SIZE = 256
 #: Rows per band where full-resolution maps are combined elementwise (bounded temporaries on large photos).
@@ -48,7 +56,8 @@ ROW_BAND = 256
 @dataclass(frozen=True)
 class NetConfig:
     """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``;
-    ``light_mode`` ``head``, ``solve`` or ``hybrid`` (module docstring), ``solve_reg`` the solve's λ.
+    ``light_mode`` ``head``, ``solve`` or ``hybrid`` and ``transport_head`` ``free`` or ``cone`` (module
+    docstring), ``solve_reg`` the solve's λ.
 
     ``input_size`` is not part of the architecture (any H, W that are multiples of 16 run): it is
     the side of the square crops the network was trained on, its working size at inference
@@ -64,10 +73,14 @@ class NetConfig:
     light_mode: str = "head"
     solve_reg: float = 1e-2
     input_size: int = DEFAULT_INPUT_SIZE
+    transport_head: str = "free"
 
     def __post_init__(self) -> None:
         if self.light_mode not in LIGHT_MODES:
             raise InputError(f"net config light_mode: expected one of {LIGHT_MODES}, got {self.light_mode!r}")
+        if self.transport_head not in TRANSPORT_HEADS:
+            raise InputError(f"net config transport_head: expected one of {TRANSPORT_HEADS}, "
+                             f"got {self.transport_head!r}")
         if not self.solve_reg > 0:
             raise InputError(f"net config solve_reg: expected > 0, got {self.solve_reg!r}")
         if isinstance(self.input_size, bool) or not isinstance(self.input_size, int) or self.input_size < 1:
@@ -196,6 +209,23 @@ def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
     return out
 
 
+def cone_maps(raw: torch.Tensor, lmax: int) -> torch.Tensor:
+    """Transport maps from a cone head's raw output (:func:`relightnet.sh.cone_transport`).
+
+    Args:
+        raw: (B, 4, H, W): three channels of an unnormalised bent normal (light frame) and the logit
+            of the cosine of the visibility cone's half-angle (sigmoid: c in (0, 1)).
+        lmax: SH order.
+
+    Returns:
+        (B, K, H, W) transport.
+    """
+    check_shape(raw, ["B", 4, "H", "W"], name="cone head output")
+    axis = F.normalize(raw[:, :3].float(), dim=1, eps=1e-6)
+    c = torch.sigmoid(raw[:, 3].float())
+    return to_channels_first(cone_transport(to_channels_last(axis), c, lmax, check=False))
+
+
 def normalize_input(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
     """KE18 input: sRGB image in [0, 1] → [−1, 1], times the mask, mask appended.
 
@@ -264,7 +294,11 @@ class RelightNet(nn.Module):
         self.down = nn.ModuleList(_Block(widths[i], widths[i + 1], stride=2) for i in range(cfg.levels))
         k = cfg.n_coeffs
         self.solves = cfg.light_mode != "head"
-        self.transport_dec = _Decoder(widths, k + (1 if self.solves else 0))  # + the solve's confidence
+        self.transport_channels = 4 if cfg.transport_head == "cone" else k  # cone: bent normal (3) + aperture
+        self.transport_dec = _Decoder(widths, self.transport_channels + (1 if self.solves else 0))  # + confidence
+        if cfg.transport_head == "cone":
+            with torch.no_grad():  # start at cones facing the camera (light-frame x), half-open (c ≈ 0.18)
+                self.transport_dec.head.bias[:4] = torch.tensor([1.0, 0.0, 0.0, -1.5])
         self.albedo_dec = _Decoder(widths, 3 + (1 if cfg.mask_head else 0))
         pooled = widths[-1] + sum(widths[:-1])
         self.light_head = None
@@ -290,8 +324,8 @@ class RelightNet(nn.Module):
         for d in self.down:
             feats.append(d(feats[-1]))
         out, t_inner = self.transport_dec(feats)
-        k = self.config.n_coeffs
-        transport = out[:, :k]
+        k, tc = self.config.n_coeffs, self.transport_channels
+        transport = cone_maps(out[:, :tc], self.config.lmax) if self.config.transport_head == "cone" else out[:, :k]
         a, a_inner = self.albedo_dec(feats)
         albedo = torch.sigmoid(a[:, :3])
         mask = torch.sigmoid(a[:, 3:4]) if self.config.mask_head else None
@@ -302,7 +336,7 @@ class RelightNet(nn.Module):
             head = self.light_head(torch.cat(pooled, 1)).view(x.shape[0], k, 3)
         if not self.solves:
             return Prediction(albedo=albedo, transport=transport, light=head, mask=mask)
-        return self._solve(x, albedo, transport, out[:, k:], head, mask)
+        return self._solve(x, albedo, transport, out[:, tc:], head, mask)
 
     def _solve(self, x, albedo, transport, conf_logit, head, mask) -> Prediction:
         """The light that makes the maps explain the input image (module docstring)."""

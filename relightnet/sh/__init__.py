@@ -21,7 +21,7 @@ from .frames import (
     world_to_light,
 )
 from .io import LIGHT_SUFFIXES, load_light, load_light_sequence, resize_sh, save_light, save_light_sequence
-from .irradiance import Irradiance, cosine_lobe, cosine_lobe_per_coeff, irradiance
+from .irradiance import Irradiance, cone_band_factors, cone_transport, cosine_lobe, cosine_lobe_per_coeff, irradiance
 from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve, stack_evidence
 from .metrics import (
     chromaticity_error,
@@ -58,7 +58,7 @@ __all__ = [
     "random_fibonacci_sphere",
     "WORLD_TO_LIGHT", "camera_normals_to_light", "light_to_world", "rotation_world_to_light",
     "world_to_light",
-    "Irradiance", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
+    "Irradiance", "cone_band_factors", "cone_transport", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
     "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve", "stack_evidence",
     "project", "project_envmap", "radiance", "sh_to_envmap",
     "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",

@@ -1,4 +1,5 @@
-"""Clamped-cosine convolution: Â_l and irradiance E(n) = Σ Â_l L_lm Y_lm(n)."""
+"""Clamped-cosine convolution: Â_l and irradiance E(n) = Σ Â_l L_lm Y_lm(n); the same lobe restricted
+to a cone of visibility (:func:`cone_transport`)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from torch import nn
 from ..checks import check_finite, check_sh_count, check_shape
 from .basis import sh_basis, sh_degrees
 
-__all__ = ["cosine_lobe", "cosine_lobe_per_coeff", "irradiance", "Irradiance"]
+__all__ = ["cosine_lobe", "cosine_lobe_per_coeff", "cone_band_factors", "cone_transport", "irradiance", "Irradiance"]
 
 
 def cosine_lobe(l: int) -> float:
@@ -38,6 +39,67 @@ def cosine_lobe_per_coeff(lmax: int, dtype=torch.float32, device=None) -> torch.
     """(K,) vector of Â_l repeated over each band's 2l+1 coefficients."""
     a = torch.tensor([cosine_lobe(l) for l in range(lmax + 1)], dtype=dtype, device=device)
     return a[sh_degrees(lmax, device=device)]
+
+
+def _t_legendre_integrals(lmax: int) -> list[list[float]]:
+    """Per band l, the coefficients c_j of ∫_c^1 t P_l(t) dt = Σ_j c_j (1 − c^(j+2)) (power series of P_l)."""
+    import numpy as np
+    from numpy.polynomial import legendre
+
+    out = []
+    for l in range(lmax + 1):
+        p = legendre.leg2poly(np.eye(l + 1)[l])  # P_l's power-series coefficients, low degree first
+        out.append([float(a) / (j + 2) for j, a in enumerate(p)])
+    return out
+
+
+def cone_band_factors(cos_aperture: torch.Tensor, lmax: int) -> torch.Tensor:
+    """Band factors g_l(c) of the clamped cosine seen through a cone of half-angle α = acos(c) about its axis.
+
+    The visibility of a point modelled as a cone around an axis b (a "bent normal") with the cosine
+    taken about b: ``∫_{ω·b ≥ c} (ω·b) Y_lm(ω) dω = g_l(c) Y_lm(b)`` with
+    ``g_l(c) = 2π ∫_c^1 t P_l(t) dt`` (the function is zonal about b: Funk–Hecke). ``c = 0`` (an open
+    hemisphere) gives :func:`cosine_lobe`: g = (π, 2π/3, π/4, ...); ``c → 1`` (fully occluded) gives 0.
+    Polynomial in c, so differentiable everywhere.
+
+    Args:
+        cos_aperture: (...) c in [0, 1] (values outside are clamped).
+        lmax: SH order.
+
+    Returns:
+        (..., lmax + 1) g_l(c).
+    """
+    c = cos_aperture.clamp(0.0, 1.0)
+    bands = []
+    for coeffs in _t_legendre_integrals(lmax):
+        g = torch.zeros_like(c)
+        for j, a in enumerate(coeffs):
+            if a:
+                g = g + a * (1 - c ** (j + 2))
+        bands.append(2 * math.pi * g)
+    return torch.stack(bands, -1)
+
+
+def cone_transport(axis: torch.Tensor, cos_aperture: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
+    """SH transport of a point whose unoccluded directions form a cone: ``T_k = g_l(c) Y_k(b)``.
+
+    The closed form of ``∫ V(ω) max(b·ω, 0) Y_k(ω) dω`` (docs/design.md's transport, no 1/π) when V is
+    the indicator of the cone ``ω·b ≥ c`` and the cosine is taken about the cone's axis b
+    (:func:`cone_band_factors`). With c = 0 it is the unoccluded transport Â_l Y_k(n).
+
+    Args:
+        axis: (..., 3) unit cone axes (bent normals) in the light frame.
+        cos_aperture: (...) cosines of the cones' half-angles, in [0, 1].
+        lmax: SH order.
+        check: validate that ``axis`` holds unit vectors.
+
+    Returns:
+        (..., K) transport, K = (lmax + 1)².
+    """
+    check_shape(cos_aperture, list(axis.shape[:-1]), name="cos_aperture")
+    Y = sh_basis(axis, lmax, check=check)
+    g = cone_band_factors(cos_aperture.to(Y.dtype), lmax)
+    return Y * g[..., sh_degrees(lmax, device=Y.device)]
 
 
 def irradiance(sh: torch.Tensor, normals: torch.Tensor, check: bool = True) -> torch.Tensor:

@@ -90,3 +90,30 @@ def test_photo_albedo_divides_the_photo_by_the_shading():
     torch.testing.assert_close(photo_albedo(photo, dark), cnn)
     with pytest.raises(ShapeError):
         photo_albedo(photo[:, :, :8], pred)
+
+
+def test_cone_head_predicts_the_transport_of_a_cone():
+    from relightnet.model import cone_maps
+    from relightnet.sh import cone_band_factors, cone_transport
+
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32, transport_head="cone", light_mode="hybrid"))
+    x = normalize_input(torch.rand(2, 3, 32, 32), torch.ones(2, 1, 32, 32))
+    p = net(x)
+    assert p.transport.shape == (2, 9, 32, 32) and p.confidence.shape == (2, 1, 32, 32)
+    # Every pixel is the transport of some cone: the l = 0 term within [0, g_0(0) Y_00] and the l = 1 vector
+    # no longer than g_1 of that cone, whatever the weights.
+    g = cone_band_factors(torch.tensor([0.0]), 2)[0]
+    y00 = 0.28209479177387814
+    t0 = p.transport[:, 0] / y00
+    assert t0.min() >= 0 and t0.max() <= g[0] + 1e-5
+    raw = torch.randn(1, 4, 3, 5)
+    axis = torch.nn.functional.normalize(raw[:, :3], dim=1).permute(0, 2, 3, 1)
+    want = cone_transport(axis, torch.sigmoid(raw[:, 3]), 2).permute(0, 3, 1, 2)
+    torch.testing.assert_close(cone_maps(raw, 2), want)
+    (p.transport.mean() + p.light.mean() + p.albedo.mean()).backward()
+    assert all(q.grad is not None for q in net.parameters())
+
+
+def test_unknown_transport_head_is_refused():
+    with pytest.raises(InputError, match="transport_head"):
+        NetConfig(transport_head="spline")
