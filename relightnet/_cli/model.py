@@ -34,6 +34,11 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
     out = out_dir(args.out)
+    if (args.data is None) == (args.photos is None):
+        raise InputError("--data, --photos: give one, not both" if args.data else
+                         "give --data (a dataset folder made by 'relightnet synth') or --photos (a folder of photos)")
+    if args.photos is not None:
+        return _evaluate_photos(args, out)
     if args.clips and not args.light:
         raise InputError("--clips: only with --light (the light report)")
     unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline)) if given]
@@ -70,6 +75,24 @@ def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
     with atomic_write(out / "light_metrics.json", "w") as f:
         json.dump(result, f, indent=2)
     logger.info("light report (%s):\n%s", out / "light_report.md", text)
+    return 0
+
+
+def _evaluate_photos(args: argparse.Namespace, out: Path) -> int:
+    from ..model.checkpoint import load_model
+    from ..pipeline.photo_checks import format_photo_report, list_photos, photo_checks, write_photo_report
+
+    unused = [o for o, given in (("--light", args.light), ("--clips", args.clips), ("--ablation", args.ablation),
+                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test")) if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used with --photos (the real-photo checks)")
+    list_photos(args.photos)  # a missing folder, or one without photos, fails before the model loads
+    model = load_model(args.checkpoint, device=args.device)
+    name = str(args.checkpoint or "shipped model")
+    result = photo_checks(model, args.photos)
+    md, js = write_photo_report(result, out, name)
+    print(format_photo_report(result, name))  # the command's own output (stdout), not a log message
+    logger.info("wrote %s and %s", md, js)
     return 0
 
 
@@ -115,17 +138,26 @@ def register(sub) -> None:
     p.set_defaults(func=run_train, interrupt_hint=lambda a: f"run the same command with --resume to continue "
                    f"from {a.out}/last.pt")
 
-    p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines.",
+    p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines, or on real "
+                    "photos of people (--photos).",
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"
                     "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
                     "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
                     "--data data/medium --out reports/ablation\n"
                     "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
-                    "--out reports/light\n")
+                    "--out reports/light\n"
+                    "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
+                    "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n")
     add_model_args(p, backend=False)
-    p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
+    p.add_argument("--data", help="dataset folder made by 'relightnet synth' (or --photos)")
+    p.add_argument("--photos", metavar="DIR",
+                   help="the real-photo checks instead, on a folder of photos of people (no masks: the person "
+                        "segmentation finds them): side contrast under a light from the left and from the right, "
+                        "and the light's round trip through relighting and estimation (photo_checks.md, "
+                        "photo_checks.json)")
     p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
-    p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png")
+    p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png "
+                   "(default: out/evaluate)")
     p.add_argument("--no-baseline", action="store_true", help="skip the mean-albedo/transport/light baseline")
     p.add_argument("--ablation", metavar="CHECKPOINT",
                    help="KE18's occlusion ablation: a twin trained on transport that ignores occlusion "

@@ -1,6 +1,7 @@
 """Whole jobs: relight an image or a video (2D path), put a relit avatar into a video (3D path),
-compare the 2D and 3D paths against ground truth, the demo; the dressed avatar, its default albedo's
-smooth garment edges, and the clean plate that lets the avatar take the target person's place."""
+compare the 2D and 3D paths against ground truth, check the 2D path on real photos, the demo; the
+dressed avatar, its default albedo's smooth garment edges, and the clean plate that lets the avatar
+take the target person's place."""
 
 from .avatar import AvatarResult, avatar
 from .backends import BACKENDS, OnnxPredictor, Predictor, TorchPredictor, as_predictor, make_predictor
@@ -18,6 +19,7 @@ from .clean_plate import (
 from .compare import ClipOutputs, CompareResult, clip_metrics, compare, compare_clip, source_light
 from .demo import run_demo
 from .outfits import OUTFIT_COLORS, OUTFIT_SLOTS, DressedBody, OutfitDraw, avatar_look, draw_outfit, dressed_body
+from .photo_checks import format_photo_report, photo_checks, write_photo_report
 from .relight_image import Relit, RelitImage, match_exposure, over_photo, relight_image, relight_prediction
 from .relight_video import relight_video
 from .scene import avatar_albedo, load_body, load_camera, motion_params, open_motion
@@ -36,4 +38,5 @@ __all__ = [
     "check_stand_in", "stand_in_frames", "avatar_look",
     "OUTFIT_COLORS", "OUTFIT_SLOTS", "DressedBody", "OutfitDraw", "draw_outfit", "dressed_body",
     "boundary_jaggedness", "smooth_default_albedo", "WalkingTarget", "walking_target",
+    "format_photo_report", "photo_checks", "write_photo_report",
 ]
