@@ -27,6 +27,7 @@ from .network import (
     shade_map,
     shading_map,
 )
+from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx, pose_encoder
 
 __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
@@ -35,4 +36,5 @@ __all__ = [
     "LossWeights", "masked_l1", "relight_losses", "total_variation",
     "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "TRANSPORT_HEADS", "NetConfig", "Prediction", "RelightNet", "cone_maps",
     "normalize_input", "pad_to_multiple", "photo_albedo", "relight", "shade_map", "shading_map",
+    "POSE_TAPS", "GraphModule", "Tap", "find_stride_taps", "load_onnx", "pose_encoder",
 ]
