@@ -16,6 +16,9 @@ An encoder–decoder with skip connections reads a masked image of a person and 
   prior. Any batch size and any H, W that are multiples of 16 (no fixed reshape as in KE18);
 - optionally ``mask`` (B, 1, H, W) logits, so the 2D path runs without a user mask.
 
+``encoder="pose"`` adds, at every level of the encoder, the projected features of MediaPipe's pose
+network (trained on photographs of real people; :mod:`.pose_features`) to the network's own.
+
 Normalisation (``normalize_input``) is KE18's: the 8-bit sRGB image mapped to [−1, 1] and
 multiplied by the mask, with the mask as a fourth input channel. Images are RGB everywhere
 inside relightnet; BGR only exists in Kanamori–Endo light files (see relightnet.sh.io).
@@ -38,7 +41,7 @@ from ..render.shading import shade, shading
 from ..sh.irradiance import cone_transport
 from ..sh.light_solve import Evidence, light_evidence, solve_light
 
-__all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
+__all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
            "RelightNet", "normalize_input", "relight",
            "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
 
@@ -47,6 +50,8 @@ __all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "cone_maps", "DEFAULT_INPUT_SIZE", 
 LIGHT_MODES = ("head", "solve", "hybrid")
 #: How the network forms its transport (see the module docstring).
 TRANSPORT_HEADS = ("free", "cone")
+#: What the network reads the person with (see the module docstring).
+ENCODERS = ("own", "pose")
 #: Working size of a network whose checkpoint does not say what it was trained at.
 DEFAULT_INPUT_SIZE = 256
 #: Rows per band where full-resolution maps are combined elementwise (bounded temporaries on large photos).
@@ -57,7 +62,9 @@ ROW_BAND = 256
 class NetConfig:
     """Architecture: ``width`` channels at full resolution, doubled per level up to ``max_width``;
     ``light_mode`` ``head``, ``solve`` or ``hybrid`` and ``transport_head`` ``free`` or ``cone`` (module
-    docstring), ``solve_reg`` the solve's λ.
+    docstring), ``solve_reg`` the solve's λ; ``encoder`` ``own`` or ``pose`` (the shipped pose network's
+    features added at every level, :mod:`.pose_features`; frozen, or trained after the stride
+    ``encoder_train_after``).
 
     ``input_size`` is not part of the architecture (any H, W that are multiples of 16 run): it is
     the side of the square crops the network was trained on, its working size at inference
@@ -74,6 +81,8 @@ class NetConfig:
     solve_reg: float = 1e-2
     input_size: int = DEFAULT_INPUT_SIZE
     transport_head: str = "free"
+    encoder: str = "own"
+    encoder_train_after: int = 0
 
     def __post_init__(self) -> None:
         if self.light_mode not in LIGHT_MODES:
@@ -81,6 +90,13 @@ class NetConfig:
         if self.transport_head not in TRANSPORT_HEADS:
             raise InputError(f"net config transport_head: expected one of {TRANSPORT_HEADS}, "
                              f"got {self.transport_head!r}")
+        if self.encoder not in ENCODERS:
+            raise InputError(f"net config encoder: expected one of {ENCODERS}, got {self.encoder!r}")
+        if self.encoder_train_after not in (0, 2, 4, 8, 16):
+            raise InputError("net config encoder_train_after: expected 0 (frozen) or a stride 2, 4, 8 or 16 of "
+                             f"the pose network after which it trains, got {self.encoder_train_after!r}")
+        if self.encoder == "pose" and self.levels > 4:
+            raise InputError(f"net config levels: the pose encoder has 4 levels below the first, got {self.levels}")
         if not self.solve_reg > 0:
             raise InputError(f"net config solve_reg: expected > 0, got {self.solve_reg!r}")
         if isinstance(self.input_size, bool) or not isinstance(self.input_size, int) or self.input_size < 1:
@@ -291,6 +307,11 @@ class RelightNet(nn.Module):
         widths = [min(cfg.width * 2**i, cfg.max_width) for i in range(cfg.levels + 1)]
         self.widths = widths
         self.stem = _Block(4, widths[0])
+        self.pose = None
+        if cfg.encoder == "pose":
+            from .pose_features import PoseFeatures
+
+            self.pose = PoseFeatures(widths, train_after=cfg.encoder_train_after or None)
         self.down = nn.ModuleList(_Block(widths[i], widths[i + 1], stride=2) for i in range(cfg.levels))
         k = cfg.n_coeffs
         self.solves = cfg.light_mode != "head"
@@ -321,8 +342,11 @@ class RelightNet(nn.Module):
                 f"input: H and W must be multiples of {m}, got {tuple(x.shape[-2:])} (use pad_to_multiple)"
             )
         feats = [self.stem(x)]
-        for d in self.down:
-            feats.append(d(feats[-1]))
+        extra = self.pose(x) if self.pose is not None else None
+        if extra is not None:
+            feats[0] = feats[0] + extra[0]
+        for i, d in enumerate(self.down):
+            feats.append(d(feats[-1]) if extra is None else d(feats[-1]) + extra[i + 1])
         out, t_inner = self.transport_dec(feats)
         k, tc = self.config.n_coeffs, self.transport_channels
         transport = cone_maps(out[:, :tc], self.config.lmax) if self.config.transport_head == "cone" else out[:, :k]

@@ -93,3 +93,18 @@ def test_architecture_and_storage_are_bounded(tmp_path):
     torch.save(_state(train_config={"x": laugh}), tmp_path / "y.pt")
     with pytest.raises(TypeError, match="more than 100000 values"):
         release_checkpoint(tmp_path / "y.pt", tmp_path / "z.pt")
+
+
+def test_pose_encoder_checkpoint_holds_only_what_trained(tmp_path):
+    cfg = dataclasses.replace(CFG, encoder="pose", transport_head="cone")
+    net = RelightNet(cfg)
+    with torch.no_grad():
+        for p in net.pose.proj.parameters():
+            p.normal_()
+    save_checkpoint(tmp_path / "c.pt", net, cfg, step=2)
+    state = torch.load(tmp_path / "c.pt", weights_only=True)
+    assert not any(k.startswith("pose.encoder.") for k in state["model"])  # frozen: the package's own file
+    m = load_model(tmp_path / "c.pt").eval()
+    x = torch.rand(1, 4, 32, 32)
+    with torch.no_grad():
+        torch.testing.assert_close(m(x).transport, net.eval()(x).transport)

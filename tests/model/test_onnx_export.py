@@ -89,3 +89,26 @@ def test_bad_exports_write_nothing(tmp_path):
         export_onnx(net, tmp_path / "m.onnx", smoothing="no-such-smoother")
     assert list(tmp_path.iterdir()) == []
     assert "ema" in STREAMING_SMOOTHING and "pooled" in STREAMING_SMOOTHING
+
+
+@pytest.mark.slow
+def test_pose_encoder_and_cone_head_export_into_one_graph(tmp_path):
+    cfg = NetConfig(width=8, max_width=32, light_hidden=32, light_mode="hybrid", transport_head="cone",
+                    encoder="pose", input_size=32)
+    torch.manual_seed(0)
+    net = RelightNet(cfg).eval()
+    with torch.no_grad():
+        for p in net.pose.proj.parameters():
+            p.normal_(0, 0.1)
+    path = export_onnx(net, tmp_path / "m.onnx", smoothing="ema")
+    assert len(list(tmp_path.iterdir())) == 1  # one file: the pose encoder's weights are inside
+    ref = StreamingRelighter(net, make_smoother("ema")).eval()
+    img, mask = _inputs(2, 64, 32)
+    state, first = torch.zeros(2, 1, 9, 3), torch.tensor([True, True])
+    outs = OnnxRelighter(path).run({"image": img.numpy(), "mask": mask.numpy(), "light_state": state.numpy(),
+                                    "is_first": first.numpy()})
+    with torch.no_grad():
+        expected = ref(img, mask, state, first)
+    for o, e in zip(outs, expected, strict=True):
+        scale = max(1.0, float(e.abs().max()))
+        assert np.abs(o - e.numpy()).max() <= 1e-4 * scale
