@@ -23,7 +23,8 @@ def run_train(args: argparse.Namespace) -> int:
     if not Path(args.data, "manifest.json").is_file():
         raise InputError(f"--data {args.data}: expected a dataset folder made by 'relightnet synth' (no manifest.json)")
     out = out_dir(args.out)
-    last = train(cfg, args.data, out, resume=args.resume, device=args.device)
+    last = train(cfg, args.data, out, resume=args.resume, device=args.device, resume_from=args.resume_from,
+                 candidate=out_file(args.candidate, "--candidate", (".pt",)) if args.candidate else None)
     logger.info("training finished: %s", json.dumps({k: round(v, 5) for k, v in last.items()}) if last else "-")
     return 0
 
@@ -134,6 +135,12 @@ def register(sub) -> None:
     p.add_argument("--data", required=True, help="dataset folder made by 'relightnet synth'")
     p.add_argument("--out", required=True, help="run folder: checkpoints (last.pt), metrics.jsonl, loss.png")
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument("--resume-from", metavar="CKPT", default=None,
+                   help="continue from this checkpoint (a committed candidate, train/checkpoints/) while OUT has "
+                        "no last.pt; then from OUT/last.pt")
+    p.add_argument("--candidate", metavar="PATH", default=None,
+                   help="also write the run's carry-over checkpoint here at every checkpoint (weights, step, "
+                        "schedule, config and data recipe; no optimiser state; at most 15 MB)")
     p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
     p.set_defaults(func=run_train, interrupt_hint=lambda a: f"run the same command with --resume to continue "
                    f"from {a.out}/last.pt")

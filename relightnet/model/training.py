@@ -33,7 +33,8 @@ from .network import NetConfig, RelightNet, normalize_input, shade_map
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "TrainData"]
+__all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "TrainData", "save_candidate",
+           "CANDIDATE_BYTES"]
 
 
 @dataclass(frozen=True)
@@ -220,19 +221,48 @@ def _new_model(cfg: TrainConfig, data: TrainData, device: str, resume: bool) -> 
 
 
 def _resume(ckpt: Path, cfg: TrainConfig, model, opt, sched, device: str) -> int:
-    """Restore model, optimiser and schedule from ``ckpt`` (made with the same config): its step."""
+    """Restore model, optimiser and schedule from ``ckpt`` (made with the same config): its step.
+
+    A candidate (:func:`save_candidate`) holds no optimiser state: the weights, step and schedule
+    continue and Adam's moments start again from zero (logged)."""
     state = load_checkpoint(ckpt, map_location=device)
     # Keys added to TrainConfig later take their defaults in older checkpoints.
+    if not isinstance(state.get("train_config"), dict) or not isinstance(state.get("scheduler"), dict):
+        raise InputError(f"{ckpt}: not a training checkpoint (no train_config or scheduler state)")
     if {**TrainConfig().to_dict(), **state["train_config"]} != cfg.to_dict():
         raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
     model.load_state_dict(state["model"])
-    opt.load_state_dict(state["optimizer"])
+    if "optimizer" in state:
+        opt.load_state_dict(state["optimizer"])
+    else:
+        logger.info("%s: a candidate without optimiser state; Adam's moments restart at step %d", ckpt, state["step"])
     sched.load_state_dict(state["scheduler"])
     return state["step"]
 
 
+#: Largest candidate checkpoint committed to the repository (train/checkpoints/).
+CANDIDATE_BYTES = 15 * 2**20
+
+
+def save_candidate(path, model: RelightNet, net_cfg: NetConfig, step: int, sched, cfg: TrainConfig,
+                   data_dir) -> Path:
+    """Write a run's carry-over checkpoint: weights, step, schedule, training config and the data's
+    recipe (the ``relightnet synth`` config of ``data_dir``, so a fresh machine regenerates it), no
+    optimiser state; at most :data:`CANDIDATE_BYTES`. ``relightnet train --resume-from`` continues it."""
+    from ..io.documents import read_document
+
+    manifest = read_document(Path(data_dir) / "manifest.json", "dataset manifest", yaml_ok=False)
+    recipe = manifest.get("config") if isinstance(manifest, dict) else None
+    out = save_checkpoint(path, model, net_cfg, step=step, scheduler=sched, train_config=cfg.to_dict(),
+                          data_recipe=recipe if isinstance(recipe, dict) else {})
+    if out.stat().st_size > CANDIDATE_BYTES:
+        out.unlink()
+        raise InputError(f"{path}: the candidate is larger than {CANDIDATE_BYTES >> 20} MB; use a smaller network")
+    return out
+
+
 def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str = "cpu",
-          stop_after: int | None = None) -> dict:
+          stop_after: int | None = None, resume_from=None, candidate=None) -> dict:
     """Train (or continue training) a :class:`RelightNet`.
 
     Args:
@@ -242,6 +272,9 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         resume: continue from ``out_dir/last.pt`` (bit-identical continuation).
         device: ``cpu`` or ``cuda``.
         stop_after: stop (with a checkpoint) after this many steps of this call, for tests.
+        resume_from: continue from this checkpoint instead (a run's ``last.pt`` or a committed
+            candidate) when ``out_dir`` has no ``last.pt`` yet; the same training config is required.
+        candidate: also write the carry-over checkpoint here at every checkpoint (:func:`save_candidate`).
 
     Returns:
         The last logged metrics.
@@ -257,11 +290,12 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items)
-    model, net_cfg = _new_model(cfg, data, device, resume)
+    model, net_cfg = _new_model(cfg, data, device, resume or resume_from is not None)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(cfg))
     ckpt = out / "last.pt"
-    step = _resume(ckpt, cfg, model, opt, sched, device) if resume else 0
+    source = ckpt if resume or (resume_from is not None and ckpt.exists()) else resume_from
+    step = _resume(Path(source), cfg, model, opt, sched, device) if source is not None else 0
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
     aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
     weights = LossWeights(**cfg.loss)
@@ -298,6 +332,8 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
                           or (stop_after is not None and done_here == stop_after)):
             save_checkpoint(ckpt, model, net_cfg, step=step, optimizer=opt, scheduler=sched,
                             train_config=cfg.to_dict(), data=str(data_dir))
+            if candidate is not None:
+                save_candidate(candidate, model, net_cfg, step, sched, cfg, data_dir)
     if rank == 0 and step >= cfg.steps:
         plot_losses(log_path, out / "loss.png")
     if world > 1:

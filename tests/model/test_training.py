@@ -197,3 +197,24 @@ def test_training_data_subset_half_precision_and_bf16(tiny_dataset, tmp_path):
         TrainConfig(train_items=0)
     with pytest.raises(InputError, match="precision"):
         TrainConfig(precision="fp8")
+
+
+def test_a_candidate_carries_a_run_over_to_a_fresh_machine(tiny_dataset, tmp_path):
+    from relightnet.model.training import CANDIDATE_BYTES
+
+    cfg = TrainConfig(steps=4, batch_size=2, warmup=1, log_every=1, checkpoint_every=2, net=NET, threads=1)
+    cand = tmp_path / "checkpoints" / "cand.pt"
+    cand.parent.mkdir()
+    train(cfg, tiny_dataset, tmp_path / "first", stop_after=2, candidate=cand)
+    state = load_checkpoint(cand)
+    assert "optimizer" not in state and state["step"] == 2 and state["train_config"] == cfg.to_dict()
+    manifest = json.loads((Path(tiny_dataset) / "manifest.json").read_text())
+    assert state["data_recipe"] == manifest["config"]  # the data is regenerated from its recipe
+    assert cand.stat().st_size <= CANDIDATE_BYTES
+    # A fresh machine: no run folder, only the committed candidate.
+    train(cfg, tiny_dataset, tmp_path / "fresh", resume_from=cand)
+    steps = [r["step"] for r in _losses(tmp_path / "fresh")]
+    assert steps == [3, 4] and load_checkpoint(tmp_path / "fresh" / "last.pt")["step"] == 4
+    full = TrainConfig(**{**cfg.to_dict(), "steps": 5})
+    with pytest.raises(InputError, match="different training config"):
+        train(full, tiny_dataset, tmp_path / "other", resume_from=cand)
