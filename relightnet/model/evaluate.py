@@ -19,7 +19,7 @@ from ..checks import InputError
 from ..color import linear_to_srgb
 from ..io import atomic_write, write_image
 from .network import Prediction, RelightNet, photo_albedo, shade_map, shading_map
-from .training import TrainData, batch_to_input
+from .training import batch_to_input
 
 __all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation", "write_report"]
 
@@ -44,15 +44,28 @@ def _psnr_ssim(pred: torch.Tensor, gt: torch.Tensor, mask: torch.Tensor) -> tupl
 
 
 def baseline_from_train(data_dir, target: str = "transport") -> dict:
-    """Trivial predictors from the training split: mean albedo, mean transport, mean light."""
-    d = TrainData(data_dir, "train", target)
-    m = d.tensors["mask"]
-    n = m.sum().clamp_min(1)
-    return {
-        "albedo": (d.tensors["albedo"] * m).sum((0, 2, 3)) / n,
-        "transport": (d.tensors["transport"] * m).sum((0, 2, 3)) / n,
-        "light": d.tensors["light"].mean(0),
-    }
+    """Trivial predictors from the training split: mean albedo, mean transport (over the people's
+    pixels), mean light. Streams the split item by item (memory does not grow with the split).
+
+    Returns:
+        ``albedo`` (3,), ``transport`` (K,), ``light`` (K, 3).
+    """
+    from ..data.dataset import SynthDataset
+
+    ds = SynthDataset(data_dir, "train", fields=("mask", "albedo", "light", target), cache_shards=1)
+    if len(ds) == 0:
+        raise InputError(f"{data_dir}: the train split is empty")
+    sums: dict = {}
+    for i in range(len(ds)):
+        item = ds[i]
+        m = item["mask"].double()
+        parts = {"albedo": (item["albedo"].double() * m).sum((1, 2)), "light": item["light"].double(),
+                 "transport": (item[target].double() * m).sum((1, 2)), "pixels": m.sum()}
+        for k, v in parts.items():
+            sums[k] = sums[k] + v if k in sums else v
+    n = sums["pixels"].clamp_min(1)
+    return {"albedo": (sums["albedo"] / n).float(), "transport": (sums["transport"] / n).float(),
+            "light": (sums["light"] / len(ds)).float()}
 
 
 @torch.no_grad()

@@ -24,6 +24,14 @@ def test_metrics_and_baseline(tiny_dataset, tmp_path):
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32)).eval()
     base = baseline_from_train(tiny_dataset)
     assert base["albedo"].shape == (3,) and base["transport"].shape == (9,) and base["light"].shape == (9, 3)
+    # Streamed item by item, it equals the means over the split held in memory.
+    from relightnet.model.training import TrainData
+
+    d = TrainData(tiny_dataset, "train")
+    m = d.tensors["mask"]
+    torch.testing.assert_close(base["transport"], (d.tensors["transport"] * m).sum((0, 2, 3)) / m.sum())
+    torch.testing.assert_close(base["albedo"], (d.tensors["albedo"] * m).sum((0, 2, 3)) / m.sum())
+    torch.testing.assert_close(base["light"], d.tensors["light"].mean(0))
     r = evaluate(net, tiny_dataset, "test", baseline=base, sheet=tmp_path / "sheet.png")
     assert r["n"] == 3
     for who in ("model", "baseline"):
