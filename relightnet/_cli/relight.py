@@ -29,11 +29,12 @@ def run(args: argparse.Namespace) -> int:
 
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
-    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
+    # without --save-maps the CNN's maps are never held at the photo's size (memory budget)
+    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo,
+                        maps=maps is not None)
     del image, mask
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
-    # without --save-maps the full-size maps are freed before the image is encoded (memory budget)
     relit, res = res.image, (res if maps is not None else None)
     write_image(out, relit, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
     if maps is not None:
