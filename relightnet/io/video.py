@@ -25,6 +25,7 @@ import torch
 from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
 from .image import limit_hint, open_limited, to_uint8, upright
+from .limits import check_pixels, check_video_expansion
 
 logger = logging.getLogger(__name__)
 
@@ -50,11 +51,18 @@ class VideoInfo:
 def _open(path):
     import av
 
+    from .probe import header_size
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: video file not found")
     try:
+        size = header_size(path)  # an image format played as a video (GIF, WebP, TIFF): its canvas
+        if size is not None:
+            check_pixels(*size, f"{path}")
         return open_limited(path, "a video")  # frame size checked before any frame is decoded
+    except InputError:
+        raise
     except (av.error.FFmpegError, OSError, ValueError) as e:
         raise InputError(f"{path}: unreadable video ({type(e).__name__}: {e})") from None
 
@@ -88,19 +96,30 @@ def count_frames(path) -> int:
     say 20 million frames, so it is never used to size anything. Demuxing reads each packet's
     header and data only (milliseconds per thousand frames) and stops where the file's data ends.
     """
+    h, w = video_info(path).size  # the size, rate and first frame checked as every reader does
+    return _count_checked(path, w, h)
+
+
+def _count_checked(path, width: int, height: int) -> int:
+    """The packets of the video stream, refused when they decode to far more than the file
+    holds (:func:`~relightnet.io.limits.check_video_expansion`: a decompression bomb)."""
     import av
 
-    video_info(path)  # the size, rate and first frame checked as every reader does
     with contextlib.closing(_open(path)) as c:
         try:
-            return sum(1 for p in c.demux(video=0) if p.size)
+            n = sum(1 for p in c.demux(video=0) if p.size)
         except (av.error.FFmpegError, ValueError) as e:
             raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+    check_video_expansion(n, width, height, Path(path).stat().st_size, f"{path}")
+    return n
 
 
 def read_video(path) -> Iterator[np.ndarray]:
     """Yield the frames of a video one at a time (memory does not grow with length), upright
     (a display rotation stored by the camera is applied).
+
+    Before the first frame is yielded, the file's packets are counted: a video that decodes to
+    far more pixels than its file holds is refused (:func:`count_frames`).
 
     Yields:
         (H, W, 3) uint8 RGB frames.
@@ -109,8 +128,12 @@ def read_video(path) -> Iterator[np.ndarray]:
 
     with contextlib.closing(_open(path)) as c:
         try:
-            for frame in c.decode(video=0):
+            for i, frame in enumerate(c.decode(video=0)):
+                if i == 0:
+                    _count_checked(path, frame.width, frame.height)
                 yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
+        except InputError:
+            raise
         except (av.error.FFmpegError, ValueError) as e:
             raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
 

@@ -85,7 +85,10 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 empty.append(t)
                 n += 1
                 continue
-            pred = predict.crop(img, mask)  # the maps stay at the working size: pasted band by band
+            try:  # the maps stay at the working size: pasted band by band
+                pred = predict.crop(img, mask)
+            except InputError as e:  # a frame the CNN cannot take (e.g. blank, for its mask head): name it
+                raise InputError(f"{video}: frame {t}: {e}") from None
             if smoother is None:  # auto: pooled or ema, whether the network solves its light
                 smoother = _smoother(smoothing, pred.evidence is not None, predict, alpha)
             kw = {"evidence": pred.evidence, "prior": pred.light_head} if getattr(smoother, "uses_evidence", False) \
