@@ -107,7 +107,8 @@ def resources(names: list[str]) -> None:
         line = (lines[-1] if lines else "").replace("|", "/")
         line = line if len(line) <= 110 else line[:107] + "..."
         status = "timed out" if res.timed_out else str(res.rc)
-        print(f"| {name} | {size / 1e3:,.0f} KB | {case.argv[0]} | {status} | {res.rss / 2**20:,.0f} MiB | "
+        command = next(a for a in case.argv if not a.startswith("-"))
+        print(f"| {name} | {size / 1e3:,.0f} KB | {command} | {status} | {res.rss / 2**20:,.0f} MiB | "
               f"{res.wall:.1f} s | {', '.join(res.leftovers) or 'nothing'} | "
               f"{line if res.rc else 'ok: ' + ', '.join(case.outputs[:1])} |", flush=True)
 

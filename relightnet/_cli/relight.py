@@ -19,37 +19,50 @@ def run(args: argparse.Namespace) -> int:
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
+    from ..io import write_image
+    from ..pipeline.backends import make_predictor
+    from ..pipeline.relight_image import relight_image
+
+    light = load_single_light(args.light)
+    model = make_predictor(args.backend, args.checkpoint, args.device)
+    # without --save-maps the CNN's maps are never held at the photo's size (memory budget)
+    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo,
+                        maps=maps is not None)
+    del image, mask
+    if res.mask_predicted:
+        logger.info("no --mask: the person was found by the model's mask head")
+    relit, kept = res.image, {"prediction": res.prediction, "albedo": res.albedo, "light": res.light}
+    del res  # from here each full-size map is freed once written
+    write_image(out, relit, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
+    del relit
+    if maps is not None:
+        _save_maps(maps, kept)
+    logger.info("wrote %s", out)
+    return 0
+
+
+def _save_maps(d, kept: dict) -> None:
+    """``--save-maps``: the full-size maps of a photo (``kept``: its prediction, relit albedo and light
+    used, taken out as they are written so that each is freed then)."""
     import numpy as np
     import torch
 
     from ..io import atomic_write, write_image
-    from ..pipeline.backends import make_predictor
-    from ..pipeline.relight_image import relight_image
     from ..sh import save_light
 
-    light = load_single_light(args.light)
-    model = make_predictor(args.backend, args.checkpoint, args.device)
-    res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo)
-    del image, mask
-    if res.mask_predicted:
-        logger.info("no --mask: the person was found by the model's mask head")
-    # without --save-maps the full-size maps are freed before the image is encoded (memory budget)
-    relit, res = res.image, (res if maps is not None else None)
-    write_image(out, relit, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
-    if maps is not None:
-        d = maps
-        d.mkdir(parents=True, exist_ok=True)
-        p = res.prediction
-        write_image(d / "albedo.png", res.albedo.permute(1, 2, 0))
-        s = p.shading()[0].permute(1, 2, 0) * p.mask[0].permute(1, 2, 0)
-        write_image(d / "shading.png", s / s.amax().clamp_min(1e-8))
-        write_image(d / "mask.png", p.mask[0].permute(1, 2, 0).expand(-1, -1, 3), srgb=False)
-        with atomic_write(d / "transport.npz") as f:
-            np.savez_compressed(f, transport=p.transport[0].numpy(), mask=p.mask[0, 0].numpy())
-        save_light(d / "light_estimated.npz", p.light[0])
-        save_light(d / "light_used.npz", res.light.to(torch.float32))
-    logger.info("wrote %s", out)
-    return 0
+    d.mkdir(parents=True, exist_ok=True)
+    albedo = kept.pop("albedo")
+    write_image(d / "albedo.png", albedo.permute(1, 2, 0))
+    del albedo
+    p, used = kept.pop("prediction"), kept.pop("light")
+    s = p.shading()[0].mul_(p.mask[0]).permute(1, 2, 0)
+    write_image(d / "shading.png", s.div_(s.amax().clamp_min(1e-8)))
+    del s
+    write_image(d / "mask.png", p.mask[0].permute(1, 2, 0).expand(-1, -1, 3), srgb=False)
+    with atomic_write(d / "transport.npz") as f:
+        np.savez_compressed(f, transport=p.transport[0].numpy(), mask=p.mask[0, 0].numpy())
+    save_light(d / "light_estimated.npz", p.light[0])
+    save_light(d / "light_used.npz", used.to(torch.float32))
 
 
 def run_video(args: argparse.Namespace) -> int:

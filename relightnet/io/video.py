@@ -1,7 +1,10 @@
 """Video files through PyAV: streaming reader and an atomic streaming writer.
 
 ``.mp4`` is written with libx264 (CRF 18; yuv420p, or yuv444p for odd sizes); ``.mkv`` with the
-lossless ffv1 codec (exact 8-bit RGB round trip, for tests and intermediate files).
+lossless ffv1 codec (exact 8-bit RGB round trip, for tests and intermediate files). Above 1080p
+libx264 looks ahead 4 frames and makes no B-frames (:data:`X264_LARGE`): the frames it holds
+bound its memory (at 12.5 MP, 0.5 GB instead of 1 GB with the preset's 10-frame lookahead and
+3 B-frames), at the price of a somewhat larger file at the same quality.
 Frames are (H, W, 3) uint8 sRGB, or float linear RGB that the writer converts.
 """
 
@@ -22,12 +25,17 @@ import torch
 from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
 from .image import limit_hint, open_limited, to_uint8, upright
+from .limits import check_pixels, check_video_expansion
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["VideoInfo", "video_info", "count_frames", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
 
 _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), ".mkv": ("ffv1", "bgr0", {})}
+#: libx264's options for frames above 1080p (:data:`X264_LARGE_PIXELS`): the frames it holds (lookahead,
+#: B-frames) are what its memory grows with (module docstring).
+X264_LARGE = {"rc-lookahead": "2", "bf": "0"}
+X264_LARGE_PIXELS = 1920 * 1080
 
 
 @dataclass(frozen=True)
@@ -43,11 +51,18 @@ class VideoInfo:
 def _open(path):
     import av
 
+    from .probe import header_size
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: video file not found")
     try:
+        size = header_size(path)  # an image format played as a video (GIF, WebP, TIFF): its canvas
+        if size is not None:
+            check_pixels(*size, f"{path}")
         return open_limited(path, "a video")  # frame size checked before any frame is decoded
+    except InputError:
+        raise
     except (av.error.FFmpegError, OSError, ValueError) as e:
         raise InputError(f"{path}: unreadable video ({type(e).__name__}: {e})") from None
 
@@ -81,19 +96,30 @@ def count_frames(path) -> int:
     say 20 million frames, so it is never used to size anything. Demuxing reads each packet's
     header and data only (milliseconds per thousand frames) and stops where the file's data ends.
     """
+    h, w = video_info(path).size  # the size, rate and first frame checked as every reader does
+    return _count_checked(path, w, h)
+
+
+def _count_checked(path, width: int, height: int) -> int:
+    """The packets of the video stream, refused when they decode to far more than the file
+    holds (:func:`~relightnet.io.limits.check_video_expansion`: a decompression bomb)."""
     import av
 
-    video_info(path)  # the size, rate and first frame checked as every reader does
     with contextlib.closing(_open(path)) as c:
         try:
-            return sum(1 for p in c.demux(video=0) if p.size)
+            n = sum(1 for p in c.demux(video=0) if p.size)
         except (av.error.FFmpegError, ValueError) as e:
             raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+    check_video_expansion(n, width, height, Path(path).stat().st_size, f"{path}")
+    return n
 
 
 def read_video(path) -> Iterator[np.ndarray]:
     """Yield the frames of a video one at a time (memory does not grow with length), upright
     (a display rotation stored by the camera is applied).
+
+    Before the first frame is yielded, the file's packets are counted: a video that decodes to
+    far more pixels than its file holds is refused (:func:`count_frames`).
 
     Yields:
         (H, W, 3) uint8 RGB frames.
@@ -102,8 +128,12 @@ def read_video(path) -> Iterator[np.ndarray]:
 
     with contextlib.closing(_open(path)) as c:
         try:
-            for frame in c.decode(video=0):
+            for i, frame in enumerate(c.decode(video=0)):
+                if i == 0:
+                    _count_checked(path, frame.width, frame.height)
                 yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
+        except InputError:
+            raise
         except (av.error.FFmpegError, ValueError) as e:
             raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e}{limit_hint()})") from None
 
@@ -162,6 +192,8 @@ class VideoWriter:
                 pix_fmt = "yuv444p"
                 logger.warning("%s: odd frame size %dx%d (width x height): mp4 written as yuv444p (4:4:4)",
                                self.path, w, h)
+            if codec == "libx264" and h * w > X264_LARGE_PIXELS:
+                opts = {**opts, **X264_LARGE}
             fmt = "mp4" if codec == "libx264" else "matroska"
             self._container = av.open(self._file, mode="w", format=fmt)
             self._stream = self._container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
@@ -245,9 +277,8 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
         if not files:
             raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
         return len(files), (read_mask(f) for f in files)
-    return count_frames(p), (
-        (torch.from_numpy(f).float().mean(-1) > 127).float() for f in read_video(p)
-    )
+    # white = person: the mean of R, G, B above 127, i.e. their sum above 381 (no float copy of the frame)
+    return count_frames(p), ((torch.from_numpy(f).sum(-1, dtype=torch.int16) > 381).float() for f in read_video(p))
 
 
 def frames_with_masks(video, masks, allow_empty: bool = False
@@ -276,7 +307,7 @@ def frames_with_masks(video, masks, allow_empty: bool = False
         for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
             if frame is None or mask is None:
                 raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
-            img = torch.from_numpy(frame).permute(2, 0, 1).float() / 255
+            img = torch.from_numpy(frame).permute(2, 0, 1).float().div_(255)  # one float copy of the frame
             if tuple(mask.shape) != tuple(img.shape[1:]):
                 raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
             if not allow_empty and not mask.any():

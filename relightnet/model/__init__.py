@@ -3,12 +3,15 @@
 from .checkpoint import SHIPPED, load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
 from .inference import (
     CropBox,
+    CropMaps,
     crop_to_box,
     estimate_light,
     estimate_light_evidence,
     frame_person,
     mask_crop_box,
     paste_from_box,
+    paste_rows,
+    predict_crop,
     predict_image,
 )
 from .losses import LossWeights, masked_l1, relight_losses, total_variation
@@ -23,6 +26,7 @@ from .network import (
     normalize_input,
     pad_to_multiple,
     photo_albedo,
+    photo_albedo_rows,
     relight,
     shade_map,
     shading_map,
@@ -31,10 +35,10 @@ from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx
 
 __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
-    "CropBox", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person", "mask_crop_box",
-    "paste_from_box", "predict_image",
+    "CropBox", "CropMaps", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person",
+    "mask_crop_box", "paste_from_box", "paste_rows", "predict_crop", "predict_image",
     "LossWeights", "masked_l1", "relight_losses", "total_variation",
     "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "TRANSPORT_HEADS", "NetConfig", "Prediction", "RelightNet", "cone_maps",
-    "normalize_input", "pad_to_multiple", "photo_albedo", "relight", "shade_map", "shading_map",
+    "normalize_input", "pad_to_multiple", "photo_albedo", "photo_albedo_rows", "relight", "shade_map", "shading_map",
     "POSE_TAPS", "GraphModule", "Tap", "find_stride_taps", "load_onnx", "pose_encoder",
 ]

@@ -18,8 +18,9 @@ from .network import Prediction, RelightNet, normalize_input
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CropBox", "mask_crop_box", "crop_to_box", "paste_from_box", "frame_person", "predict_image",
-           "estimate_light", "estimate_light_evidence", "check_not_blank", "check_predicted_person"]
+__all__ = ["CropBox", "mask_crop_box", "crop_to_box", "paste_from_box", "paste_rows", "frame_person", "predict_image",
+           "CropMaps", "predict_crop", "estimate_light", "estimate_light_evidence", "check_not_blank",
+           "check_predicted_person"]
 
 
 @dataclass(frozen=True)
@@ -73,6 +74,76 @@ def paste_from_box(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tenso
             up = F.interpolate(x[..., c : c + 1, :, :], size=(s, s), mode="bilinear", align_corners=False)
             out[..., c : c + 1, ys:ye, xs:xe] = up[..., ys - t : ye - t, xs - l : xe - l]
     return out
+
+
+def paste_rows(x: torch.Tensor, box: CropBox, h: int, w: int, r0: int, r1: int) -> torch.Tensor:
+    """Rows ``r0:r1`` of :func:`paste_from_box` ``(x, box, h, w)`` without the others: (B, C, s, s) →
+    (B, C, r1 - r0, W), so a large photo's maps can be pasted one band of rows at a time.
+
+    The bilinear resize is torch's (``align_corners=False``): across, ``F.interpolate`` on the source
+    rows the band needs; down, the same source positions and weights, computed here (equal to
+    float32 rounding of the source position: within ~1e-5 of the maps' values)."""
+    out = x.new_zeros(*x.shape[:-2], r1 - r0, w)
+    t, l, s, n = box.top, box.left, box.size, x.shape[-2]
+    ys, ye, xs, xe = max(t, r0, 0), min(t + s, r1, h), max(l, 0), min(l + s, w)
+    if ys >= ye or xs >= xe:
+        return out
+    scale = torch.tensor(n, dtype=torch.float32) / s
+    src = (scale * (torch.arange(ys - t, ye - t, dtype=torch.float32) + 0.5) - 0.5).clamp_min(0)
+    i0 = src.long().clamp_max(n - 1)
+    i1 = (i0 + 1).clamp_max(n - 1)
+    l1 = (src - i0).clamp(0, 1)[:, None].to(x.dtype)
+    lo, hi = int(i0[0]), int(i1[-1]) + 1
+    across = F.interpolate(x[..., lo:hi, :], size=(hi - lo, s), mode="bilinear", align_corners=False)
+    across = across[..., xs - l : xe - l]
+    band = across.index_select(-2, i0 - lo).mul_(1 - l1)
+    out[..., ys - r0 : ye - r0, xs:xe] = band.addcmul_(across.index_select(-2, i1 - lo), l1)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class CropMaps:
+    """What the CNN predicted for a photo, kept at its working size with the crop box it saw.
+
+    The maps at the photo's resolution are made on demand: :meth:`rows` pastes one band of rows
+    (what a large photo is relit by, :func:`relightnet.pipeline.relight_bands.relight_over_photo`),
+    :meth:`pasted` the whole :class:`Prediction` (:func:`predict_image`'s).
+
+    Attributes:
+        albedo: (1, 3, s, s) and ``transport`` (1, K, s, s) at the working size s.
+        light: (1, K, 3); ``evidence`` and ``light_head`` as in :class:`Prediction`.
+        mask: (1, 1, H, W) the person's mask at the photo's resolution (given or predicted).
+        box: the crop of the photo the network saw.
+    """
+
+    albedo: torch.Tensor
+    transport: torch.Tensor
+    light: torch.Tensor
+    mask: torch.Tensor
+    box: CropBox
+    evidence: object = None
+    light_head: torch.Tensor | None = None
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(H, W) of the photo."""
+        return int(self.mask.shape[-2]), int(self.mask.shape[-1])
+
+    def rows(self, r0: int, r1: int, albedo: bool = True):
+        """``(albedo (1, 3, r, W) or None, transport (1, K, r, W), mask (1, 1, r, W))`` of rows ``r0:r1``,
+        the maps zero outside the person's mask (times the mask, as :meth:`pasted`)."""
+        h, w = self.size
+        m = self.mask[:, :, r0:r1]
+        t = paste_rows(self.transport, self.box, h, w, r0, r1).mul_(m)
+        a = paste_rows(self.albedo, self.box, h, w, r0, r1).mul_(m) if albedo else None
+        return a, t, m
+
+    def pasted(self) -> Prediction:
+        """The :class:`Prediction` at the photo's resolution (maps zero outside the mask)."""
+        h, w = self.size
+        return Prediction(albedo=paste_from_box(self.albedo, self.box, h, w).mul_(self.mask),
+                          transport=paste_from_box(self.transport, self.box, h, w).mul_(self.mask),
+                          light=self.light, mask=self.mask, evidence=self.evidence, light_head=self.light_head)
 
 
 def frame_person(image: torch.Tensor, mask: torch.Tensor, size: int, pad: float = 0.05):
@@ -168,6 +239,15 @@ def _network_input(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | 
 
 
 @torch.no_grad()
+def predict_crop(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
+                 size: int | None = None, pad: float = 0.05) -> CropMaps:
+    """:func:`predict_image` without the paste: the maps at the working size (:class:`CropMaps`)."""
+    x, box, mask = _network_input(model, image, mask, size, pad)
+    pred = model(x)
+    return CropMaps(pred.albedo, pred.transport, pred.light, mask[None, None], box, pred.evidence, pred.light_head)
+
+
+@torch.no_grad()
 def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | None = None,
                   size: int | None = None, pad: float = 0.05) -> tuple[Prediction, CropBox | None]:
     """Predict albedo, transport, light (and mask) for one photo at its own resolution.
@@ -185,18 +265,8 @@ def predict_image(model: RelightNet, image: torch.Tensor, mask: torch.Tensor | N
         (prediction at the original resolution with a batch of 1 — maps are zero outside the
         crop, ``mask`` is the given or predicted mask — and the crop box used).
     """
-    h, w = image.shape[-2:]
-    x, box, mask = _network_input(model, image, mask, size, pad)
-    pred = model(x)
-    inside = mask[None, None]
-    return Prediction(
-        albedo=paste_from_box(pred.albedo, box, h, w) * inside,
-        transport=paste_from_box(pred.transport, box, h, w) * inside,
-        light=pred.light,
-        mask=mask[None, None],
-        evidence=pred.evidence,
-        light_head=pred.light_head,
-    ), box
+    crop = predict_crop(model, image, mask, size, pad)
+    return crop.pasted(), crop.box
 
 
 @torch.no_grad()

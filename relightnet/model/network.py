@@ -43,7 +43,7 @@ from ..sh.light_solve import Evidence, light_evidence, solve_light
 
 __all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
            "RelightNet", "normalize_input", "relight",
-           "photo_albedo", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
+           "photo_albedo", "photo_albedo_rows", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
 
 
 #: How the network gets its light (see the module docstring).
@@ -212,17 +212,21 @@ def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
     mean = (shading * m).sum((2, 3), keepdim=True) / m.sum((2, 3), keepdim=True).clamp_min(1e-8)
     tau = (floor * mean).clamp_min(1e-6)
 
-    def rows(s, img, alb):
-        w = (s / tau).clamp(0, 1)
-        return (w * img.to(s).clamp_min(0) / torch.maximum(s, tau) + (1 - w) * alb).clamp_min(0)
-
     if torch.is_grad_enabled() and (shading.requires_grad or pred.albedo.requires_grad):
-        return rows(shading, image, pred.albedo)
+        return photo_albedo_rows(image, shading, pred.albedo, tau)
     out = torch.empty_like(shading)  # in bands of rows: a large photo's temporaries stay small (same values)
     for r in range(0, dims["H"], ROW_BAND):
         band = slice(r, r + ROW_BAND)
-        out[:, :, band] = rows(shading[:, :, band], image[:, :, band], pred.albedo[:, :, band])
+        out[:, :, band] = photo_albedo_rows(image[:, :, band], shading[:, :, band], pred.albedo[:, :, band], tau)
     return out
+
+
+def photo_albedo_rows(image: torch.Tensor, shading: torch.Tensor, albedo: torch.Tensor,
+                      tau: torch.Tensor) -> torch.Tensor:
+    """:func:`photo_albedo` of some rows, its threshold ``tau`` (B, 3, 1, 1) found over the whole photo:
+    image / shading where the shading is above ``tau``, blended into the CNN's ``albedo`` below."""
+    w = (shading / tau).clamp(0, 1)
+    return (w * image.to(shading).clamp_min(0) / torch.maximum(shading, tau) + (1 - w) * albedo).clamp_min(0)
 
 
 def cone_maps(raw: torch.Tensor, lmax: int) -> torch.Tensor:

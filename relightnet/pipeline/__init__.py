@@ -20,6 +20,7 @@ from .compare import ClipOutputs, CompareResult, clip_metrics, compare, compare_
 from .demo import run_demo
 from .outfits import OUTFIT_COLORS, OUTFIT_SLOTS, DressedBody, OutfitDraw, avatar_look, draw_outfit, dressed_body
 from .photo_checks import format_photo_report, photo_checks, write_photo_report
+from .relight_bands import BandRelit, relight_over_photo
 from .relight_image import Relit, RelitImage, match_exposure, over_photo, relight_image, relight_prediction
 from .relight_video import relight_video
 from .scene import avatar_albedo, load_body, load_camera, motion_params, open_motion
@@ -32,7 +33,7 @@ __all__ = [
     "BACKENDS", "OnnxPredictor", "Predictor", "TorchPredictor", "as_predictor", "make_predictor",
     "ClipOutputs", "CompareResult", "clip_metrics", "compare", "compare_clip", "source_light",
     "run_demo", "Relit", "RelitImage", "match_exposure", "over_photo", "relight_image", "relight_prediction",
-    "relight_video",
+    "relight_video", "BandRelit", "relight_over_photo",
     "avatar_albedo", "load_body", "load_camera", "motion_params", "open_motion",
     "CleanPlate", "Placement", "clean_plate", "person_placement", "placed_camera", "plate_psnr", "stand_in",
     "check_stand_in", "stand_in_frames", "avatar_look",

@@ -36,8 +36,7 @@ import torch
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import VideoWriter, count_frames, read_video, video_info
 from ..names import VIDEO_SMOOTHING
-from ..raster import Camera, default_camera, silhouette_pixels
-from ..raster import antialias as aa
+from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
@@ -157,19 +156,28 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
     """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
-    (H, W, 3) uint8 (:func:`_composite_covered`), or with the silhouette antialiased
-    (:func:`relightnet.render.composite` of the whole frame, then analytic edge antialiasing) →
-    (H, W, 3) in [0, 1]."""
+    (H, W, 3) uint8 (:func:`_composite_covered`); with ``antialias``, the silhouette's pixels then
+    get what analytic edge antialiasing of the whole composited frame gives there
+    (:func:`relightnet.raster.antialias_pixels`: the colours of the pixels along the silhouette
+    only, no float copy of the frame; a frame at the pixel limit is 150 MB in float)."""
     from ..color import linear_to_srgb
-    from ..render.shading import composite
 
+    out = _composite_covered(r, bg)
     if not antialias:
-        return _composite_covered(r, bg)
-    a = r.alpha[0]
-    bgf = torch.from_numpy(bg).float() / 255
-    comp = composite(linear_to_srgb(r.image.clamp(0, 1)), r.alpha, bgf)[0]
-    smooth = aa(comp[None], r.frags, camera.transform(verts), faces)[0]
-    return torch.where(silhouette_pixels(a > 0)[..., None], smooth, comp)
+        return out
+    img, covered = r.image.reshape(-1, 3), r.frags.mask.reshape(-1)
+    flat = torch.from_numpy(out).view(-1, 3)  # the background where not covered
+
+    def color_at(idx):  # fg·α + bg·(1−α) with α in {0, 1}, in [0, 1]
+        c = flat[idx].float().div_(255)
+        on = covered[idx]
+        c[on] = linear_to_srgb(img[idx[on]].clamp(0, 1))
+        return c
+
+    sil = silhouette_pixels(r.alpha[0] > 0)[None]
+    idx, colors = antialias_pixels(color_at, r.frags, camera.transform(verts), faces, sil)
+    flat[idx] = colors.clamp_(0, 1).mul_(255).round_().to(torch.uint8)
+    return out
 
 
 def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, antialias: bool, camera: Camera,
@@ -184,6 +192,7 @@ def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, a
             if written == n:
                 break
             writer.write(_composite_frame(fr.render, bg, antialias, camera, fr.verts, faces))
+            del bg, fr  # the next frame is decoded and rendered without this one's
             written += 1
         if written < n:
             raise InputError(f"{source}: only {written} frames decoded, {n} expected")

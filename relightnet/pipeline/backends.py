@@ -2,7 +2,10 @@
 
 Both backends are :class:`Predictor` s: ``predictor(image (3, H, W), mask (H, W) | None) -> Prediction``
 at the photo's own resolution (crop around the mask, resize to the working size, run, paste
-back), ``predictor.light(image, mask) -> (K, 3)`` (the light only, nothing pasted back),
+back), ``predictor.crop(image, mask) -> CropMaps`` (the same without the paste: the maps at the
+working size, pasted band by band where a large photo is relit,
+:class:`~relightnet.model.inference.CropMaps`), ``predictor.light(image, mask) -> (K, 3)`` (the light
+only, nothing pasted back),
 ``predictor.light_evidence(image, mask) -> (light (K, 3), Evidence | None, prior (K, 3) | None)``
 (what a video pools over a shot, :mod:`relightnet.temporal.pooling`; None for a network that
 regresses its light), ``predictor.lmax`` the SH order of the model, ``predictor.solve_reg``
@@ -22,7 +25,7 @@ from typing import Protocol, runtime_checkable
 import torch
 
 from ..checks import InputError, sh_order_from_count
-from ..model.inference import paste_from_box
+from ..model.inference import CropMaps
 from ..model.network import Prediction, RelightNet
 
 logger = logging.getLogger(__name__)
@@ -49,6 +52,9 @@ class Predictor(Protocol):
 
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
         """Albedo, transport, light (and mask) at the photo's resolution, batch 1."""
+
+    def crop(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> CropMaps:
+        """The same prediction with its maps at the working size (not pasted back)."""
 
     def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
         """The light (K, 3) only."""
@@ -82,6 +88,12 @@ class TorchPredictor:
         from ..model.inference import predict_image
 
         return predict_image(self.model, image, mask, size=self.size)[0]
+
+    def crop(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> CropMaps:
+        """The prediction with its maps at the working size (:class:`~relightnet.model.inference.CropMaps`)."""
+        from ..model.inference import predict_crop
+
+        return predict_crop(self.model, image, mask, size=self.size)
 
     def light(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
         """Only the light (K, 3) (the maps are not pasted back)."""
@@ -135,14 +147,18 @@ class OnnxPredictor:
 
     @torch.no_grad()
     def __call__(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> Prediction:
+        return self.crop(image, mask).pasted()
+
+    @torch.no_grad()
+    def crop(self, image: torch.Tensor, mask: torch.Tensor | None = None) -> CropMaps:
+        """The prediction with its maps at the working size (:class:`~relightnet.model.inference.CropMaps`)."""
         res, box = self._step(image, mask)
-        h, w = image.shape[-2:]
-        inside = mask.float()[None, None]
-        return Prediction(
-            albedo=paste_from_box(torch.from_numpy(res["albedo"]), box, h, w) * inside,
-            transport=paste_from_box(torch.from_numpy(res["transport"]), box, h, w) * inside,
+        return CropMaps(
+            albedo=torch.from_numpy(res["albedo"]),
+            transport=torch.from_numpy(res["transport"]),
             light=torch.from_numpy(res["light_raw"]),
-            mask=inside,
+            mask=mask.float()[None, None],
+            box=box,
             evidence=_evidence(res),
             light_head=torch.from_numpy(res["light_prior"]) if self._has_prior and "light_prior" in res else None,
         )

@@ -168,7 +168,7 @@ def model_functions(model=None, device: str = "cpu") -> tuple[Relighter, Estimat
         predict = as_predictor(model)
 
     def relight(image: torch.Tensor, mask: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
-        return relight_image(predict, image, light, mask).image.permute(2, 0, 1)
+        return relight_image(predict, image, light, mask, maps=False).image.permute(2, 0, 1)
 
     def estimate(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         return predict.light(image, mask).float().cpu()

@@ -6,9 +6,10 @@ The albedo that is relit is the photo divided by the predicted shading
 (:func:`~relightnet.model.photo_albedo`), so the photo keeps its detail; ``detail=False``
 relights the CNN's own albedo (blurred to the working size on a large photo).
 
-:func:`relight_prediction` is the relighting step itself, shared by ``relight-image``,
-``relight-video`` and the 2D path of ``compare``; :func:`over_photo` puts its result over the
-photo.
+:func:`relight_prediction` is the relighting step itself on a pasted prediction (the 2D path of
+``compare``, batches of frames); :func:`over_photo` puts its result over the photo.
+``relight-image`` and ``relight-video`` compute the same in bands of rows without pasting the
+maps whole (:mod:`relightnet.pipeline.relight_bands`: the memory budget at the pixel limit).
 """
 
 from __future__ import annotations
@@ -35,15 +36,16 @@ __all__ = ["RelitImage", "Relit", "relight_image", "relight_prediction", "over_p
 
 @dataclass(frozen=True, eq=False)
 class RelitImage:
-    """Result of :func:`relight_image`: ``image`` (H, W, 3) sRGB in [0, 1], ``prediction``,
-    the ``light`` actually used (K, 3), whether the mask came from the model, and the
-    ``albedo`` that was relit (3, H, W) linear."""
+    """Result of :func:`relight_image`: ``image`` (H, W, 3) sRGB in [0, 1], ``prediction`` (at the
+    photo's resolution), the ``light`` actually used (K, 3), whether the mask came from the model,
+    and the ``albedo`` that was relit (3, H, W) linear; ``prediction`` and ``albedo`` are None when
+    :func:`relight_image` was asked for no maps."""
 
     image: torch.Tensor
-    prediction: Prediction
+    prediction: Prediction | None
     light: torch.Tensor
     mask_predicted: bool
-    albedo: torch.Tensor
+    albedo: torch.Tensor | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,8 +143,14 @@ def over_photo(relit: torch.Tensor, mask: torch.Tensor, image: torch.Tensor) -> 
 
 @torch.no_grad()
 def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
-                  keep_exposure: bool = True, size: int | None = None, detail: bool = True) -> RelitImage:
+                  keep_exposure: bool = True, size: int | None = None, detail: bool = True,
+                  maps: bool = True) -> RelitImage:
     """Relight a photo.
+
+    The photo is relit at its full size in bands of rows
+    (:func:`~relightnet.pipeline.relight_bands.relight_over_photo`): the same result as
+    :func:`relight_prediction` and :func:`over_photo` on the pasted prediction (to float32 rounding),
+    without holding the CNN's maps at the photo's size unless ``maps`` asks for them.
 
     Args:
         model: the CNN: a :class:`~relightnet.model.RelightNet` (e.g. ``relightnet.model.load_model()``)
@@ -154,22 +162,22 @@ def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.T
         size: working size (default: the model's, from its checkpoint); only with a RelightNet.
         detail: relight the photo's own albedo (photo / predicted shading, full detail); False
             relights the CNN's albedo.
+        maps: also return the prediction and the relit albedo at the photo's size (about
+            0.06 GB per megapixel more; ``relight-image --save-maps``).
 
     Returns:
         :class:`RelitImage`; outside the mask the photo is unchanged.
     """
+    from .relight_bands import relight_over_photo
+
     check_shape(light, ["K", 3], name="light")
     check_finite(light, "light")
     predict = as_predictor(model, size=size)
     light = to_model_order(light, predict.lmax)
-    if image.dtype == torch.uint8:
-        image = image.float() / 255
-    pred = predict(image, mask)
-    image = image.to(pred.albedo)
-    relit = relight_prediction(pred, image[None], light, detail=detail, keep_exposure=keep_exposure)
-    lit = float(((relit.shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum().clamp_min(1))
-    if lit < 0.5:
+    crop = predict.crop(image, mask)
+    res = relight_over_photo(crop, image, light, detail=detail, keep_exposure=keep_exposure, keep_albedo=maps)
+    if res.lit < 0.5:
         logger.warning("light: it lights only %.0f%% of the person (negative or zero irradiance elsewhere): "
-                       "is it a valid SH light?", 100 * lit)
-    out = over_photo(relit.linear, pred.mask, image[None])[0]
-    return RelitImage(out.cpu(), pred, relit.light, mask is None, relit.albedo[0].cpu())
+                       "is it a valid SH light?", 100 * res.lit)
+    pred = crop.pasted() if maps else None
+    return RelitImage(res.image, pred, res.light, mask is None, res.albedo)

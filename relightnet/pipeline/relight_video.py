@@ -9,7 +9,9 @@ the solve's evidence since the last light switch (:class:`relightnet.temporal.Po
 constant light the estimate settles instead of following each frame), one that regresses it
 is smoothed by an EMA (weight ``alpha``); the new light can turn about the up axis over time.
 As for photos, the albedo relit is the frame divided by the predicted shading, so the
-frames keep their detail.
+frames keep their detail. Each frame is relit at its full size in bands of rows
+(:func:`~relightnet.pipeline.relight_bands.relight_over_photo`): the CNN's maps are never held
+at the frame's size, so a frame at the pixel limit stays within the memory budget.
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
 from ..temporal.registry import check_smoothing, make_smoother, resolve_smoothing
 from .backends import as_predictor
-from .relight_image import over_photo, relight_prediction, to_model_order
+from .relight_bands import relight_over_photo
+from .relight_image import to_model_order
 
 logger = logging.getLogger(__name__)
 
@@ -82,7 +85,10 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 empty.append(t)
                 n += 1
                 continue
-            pred = predict(img, mask)
+            try:  # the maps stay at the working size: pasted band by band
+                pred = predict.crop(img, mask)
+            except InputError as e:  # a frame the CNN cannot take (e.g. blank, for its mask head): name it
+                raise InputError(f"{video}: frame {t}: {e}") from None
             if smoother is None:  # auto: pooled or ema, whether the network solves its light
                 smoother = _smoother(smoothing, pred.evidence is not None, predict, alpha)
             kw = {"evidence": pred.evidence, "prior": pred.light_head} if getattr(smoother, "uses_evidence", False) \
@@ -91,9 +97,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             src = y[0]
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
             # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-            relit = relight_prediction(pred, img[None], new, detail=detail, reference=src[None])
-            writer.write(over_photo(relit.linear, pred.mask, img[None])[0])
-            del pred, relit, img, mask  # the next frame is decoded and predicted without this one's maps
+            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8).image)
+            del pred, img, mask  # the next frame is decoded and predicted without this one's
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
             raise InputError(f"{masks or video}: every mask is empty: no person to relight")

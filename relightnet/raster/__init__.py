@@ -7,7 +7,7 @@ and :func:`to_channels_last` convert to and from the CNN layout (B, C, H, W).
 Texture coordinates have v = 0 at the bottom of the image (:mod:`.texture`).
 """
 
-from .antialias import antialias, silhouette_pixels
+from .antialias import antialias, antialias_pixels, silhouette_pixels
 from .camera import (
     Camera,
     default_camera,
@@ -31,5 +31,5 @@ __all__ = [
     "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
     "Fragments", "rasterize",
     "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
-    "texture", "texture_pixels", "antialias", "silhouette_pixels", "erode",
+    "texture", "texture_pixels", "antialias", "antialias_pixels", "silhouette_pixels", "erode",
 ]

@@ -22,7 +22,7 @@ import torch
 from ..checks import check_shape
 from .fragments import Fragments
 
-__all__ = ["antialias", "silhouette_pixels"]
+__all__ = ["antialias", "antialias_pixels", "silhouette_pixels"]
 
 
 def _lam(P, u, v):
@@ -44,6 +44,30 @@ def _exit(lam_a, lam_b):
     return s.min(dim=1).values
 
 
+def _pairs(frags: Fragments, verts_clip: torch.Tensor, faces: torch.Tensor):
+    """Per direction (across, then down): ``(pa, pb, s)``, the flat indices of the adjacent pixel pairs
+    (A, B) showing different triangles and where their boundary crosses (fraction from A to B; 0.5
+    where none is found). Found from int32 face and float depth images made here (no index per pixel)."""
+    B, H, W = frags.shape
+    V = verts_clip.shape[1]
+    faces = faces.to(device=verts_clip.device, dtype=torch.long)
+    n = B * H * W
+    fid = torch.full((n,), -1, dtype=torch.int32, device=frags.pix.device).index_copy_(0, frags.pix,
+                                                                                         frags.pix_face.int())
+    depth = torch.full((n,), float("inf"), dtype=frags.pix_depth.dtype, device=frags.pix.device)
+    depth.index_copy_(0, frags.pix, frags.pix_depth.detach())
+    img = fid.view(B, H, W)
+    for step, differs in ((1, img[:, :, :-1] != img[:, :, 1:]), (W, img[:, :-1, :] != img[:, 1:, :])):
+        at = torch.nonzero(differs)
+        del differs
+        if at.numel() == 0:
+            continue
+        pa = (at[:, 0] * H + at[:, 1]) * W + at[:, 2]
+        pb = pa + step
+        s = _crossing(pa, pb, fid[pa].long(), fid[pb].long(), depth, verts_clip, faces, V, H, W)
+        yield pa, pb, torch.where(torch.isfinite(s), s, torch.full_like(s, 0.5))
+
+
 def antialias(color: torch.Tensor, frags: Fragments, verts_clip: torch.Tensor, faces: torch.Tensor) -> torch.Tensor:
     """Blend colours across triangle boundaries according to where the edges cross.
 
@@ -60,27 +84,51 @@ def antialias(color: torch.Tensor, frags: Fragments, verts_clip: torch.Tensor, f
     check_shape(color, [B, H, W, "C"], name="color")
     check_shape(verts_clip, [B, "V", 4], name="verts_clip")
     C = color.shape[-1]
-    V = verts_clip.shape[1]
-    fid = frags.face_id
-    depth = frags.depth.reshape(-1)
     flat = color.reshape(-1, C)
-    faces = faces.to(device=color.device, dtype=torch.long)
     out = flat.clone()
-    idx = torch.arange(B * H * W, device=color.device).view(B, H, W)
-    for a, b in ((idx[:, :, :-1], idx[:, :, 1:]), (idx[:, :-1, :], idx[:, 1:, :])):
-        fa, fb = fid.reshape(-1)[a.reshape(-1)], fid.reshape(-1)[b.reshape(-1)]
-        diff = torch.nonzero(fa != fb).squeeze(1)
-        if diff.numel() == 0:
-            continue
-        pa, pb = a.reshape(-1)[diff], b.reshape(-1)[diff]
-        fa, fb = fa[diff], fb[diff]
-        s = _crossing(pa, pb, fa, fb, depth, verts_clip, faces, V, H, W)
-        ok = torch.isfinite(s)
-        s = torch.where(ok, s, torch.full_like(s, 0.5)).to(color.dtype)[:, None]
+    for pa, pb, s in _pairs(frags, verts_clip, faces):
+        s = s.to(color.dtype)[:, None]
         ca, cb = flat[pa], flat[pb]
-        out = out.index_add(0, pb, (s - 0.5).clamp(min=0) * (ca - cb))
-        out = out.index_add(0, pa, (0.5 - s).clamp(min=0) * (cb - ca))
+        out.index_add_(0, pb, (s - 0.5).clamp(min=0) * (ca - cb))
+        out.index_add_(0, pa, (0.5 - s).clamp(min=0) * (cb - ca))
     return out.view(B, H, W, C)
+
+
+@torch.no_grad()
+def antialias_pixels(color_at, frags: Fragments, verts_clip: torch.Tensor, faces: torch.Tensor,
+                     keep: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """:func:`antialias` at some pixels only, the colours asked for where they are needed.
+
+    The same values as ``antialias(color, ...)`` at those pixels (the same additions in the same
+    order) without a whole image of colours: a frame composited in 8 bits gets its silhouette
+    antialiased from the few pixels along it.
+
+    Args:
+        color_at: ``color_at(idx (N,) int64) -> (N, C)`` the colours of pixels by flat index into B·H·W.
+        frags, verts_clip, faces: as :func:`antialias`.
+        keep: (B, H, W) bool the pixels wanted (e.g. :func:`silhouette_pixels`).
+
+    Returns:
+        ``(idx (M,) int64, colours (M, C))`` of the wanted pixels that a boundary changes.
+    """
+    B, H, W = frags.shape
+    check_shape(keep, [B, H, W], name="keep")
+    keep = keep.reshape(-1)
+    found = []
+    for pa, pb, s in _pairs(frags, verts_clip, faces):
+        near = keep[pa] | keep[pb]
+        found.append((pa[near], pb[near], s[near]))
+    ends = [i[keep[i]] for pa, pb, _ in found for i in (pa, pb)]
+    idx = torch.unique(torch.cat(ends)) if ends else torch.zeros(0, dtype=torch.long, device=keep.device)
+    out = color_at(idx).clone()
+    for pa, pb, s in found:
+        ca, cb = color_at(pa), color_at(pb)
+        s = s.to(ca.dtype)[:, None]
+        for to, d in ((pb, (s - 0.5).clamp(min=0) * (ca - cb)), (pa, (0.5 - s).clamp(min=0) * (cb - ca))):
+            at = torch.searchsorted(idx, to).clamp_max(max(idx.numel() - 1, 0))  # where ``to`` is in ``idx``
+            wanted = idx[at] == to
+            out.index_add_(0, at[wanted], d[wanted])
+    return idx, out
 
 
 def _crossing(pa, pb, fa, fb, depth, verts_clip, faces, V, H, W):
@@ -133,6 +181,11 @@ def silhouette_pixels(mask: torch.Tensor) -> torch.Tensor:
         mask: (H, W) bool or {0, 1}.
     """
     check_shape(mask, ["H", "W"], name="mask")
-    p = torch.nn.functional.pad(mask[None, None].float(), (1, 1, 1, 1), mode="replicate")[0, 0]
-    nb = torch.stack([p[:-2, 1:-1], p[2:, 1:-1], p[1:-1, :-2], p[1:-1, 2:]])
-    return (nb != mask.float()).any(0)
+    m = mask.bool()
+    out = torch.zeros_like(m)
+    rows, cols = m[1:] != m[:-1], m[:, 1:] != m[:, :-1]  # boolean images only (a frame at the limit: 12 MB each)
+    out[1:] |= rows
+    out[:-1] |= rows
+    out[:, 1:] |= cols
+    out[:, :-1] |= cols
+    return out

@@ -207,4 +207,5 @@ def render_body_frames(
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
             r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags)
             yield BodyFrame(t, r, T, v)
+            del r, T, frags  # the next frame is rendered without this one's (a frame at the pixel limit: ~0.5 GB)
             t += 1

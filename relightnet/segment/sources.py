@@ -89,7 +89,7 @@ def video_masks(video, masks=None, source: str = "segment", allow_empty: bool = 
     if masks is not None:
         return frames_with_masks(video, masks, allow_empty=allow_empty)
     info = video_info(video)
-    frames = (torch.from_numpy(f).permute(2, 0, 1).float() / 255 for f in read_video(video))
+    frames = (torch.from_numpy(f).permute(2, 0, 1).float().div_(255) for f in read_video(video))
     if source == "head":
         logger.info("no masks given: the model's mask head finds the person in %s", video)
         return info, info.n_frames, ((t, img, None) for t, img in enumerate(frames))

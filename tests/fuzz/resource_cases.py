@@ -19,27 +19,15 @@ import zlib
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import resource_media  # noqa: E402
+from resource_media import _png_chunk, png, video  # noqa: E402
 from resource_runner import AS_CAP, RSS_BUDGET, THIRD_PARTY_TMP, WALL_CAP, Case, Result, run_capped  # noqa: E402
 
 sys.path.pop(0)
-__all__ = ["AS_CAP", "RSS_BUDGET", "THIRD_PARTY_TMP", "WALL_CAP", "Case", "Result", "run_capped", "CASES", "png",
-           "onnx_bytes", "describe"]
+__all__ = ["AS_CAP", "RSS_BUDGET", "THIRD_PARTY_TMP", "WALL_CAP", "Case", "Result", "run_capped", "CASES", "SLOW",
+           "png", "onnx_bytes", "describe"]
 
 # ---- the files ------------------------------------------------------------------------------
-
-def _png_chunk(kind: bytes, data: bytes) -> bytes:
-    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-
-def png(side: int, extra: bytes = b"", value: int = 128) -> bytes:
-    """A side × side grey RGB PNG, compressed row by row; ``extra`` chunks go before the image data."""
-    z, row, parts = zlib.compressobj(9), b"\x00" + bytes([value]) * (3 * side), []
-    for _ in range(side):
-        parts.append(z.compress(row))
-    parts.append(z.flush())
-    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", side, side, 8, 2, 0, 0, 0)) + extra
-            + _png_chunk(b"IDAT", b"".join(parts)) + _png_chunk(b"IEND", b""))
-
 
 def zeros_deflated(nbytes: int) -> bytes:
     """A zlib stream of ``nbytes`` zero bytes (about nbytes / 1000 on disk)."""
@@ -174,19 +162,9 @@ def checkpoint_wide(folder: Path) -> Case:
     return Case(argv, "bad.pt")
 
 
-def _video(path: Path, n: int, side: int = 64) -> None:
-    import numpy as np
-
-    from relightnet.io import VideoWriter
-
-    with VideoWriter(path, fps=30) as w:
-        for i in range(n):
-            w.write(np.full((side, side, 3), 20 * i, np.uint8))
-
-
 def mp4_lying_stts(folder: Path) -> Case:
     """An 8-frame mp4 whose ``stts`` claims 20 M frames (2 KB): the avatar is rendered for its 8 real frames."""
-    _video(folder / "target.mp4", 8)
+    video(folder / "target.mp4", 8)
     data = bytearray((folder / "target.mp4").read_bytes())
     at = data.find(b"stts")
     data[at + 12:at + 16] = struct.pack(">I", 20_000_000)
@@ -194,60 +172,6 @@ def mp4_lying_stts(folder: Path) -> Case:
     argv = ["avatar", "--target", "target.mp4", "--light", "studio", "--no-occlusion", "--n-dirs", "16",
             "--out", "out.mp4"]
     return Case(argv, "target.mp4", expect="ok", outputs=("out.mp4", "out.lights.npz", "out.lights.png"))
-
-
-def _relight(folder: Path, photo: bytes, suffix: str = ".png") -> Case:
-    (folder / f"photo{suffix}").write_bytes(photo)
-    (folder / "mask.png").write_bytes(png(16, value=255))
-    return Case(["relight-image", f"photo{suffix}", "--mask", "mask.png", "--light", "studio", "--out", "out.png"],
-                f"photo{suffix}")
-
-
-def png_8000(folder: Path) -> Case:
-    """A black 8000² PNG (about 270 KB): above the pixel limit, refused from its header."""
-    return _relight(folder, png(8000, value=0))
-
-
-def gif_bomb(folder: Path) -> Case:
-    """A GIF whose screen is 16² but whose one image claims 65535² (a few dozen bytes)."""
-    head = b"GIF89a" + struct.pack("<HHBBB", 16, 16, 0, 0, 0)
-    image = b"," + struct.pack("<HHHHB", 0, 0, 65535, 65535, 0) + b"\x02\x02\x44\x01\x00;"
-    return _relight(folder, head + image, ".gif")
-
-
-def webp_bomb(folder: Path) -> Case:
-    """A WebP (VP8X) canvas of 16384² (30 bytes)."""
-    body = b"WEBP" + b"VP8X" + struct.pack("<I", 10) + b"\x00" * 4 + (16383).to_bytes(3, "little") * 2
-    return _relight(folder, b"RIFF" + struct.pack("<I", len(body)) + body, ".webp")
-
-
-def tiff_bomb(folder: Path) -> Case:
-    """A TIFF whose IFD says 100000 × 100000 pixels (under 100 bytes)."""
-    entries = [(256, 4, 1, 100000), (257, 4, 1, 100000), (258, 3, 1, 8), (259, 3, 1, 1), (262, 3, 1, 1),
-               (273, 4, 1, 8), (277, 3, 1, 1), (278, 4, 1, 100000), (279, 4, 1, 10**10 % 2**32)]
-    ifd = struct.pack("<H", len(entries)) + b"".join(struct.pack("<HHII", *e) for e in entries) + b"\0" * 4
-    return _relight(folder, b"II*\x00" + struct.pack("<I", 8) + ifd, ".tif")
-
-
-def photo_12mp(folder: Path) -> Case:
-    """A valid 4000 × 3000 photo (12 MP, the largest common phone size): relit within the budget."""
-    side_w, side_h = 4000, 3000
-    z, row, parts = zlib.compressobj(6), b"\x00" + bytes([140, 120, 100]) * side_w, []
-    for _ in range(side_h):
-        parts.append(z.compress(row))
-    parts.append(z.flush())
-    data = (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", side_w, side_h, 8, 2, 0, 0, 0))
-            + _png_chunk(b"IDAT", b"".join(parts)) + _png_chunk(b"IEND", b""))
-    (folder / "photo.png").write_bytes(data)
-    import numpy as np
-
-    from relightnet.io import write_image
-
-    mask = np.zeros((side_h, side_w, 3), np.uint8)
-    mask[500:2800, 1200:2800] = 255
-    write_image(folder / "mask.png", mask, srgb=False)
-    return Case(["relight-image", "photo.png", "--mask", "mask.png", "--light", "studio", "--out", "out.png"],
-                "photo.png", expect="ok", outputs=("out.png",))
 
 
 def exr_8000(folder: Path) -> Case:
@@ -360,7 +284,7 @@ def onnx_bytes(side: int = 30000) -> bytes:
 def onnx_constant_of_shape(folder: Path) -> Case:
     """An ONNX graph (under 1 KB) with relightnet's inputs and outputs and a ConstantOfShape of 30000²."""
     (folder / "model.onnx").write_bytes(onnx_bytes(30000))
-    _video(folder / "v.mp4", 2, 32)
+    video(folder / "v.mp4", 2, 32)
     return Case(["onnx-run", "model.onnx", "--video", "v.mp4", "--out-dir", "out"], "model.onnx")
 
 
@@ -371,18 +295,13 @@ def onnx_wrong_outputs(folder: Path) -> Case:
     proto = onnx.load_from_string(onnx_bytes(300000))
     del proto.graph.output[1:]
     (folder / "model.onnx").write_bytes(proto.SerializeToString())
-    _video(folder / "v.mp4", 2, 32)
+    video(folder / "v.mp4", 2, 32)
     return Case(["onnx-run", "model.onnx", "--video", "v.mp4", "--out-dir", "out"], "model.onnx")
 
 
 CASES = {
     "onnx-constant-of-shape-30000": onnx_constant_of_shape,
     "onnx-other-outputs": onnx_wrong_outputs,
-    "png-8000x8000": png_8000,
-    "gif-65535x65535-frame": gif_bomb,
-    "webp-16384x16384": webp_bomb,
-    "tiff-100000x100000": tiff_bomb,
-    "photo-12MP-relit": photo_12mp,
     "exr-8000x8000": exr_8000,
     "exr-12.5MP-projected": exr_at_limit,
     "zip-stl-10M-faces": stl_in_zip,
@@ -402,7 +321,10 @@ CASES = {
     "checkpoint-laughs": checkpoint_laughs,
     "checkpoint-stride0": checkpoint_stride0,
     "checkpoint-wide": checkpoint_wide,
+    **resource_media.CASES,
 }
+#: Cases that take more than a few seconds (marked ``slow`` in the test).
+SLOW = {*resource_media.SLOW, "exr-12.5MP-projected", "mp4-stts-20M-frames"}
 
 
 def describe(name: str) -> str:

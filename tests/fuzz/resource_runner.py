@@ -32,7 +32,7 @@ class Case:
 
     argv: list[str]
     names: str
-    expect: str = "error"  # "error": exit 1 with one line naming ``names``; "ok": exit 0
+    expect: str = "error"  # "error": exit 1 with one line naming ``names``; "ok": exit 0; "any": either
     outputs: tuple[str, ...] = ()  # files the command may leave (relative to the case folder)
 
 

@@ -23,14 +23,17 @@ import resource_runner  # noqa: E402
 sys.path.pop(0)
 
 
-@pytest.mark.parametrize("name", sorted(rc.CASES))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in rc.SLOW else n
+                                  for n in sorted(rc.CASES)])
 def test_hostile_file_is_bounded(tmp_path, name):
     case = rc.CASES[name](tmp_path)
     res = rc.run_capped(case, tmp_path)
     assert not res.timed_out, f"{name}: still running after {rc.WALL_CAP} s"
     assert res.rss <= rc.RSS_BUDGET, f"{name}: peak RSS {res.rss >> 20} MiB"
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
-    if case.expect == "error":
+    if case.expect == "any" and res.rc == 0:  # read (a decoder that knows the format) or refused: both bounded
+        pass
+    elif case.expect in ("error", "any"):
         assert res.rc == 1, f"{name}: exit {res.rc}: {res.stderr[-2000:]}"
         assert len(lines) == 1, f"{name}: {len(lines)} lines on stderr: {res.stderr[-2000:]}"
         assert case.names in lines[0] and "Error" in lines[0] and len(lines[0]) < 400, lines[0]

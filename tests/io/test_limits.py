@@ -104,3 +104,46 @@ def test_npy_headers_are_checked_against_the_data(tmp_path, monkeypatch):
     monkeypatch.setenv("RELIGHTNET_MAX_ARRAY_BYTES", str(1 << 20))
     with pytest.raises(InputError, match="above the limit"):
         read_npz(tmp_path / "z.npz")  # 8 MiB from a few KB of zeros
+
+
+def test_a_video_that_decodes_to_far_more_than_its_file_is_refused(tmp_path, monkeypatch):
+    """A GIF of 2,000 one-pixel frames on a 2000² screen (46 KB, 8·10⁹ pixels of frames) is refused before
+    its first frame is used, by every video reader; below the free floor or with the limit raised it reads."""
+    import sys
+    from pathlib import Path
+
+    from relightnet.io import count_frames
+    from relightnet.io.limits import EXPANSION_FREE_FRAMES, check_video_expansion
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fuzz"))
+    from resource_media import gif
+
+    sys.path.pop(0)
+    monkeypatch.delenv("RELIGHTNET_MAX_PIXELS", raising=False)  # the default limit (another test's --max-pixels set it)
+    bomb = tmp_path / "bomb.gif"
+    bomb.write_bytes(gif(2000, 2000, 2000))
+    for read in (count_frames, lambda p: next(iter(read_video(p)))):
+        with pytest.raises(InputError, match=r"bomb.gif: 2000 frames of 2000x2000 from 46 KB .*pixels per byte"):
+            read(bomb)
+    few = tmp_path / "few.gif"
+    few.write_bytes(gif(2000, 2000, 3))  # 12 MP of frames from 129 bytes: under the free floor
+    assert count_frames(few) == 3 and next(iter(read_video(few))).shape == (2000, 2000, 3)
+    monkeypatch.setenv("RELIGHTNET_MAX_PIXELS_PER_BYTE", str(10**6))
+    assert count_frames(bomb) == 2000
+    check_video_expansion(EXPANSION_FREE_FRAMES, 5000, 2500, 1, "f")  # at the floor: never refused
+    with pytest.raises(InputError, match="f: 11 frames"):
+        check_video_expansion(EXPANSION_FREE_FRAMES + 1, 5000, 2500, 1, "f")
+
+
+def test_an_image_played_as_a_video_is_checked_from_its_header(tmp_path, monkeypatch):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fuzz"))
+    from resource_media import gif
+
+    sys.path.pop(0)
+    monkeypatch.delenv("RELIGHTNET_MAX_PIXELS", raising=False)
+    (tmp_path / "screen.gif").write_bytes(gif(65535, 65535, 2))
+    with pytest.raises(InputError, match=r"screen.gif: 65535x65535 pixels .* above the limit"):
+        next(iter(read_video(tmp_path / "screen.gif")))

@@ -159,3 +159,21 @@ def test_count_frames_trusts_no_container_claim(tmp_path):
     (tmp_path / "lie.mp4").write_bytes(bytes(data))
     assert video_info(tmp_path / "lie.mp4").n_frames == 20_000_000  # the claim, for progress bars only
     assert count_frames(tmp_path / "lie.mp4") == count_frames(tmp_path / "v.mp4") == 5
+
+
+def test_frames_above_1080p_are_encoded_without_b_frames(tmp_path):
+    """Above 1080p libx264 holds few frames (short lookahead, no B-frames): its memory stays bounded."""
+    import av
+
+    from relightnet.io.video import X264_LARGE_PIXELS
+
+    rng = np.random.default_rng(0)
+    for (h, w), big in (((1090, 2000), True), ((120, 160), False)):
+        assert (h * w > X264_LARGE_PIXELS) == big
+        base = rng.integers(0, 255, (h // 8, w // 8, 3), np.uint8).repeat(8, 0).repeat(8, 1)
+        with VideoWriter(tmp_path / f"v{w}.mp4", fps=30) as wr:
+            for i in range(8):
+                wr.write(np.roll(base, 3 * i, 1))
+        with av.open(str(tmp_path / f"v{w}.mp4")) as c:
+            kinds = {int(f.pict_type) for f in c.decode(video=0)}  # FFmpeg's AVPictureType: 3 is B
+        assert (3 in kinds) != big, kinds

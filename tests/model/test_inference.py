@@ -57,3 +57,34 @@ def test_without_mask_uses_the_mask_head_or_fails_clearly(net, caplog):
     assert "may have taken the background for the person" in caplog.text
     with pytest.raises(InputError, match="multiple of 16"):
         predict_image(net, img, torch.ones(40, 64), size=40)
+
+
+@pytest.mark.parametrize("box, h, w", [((-50, 30, 700), 600, 70), ((3, -4, 37), 40, 30), ((-10, -10, 13), 9, 20),
+                                       ((5, 7, 100), 120, 150), ((200, 0, 10), 50, 50)])
+def test_paste_rows_are_the_rows_of_the_whole_paste(box, h, w):
+    """paste_rows gives any band of rows of paste_from_box (to float32 rounding of the source position),
+    for a box inside, across or outside the photo's edges."""
+    from relightnet.model.inference import CropBox, paste_from_box, paste_rows
+
+    torch.manual_seed(0)
+    x = torch.randn(1, 9, 32, 32)
+    full = paste_from_box(x, CropBox(*box), h, w)
+    for step in (256, 7):
+        bands = torch.cat([paste_rows(x, CropBox(*box), h, w, r, min(r + step, h)) for r in range(0, h, step)], -2)
+        torch.testing.assert_close(bands, full, rtol=0, atol=2e-5)
+
+
+def test_crop_maps_paste_as_predict_image(net):
+    from relightnet.model import predict_crop
+
+    img, m = torch.rand(3, 90, 70), torch.zeros(90, 70)
+    m[10:80, 20:50] = 1
+    crop = predict_crop(net, img, m, size=32)
+    assert crop.albedo.shape == (1, 3, 32, 32) and crop.size == (90, 70)
+    pred, box = predict_image(net, img, m, size=32)
+    assert box == crop.box
+    torch.testing.assert_close(crop.pasted().transport, pred.transport)
+    a, t, mk = crop.rows(20, 50)
+    torch.testing.assert_close(t, pred.transport[:, :, 20:50], rtol=0, atol=1e-5)
+    torch.testing.assert_close(a, pred.albedo[:, :, 20:50], rtol=0, atol=1e-5)
+    assert crop.rows(0, 5, albedo=False)[0] is None and torch.equal(mk, pred.mask[:, :, 20:50])

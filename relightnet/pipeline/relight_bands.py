@@ -1,0 +1,122 @@
+"""Relighting a photo or a video frame at its full resolution in bands of rows (bounded memory).
+
+The CNN's maps are predicted at its working size; a large photo needs them at its own size,
+where a 12.5 MP frame's albedo and K = 9 transport alone take 600 MB. :func:`relight_over_photo`
+never holds them whole: the maps of a band of :data:`~relightnet.model.network.ROW_BAND` rows are
+pasted (:meth:`~relightnet.model.inference.CropMaps.rows`), relit and composited over the photo,
+and the band's result is written into the output before the next band is pasted. The two numbers
+the whole person decides (the exposure of the light and the photo albedo's shadow threshold)
+come from a first pass that sums the person's transport, Σ m·T_k: the mean shading under any
+light L is that sum times L (shading is linear in the light), so both are found without a full
+shading map. The result is :func:`~relightnet.pipeline.relight_image.relight_prediction` and
+:func:`~relightnet.pipeline.relight_image.over_photo` of the pasted prediction (to float32
+rounding); peak memory is the photo, its mask, the output and one band's maps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from ..checks import check_finite, check_shape
+from ..color import LUMA, linear_to_srgb, srgb_to_linear
+from ..model.inference import CropMaps
+from ..model.network import ROW_BAND, photo_albedo_rows, shading_map
+from ..raster.interpolate import to_channels_last
+from ..render.shading import composite, shade
+
+__all__ = ["BandRelit", "relight_over_photo", "transport_sum"]
+
+#: Below this fraction of the person's mean shading the photo albedo takes the CNN's (:func:`photo_albedo`).
+ALBEDO_FLOOR = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class BandRelit:
+    """What :func:`relight_over_photo` returns.
+
+    Attributes:
+        image: (H, W, 3) the relit person over the photo, sRGB: float in [0, 1] or uint8.
+        light: (K, 3) the light used (exposure-matched when asked).
+        lit: the fraction of the person (by mask) whose shading under ``light`` is positive.
+        albedo: (3, H, W) the albedo that was relit (linear), when asked; else None.
+    """
+
+    image: torch.Tensor
+    light: torch.Tensor
+    lit: float
+    albedo: torch.Tensor | None = None
+
+
+def transport_sum(maps: CropMaps) -> tuple[torch.Tensor, float]:
+    """``(Σ m·T_k (K,) float64, Σ m)`` over the photo: the person's transport weighted by its mask
+    (T is already zero outside it), summed one band of rows at a time."""
+    h, _ = maps.size
+    total = torch.zeros(maps.transport.shape[1], dtype=torch.float64)
+    mass = 0.0
+    for r in range(0, h, ROW_BAND):
+        _, t, m = maps.rows(r, min(r + ROW_BAND, h), albedo=False)
+        total += (t * m).sum((0, 2, 3), dtype=torch.float64)
+        mass += float(m.sum(dtype=torch.float64))
+    return total, mass
+
+
+def _level(total: torch.Tensor, mass: float, light: torch.Tensor) -> float:
+    """The person's mean shading luminance under ``light`` (K, 3) from :func:`transport_sum`."""
+    return float(total @ light.double() @ torch.tensor(LUMA, dtype=torch.float64)) / max(mass, 1.0)
+
+
+@torch.no_grad()
+def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor, detail: bool = True,
+                       keep_exposure: bool = True, reference: torch.Tensor | None = None,
+                       dtype: torch.dtype = torch.float32, keep_albedo: bool = False) -> BandRelit:
+    """Relight the person of a photo with a new light and put them over the photo, band by band.
+
+    Args:
+        maps: the CNN's prediction for the photo (:meth:`Predictor.crop <relightnet.pipeline.backends.Predictor>`).
+        image: (3, H, W) the photo, sRGB in [0, 1] (or uint8).
+        light: (K, 3) new light at the model's order, camera-relative light frame.
+        detail: relight the photo's own albedo (photo / predicted shading,
+            :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
+        keep_exposure: scale the light so the person keeps the photo's exposure
+            (:func:`~relightnet.pipeline.relight_image.match_exposure`).
+        reference: (K, 3) the light taken as the photo's own (exposure reference, divisor of the
+            photo albedo); default the predicted light (a video passes its smoothed estimate).
+        dtype: ``torch.float32`` (values in [0, 1]) or ``torch.uint8`` (rounded, what a video frame is).
+        keep_albedo: also return the relit albedo (3, H, W) (``--save-maps``; a photo's worth of memory).
+
+    Returns:
+        :class:`BandRelit`.
+    """
+    h, w = maps.size
+    check_shape(image, [3, h, w], name="image")
+    check_finite(light, "light")
+    ref = (maps.light[0] if reference is None else reference).to(maps.transport)
+    total, mass = transport_sum(maps)
+    new = light.to(maps.transport)
+    if keep_exposure:
+        old, lvl = _level(total, mass, ref), _level(total, mass, new)
+        new = new * (old / lvl) if lvl > 1e-8 and old > 0 else new
+    tau = (ALBEDO_FLOOR * (total @ ref.double()) / max(mass, 1e-8)).clamp_min(1e-6).to(new).view(1, 3, 1, 1)
+    out = torch.empty(h, w, 3, dtype=dtype)
+    albedo_out = torch.empty(3, h, w) if keep_albedo else None
+    lit = 0.0
+    for r in range(0, h, ROW_BAND):
+        r1 = min(r + ROW_BAND, h)
+        a, t, m = maps.rows(r, r1)
+        photo = image[None, :, r:r1]
+        photo = photo.float() / 255 if photo.dtype == torch.uint8 else photo.to(t)
+        if detail:
+            a = photo_albedo_rows(srgb_to_linear(photo), shading_map(t, ref), a, tau)
+        linear, shading = shade(to_channels_last(a), to_channels_last(t), new, check=False, with_shading=True)
+        lit += float(((shading.mean(-1) > 0) * m[:, 0]).sum(dtype=torch.float64))
+        fg = linear_to_srgb(linear.clamp_(0, 1))
+        band = composite(fg, to_channels_last(m), to_channels_last(photo))[0]
+        if dtype == torch.uint8:
+            check_finite(band, "relit image")
+            band = band.clamp_(0, 1).mul_(255).round_()
+        out[r:r1] = band
+        if albedo_out is not None:
+            albedo_out[:, r:r1] = a[0]
+    return BandRelit(out, new, lit / max(mass, 1.0), albedo_out)

@@ -1,0 +1,55 @@
+"""relight_over_photo (a photo relit in bands of rows) against the whole-photo relighting it replaces."""
+
+import pytest
+import torch
+
+from relightnet.io import to_uint8
+from relightnet.model import NetConfig, RelightNet
+from relightnet.pipeline import TorchPredictor, over_photo, relight_over_photo, relight_prediction
+
+
+@pytest.fixture(scope="module")
+def predict():
+    torch.manual_seed(0)
+    return TorchPredictor(RelightNet(NetConfig(width=8, max_width=32, light_hidden=32)).eval(), size=32)
+
+
+@pytest.fixture(scope="module")
+def photo():
+    """A 600 × 70 photo (three bands of rows) whose person runs off its bottom edge."""
+    torch.manual_seed(1)
+    img = torch.rand(3, 600, 70)
+    mask = torch.zeros(600, 70)
+    mask[150:, 10:60] = 1
+    mask[150:160, 10:60] = 0.5  # a soft edge
+    return img, mask
+
+
+@pytest.mark.parametrize("detail, keep_exposure, own_reference", [(True, True, False), (False, True, False),
+                                                                   (True, False, True), (False, False, False)])
+def test_bands_relight_as_the_whole_photo(predict, photo, detail, keep_exposure, own_reference):
+    img, mask = photo
+    crop = predict.crop(img, mask)
+    pred = crop.pasted()
+    light = torch.randn(9, 3) * 0.3 + torch.tensor([[1.0, 0.9, 0.8]] + [[0.0, 0.0, 0.0]] * 8)
+    ref = torch.randn(9, 3).abs() if own_reference else None
+    whole = relight_prediction(pred, img[None], light, detail=detail, keep_exposure=keep_exposure,
+                               reference=None if ref is None else ref[None])
+    expected = over_photo(whole.linear, pred.mask, img[None])[0]
+    res = relight_over_photo(crop, img, light, detail=detail, keep_exposure=keep_exposure, reference=ref,
+                             keep_albedo=True)
+    torch.testing.assert_close(res.light, whole.light, rtol=1e-4, atol=1e-6)
+    torch.testing.assert_close(res.image, expected, rtol=1e-4, atol=1e-4)
+    torch.testing.assert_close(res.albedo, whole.albedo[0], rtol=1e-4, atol=1e-4)
+    lit = ((whole.shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum()
+    assert abs(res.lit - float(lit)) < 1e-3
+    eight = relight_over_photo(crop, (img * 255).round().to(torch.uint8), light, detail=detail,
+                               keep_exposure=keep_exposure, reference=ref, dtype=torch.uint8)
+    assert eight.image.dtype == torch.uint8 and eight.albedo is None
+    quantised = to_uint8(over_photo(relight_prediction(pred, (img * 255).round()[None] / 255, light, detail=detail,
+                                                       keep_exposure=keep_exposure,
+                                                       reference=None if ref is None else ref[None]).linear,
+                                    pred.mask, (img * 255).round()[None] / 255)[0], srgb=False)
+    assert (eight.image.int() - quantised.int()).abs().max() <= 1
+    outside = mask == 0
+    assert torch.equal(eight.image[outside], (img * 255).round().to(torch.uint8).permute(1, 2, 0)[outside])
