@@ -195,8 +195,8 @@ class GraphModule(nn.Module):
             self._inputs[out] = args
             self._node_params[out] = tuple(ctx.used)
         last_use = {x: s for s, (_, args, _) in enumerate(steps) for x in args}
-        self._steps = [(fn, args, out, tuple(x for x in args if last_use[x] == s and x not in self.taps))
-                       for s, (fn, args, out) in enumerate(steps)]
+        self._steps = [(fn, args, out, tuple(dict.fromkeys(x for x in args if last_use[x] == s and x not in self.taps)))
+                       for s, (fn, args, out) in enumerate(steps)]  # a tensor given twice (Add(u, u)) is freed once
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, ...]:
         """x (B, C, H, W) -> the taps (class docstring)."""
