@@ -4,7 +4,7 @@ import pytest
 import torch
 
 from relightnet.io import to_uint8
-from relightnet.model import NetConfig, RelightNet
+from relightnet.model import NetConfig, RelightNet, shading_map
 from relightnet.pipeline import TorchPredictor, over_photo, relight_over_photo, relight_prediction
 
 
@@ -40,7 +40,13 @@ def test_bands_relight_as_the_whole_photo(predict, photo, detail, keep_exposure,
                              keep_albedo=True)
     torch.testing.assert_close(res.light, whole.light, rtol=1e-4, atol=1e-6)
     torch.testing.assert_close(res.image, expected, rtol=1e-4, atol=1e-4)
-    torch.testing.assert_close(res.albedo, whole.albedo[0], rtol=1e-4, atol=1e-4)
+    # The albedo is the photo divided by the shading. Where the shading's K terms cancel, the two paths'
+    # float32 sums (in different orders) differ by ~K·eps·Σ|T_k L_k|, large against a small S: the
+    # tolerance follows that conditioning (64 eps per unit of it) on top of assert_close's 1e-4 + 1e-4 relative.
+    src = pred.light.reshape(-1, 9, 3)  # the photo is divided by its own shading, T · L̂
+    cond = shading_map(pred.transport.abs(), src.abs()) / shading_map(pred.transport, src).abs().clamp_min(1e-12)
+    tol = 1e-4 + (1e-4 + 64 * torch.finfo(torch.float32).eps * cond[0]) * whole.albedo[0].abs()
+    assert ((res.albedo - whole.albedo[0]).abs() <= tol).all()
     lit = ((whole.shading.mean(1, keepdim=True) > 0).float() * pred.mask).sum() / pred.mask.sum()
     assert abs(res.lit - float(lit)) < 1e-3
     eight = relight_over_photo(crop, (img * 255).round().to(torch.uint8), light, detail=detail,
