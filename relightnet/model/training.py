@@ -253,12 +253,14 @@ def save_candidate(path, model: RelightNet, net_cfg: NetConfig, step: int, sched
 
     manifest = read_document(Path(data_dir) / "manifest.json", "dataset manifest", yaml_ok=False)
     recipe = manifest.get("config") if isinstance(manifest, dict) else None
-    out = save_checkpoint(path, model, net_cfg, step=step, scheduler=sched, train_config=cfg.to_dict(),
-                          data_recipe=recipe if isinstance(recipe, dict) else {})
-    if out.stat().st_size > CANDIDATE_BYTES:
-        out.unlink()
+    path = Path(path)
+    new = save_checkpoint(path.with_name(path.name + ".new"), model, net_cfg, step=step, scheduler=sched,
+                          train_config=cfg.to_dict(), data_recipe=recipe if isinstance(recipe, dict) else {})
+    if new.stat().st_size > CANDIDATE_BYTES:  # the previous candidate stays as it was
+        new.unlink()
         raise InputError(f"{path}: the candidate is larger than {CANDIDATE_BYTES >> 20} MB; use a smaller network")
-    return out
+    os.replace(new, path)
+    return path
 
 
 def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str = "cpu",

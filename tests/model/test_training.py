@@ -215,6 +215,7 @@ def test_a_candidate_carries_a_run_over_to_a_fresh_machine(tiny_dataset, tmp_pat
     train(cfg, tiny_dataset, tmp_path / "fresh", resume_from=cand)
     steps = [r["step"] for r in _losses(tmp_path / "fresh")]
     assert steps == [3, 4] and load_checkpoint(tmp_path / "fresh" / "last.pt")["step"] == 4
+    assert not list(cand.parent.glob("*.new"))  # written beside, then moved over the previous candidate
     full = TrainConfig(**{**cfg.to_dict(), "steps": 5})
     with pytest.raises(InputError, match="different training config"):
         train(full, tiny_dataset, tmp_path / "other", resume_from=cand)
