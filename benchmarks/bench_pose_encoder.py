@@ -22,7 +22,7 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.model.onnx_torch import POSE_TAPS, GraphModule, load_onnx, pose_encoder  # noqa: E402
+from relightnet.model.onnx_torch import POSE_TAPS, GraphModule, cut_to_outputs, load_onnx, pose_encoder  # noqa: E402
 
 OUTPUTS = ["Identity", "Identity_1", "Identity_2", "Identity_3", "Identity_4"]
 
@@ -44,17 +44,7 @@ def ort_model(outputs: list[str]) -> bytes:
     for t in m.graph.initializer:  # Identity_2's Reshape: (1, 256, 256, 1) -> (-1, 256, 256, 1)
         if t.name == "w200":
             t.CopyFrom(onnx.numpy_helper.from_array(np.array([-1, 256, 256, 1], np.int64), "w200"))
-    producer = {n.output[0]: n for n in m.graph.node}
-    keep, todo = set(), list(outputs)
-    while todo:
-        node = producer.get(todo.pop())
-        if node is not None and node.output[0] not in keep:
-            keep.add(node.output[0])
-            todo.extend(node.input)
-    nodes = [n for n in m.graph.node if n.output[0] in keep]
-    del m.graph.node[:], m.graph.output[:]
-    m.graph.node.extend(nodes)
-    m.graph.output.extend(onnx.helper.make_tensor_value_info(n, onnx.TensorProto.FLOAT, None) for n in outputs)
+    cut_to_outputs(m, outputs)
     return m.SerializeToString()
 
 

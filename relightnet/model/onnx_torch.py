@@ -30,7 +30,7 @@ from ..checks import InputError, ShapeError
 from ..segment.models import POSE_FILE
 from .onnx_ops import BUILDERS, SUPPORTED_OPS
 
-__all__ = ["GraphModule", "Tap", "POSE_TAPS", "load_onnx", "pose_encoder", "find_stride_taps"]
+__all__ = ["cut_to_outputs", "GraphModule", "Tap", "POSE_TAPS", "load_onnx", "pose_encoder", "find_stride_taps"]
 
 #: The NHWC -> NCHW permutation of a channels-last graph input.
 NCHW_FROM_NHWC = (0, 3, 1, 2)
@@ -107,6 +107,21 @@ class _Builder:
             raise InputError(f"ONNX node {node.output[0]!r} ({node.op_type}) reads the channels-last input "
                              "before the graph's transpose to NCHW (not supported; a channels-first graph "
                              "takes channels_last_input=False)")
+
+
+def cut_to_outputs(model, outputs: Sequence[str]) -> None:
+    """Cut ``model`` (an ``onnx.ModelProto``, in place) to the nodes ``outputs`` need, with ``outputs``
+    (any tensors of the graph) as its float outputs: ONNX Runtime runs every node of a graph."""
+    import onnx
+
+    sources = {t.name for t in model.graph.initializer} | {i.name for i in model.graph.input}
+    nodes = [model.graph.node[i] for i in _needed(list(model.graph.node), outputs, sources)]
+    kept = [onnx.NodeProto() for _ in nodes]
+    for k, n in zip(kept, nodes, strict=True):
+        k.CopyFrom(n)
+    del model.graph.node[:], model.graph.output[:]
+    model.graph.node.extend(kept)
+    model.graph.output.extend(onnx.helper.make_tensor_value_info(n, onnx.TensorProto.FLOAT, None) for n in outputs)
 
 
 def _needed(nodes, taps: Sequence[str], sources: set[str]) -> list[int]:

@@ -20,7 +20,14 @@ import torch
 from torch import nn
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.model.onnx_torch import POSE_TAPS, GraphModule, find_stride_taps, load_onnx, pose_encoder
+from relightnet.model.onnx_torch import (
+    POSE_TAPS,
+    GraphModule,
+    cut_to_outputs,
+    find_stride_taps,
+    load_onnx,
+    pose_encoder,
+)
 
 onnx = pytest.importorskip("onnx")
 ort = pytest.importorskip("onnxruntime")
@@ -41,17 +48,7 @@ def _session(model, outputs, dynamic=False):
     if dynamic:
         for dim, name in zip(m.graph.input[0].type.tensor_type.shape.dim, ("B", "H", "W"), strict=False):
             dim.dim_param = name
-    producer = {n.output[0]: n for n in m.graph.node}
-    keep, todo = set(), list(outputs)
-    while todo:  # ONNX Runtime runs every node: drop those the outputs do not need (fixed-shape heads)
-        node = producer.get(todo.pop())
-        if node is not None and node.output[0] not in keep:
-            keep.add(node.output[0])
-            todo.extend(node.input)
-    nodes = [n for n in m.graph.node if n.output[0] in keep]
-    del m.graph.node[:], m.graph.output[:]
-    m.graph.node.extend(nodes)
-    m.graph.output.extend(onnx.helper.make_tensor_value_info(n, onnx.TensorProto.FLOAT, None) for n in outputs)
+    cut_to_outputs(m, outputs)
     opts = ort.SessionOptions()
     opts.intra_op_num_threads, opts.log_severity_level = 1, 3
     return ort.InferenceSession(m.SerializeToString(), opts, providers=["CPUExecutionProvider"])
