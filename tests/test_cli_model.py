@@ -79,7 +79,7 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
 
 
 def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
-    from relightnet.sh import combine_person_plate, load_plate_light
+    from relightnet.sh import combine_person_plate, load_plate, load_plate_light
 
     g = np.random.default_rng(0)
     plate = np.concatenate([np.full((30, 80, 3), 220), np.full((30, 80, 3), 40)]).astype(np.uint8)
@@ -100,7 +100,8 @@ def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
     assert main([*photo, "--out", str(tmp_path / "person.npz")]) == 0
     assert main([*photo, "--plate", str(tmp_path / "plate.png"), "--fov", "50", "--out", str(tmp_path / "b.npz")]) == 0
     torch.testing.assert_close(load_light(tmp_path / "b.npz"),
-                               combine_person_plate(load_light(tmp_path / "person.npz"), on_plate))
+                               combine_person_plate(load_light(tmp_path / "person.npz"),
+                                                    *load_plate(tmp_path / "plate.png", hfov_deg=50.0)))
     capsys.readouterr()
     assert main(["estimate-light", "--out", str(tmp_path / "x.npz")]) == 1
     assert "give a photo of a person (IMAGE), a background plate (--plate), or both" in capsys.readouterr().err

@@ -102,7 +102,7 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
-    from ..sh.plate import combine_person_plate, load_plate_light
+    from ..sh.plate import combine_person_plate, load_plate
 
     if args.image is None and args.plate is None:
         raise InputError("give a photo of a person (IMAGE), a background plate (--plate), or both")
@@ -111,14 +111,14 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
     plate = None
     if args.plate is not None:
-        plate = load_plate_light(args.plate, hfov_deg=args.fov or 60.0)
+        plate = load_plate(args.plate, hfov_deg=args.fov or 60.0)
     light = None
     if args.image is not None:
         image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
         predict = make_predictor(args.backend, args.checkpoint, args.device, size=args.size)
         light = predict.light(image, mask).cpu()
     if plate is not None:
-        light = plate if light is None else combine_person_plate(light, plate)
+        light = plate.light if light is None else combine_person_plate(light, *plate)
     save_light(out, light)
     logger.info("wrote %s (light from %s)", out, " and ".join(
         w for w, v in (("the person", args.image), ("the plate", args.plate)) if v is not None))
