@@ -32,7 +32,7 @@ from .metrics import acceleration_error, foot_skating, landmark_error, mask_iou,
 from .observe import Observations, fill_missing, observe_frames, world_to_view_axes
 from .preview import fit_camera, fit_meshes, fit_silhouettes, overlay_frames
 from .prior import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
-from .retarget import leg_length, retarget_motion
+from .retarget import leg_length, retarget_motion, to_default_avatar
 from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
 from .solve import FitResult, FitWeights, fit_observations
 from .terms import (
@@ -58,7 +58,7 @@ __all__ = [
     "Observations", "fill_missing", "observe_frames", "world_to_view_axes",
     "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames",
     "FIT_BONES", "JOINT_LIMITS", "limit_bounds", "limit_penalty", "rest_penalty",
-    "leg_length", "retarget_motion",
+    "leg_length", "retarget_motion", "to_default_avatar",
     "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
     "FitResult", "FitWeights", "fit_observations",
     "HIP_SLOTS", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "person_scale", "reprojection_term",

@@ -149,13 +149,12 @@ def motion_for_avatar(source: str | Path, options: FitOptions = FitOptions()) ->
         The avatar body's parameters (``AnnyMotion.body_params()``): pose (T, J, 3), trans (T, 3),
         phenotype (1, 6).
     """
-    from ..body import PHENOTYPES
     from .metrics import foot_skating
-    from .retarget import retarget_motion
+    from .retarget import to_default_avatar
 
     fb = FitBody()
     fitted = fit_file(source, options, fb=fb)
-    moved = retarget_motion(fitted.motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))
+    moved = to_default_avatar(fitted.motion, fb)
     with torch.no_grad():
         out = fb.body(pose=moved.pose, trans=moved.trans, phenotype=moved.phenotype[None])
         skate = foot_skating(fb.landmarks(out.verts, out.joints))
