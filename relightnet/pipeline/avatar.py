@@ -275,8 +275,7 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
-        plate_light: a :class:`relightnet.sh.Plate` (its (K, 3) light and view), combined with the
-            estimates (``relightnet.sh.combine_person_plate``).
+        plate_light: a :class:`relightnet.sh.Plate`, combined with the estimates (``sh.combine_person_plate``).
         replace_person, outfit: take the person's place (:func:`.clean_plate.stand_in`); dress (:func:`.avatar_look`).
 
     Returns:

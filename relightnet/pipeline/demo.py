@@ -30,7 +30,7 @@ import torch
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["run_demo", "side_by_side", "DEMO_CLIP"]
+__all__ = ["run_demo", "DEMO_CLIP"]
 
 #: The generated test clip used as the target: a walk under a turning ``night`` light.
 DEMO_CLIP = 7
@@ -57,28 +57,6 @@ def _write_target(out: Path, sample) -> dict:
     return paths
 
 
-def side_by_side(out: Path, videos, fps: float) -> Path:
-    """Write the frames of ``videos`` (paths) side by side, left to right, each scaled to the first
-    one's height (area averaging; widths rounded to even), for as many frames as the shortest has."""
-    from ..io import VideoWriter, read_video
-
-    with VideoWriter(out, fps=fps) as v:
-        for frames in zip(*(read_video(p) for p in videos), strict=False):
-            h = frames[0].shape[0]
-            v.write(np.concatenate([_to_height(f, h) for f in frames], axis=1))
-    return out
-
-
-def _to_height(frame: np.ndarray, h: int) -> np.ndarray:
-    """(H, W, 3) uint8 → (h, W·h/H rounded to even, 3) uint8."""
-    if frame.shape[0] == h:
-        return frame
-    w = max(2, 2 * round(frame.shape[1] * h / frame.shape[0] / 2))
-    x = torch.from_numpy(frame).permute(2, 0, 1)[None].float()
-    y = torch.nn.functional.interpolate(x, size=(h, w), mode="area" if h < frame.shape[0] else "bilinear")
-    return y[0].permute(1, 2, 0).round().clamp(0, 255).to(torch.uint8).numpy()
-
-
 def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int = 64, compare_clips: int = 2,
              compare_size: int = 128, compare_frames: int = 24, progress: bool = True) -> dict:
     """Write the demo into ``out_dir``; returns the paths written by name.
@@ -91,7 +69,7 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     """
     from ..body import AnnyBody
     from ..data import SynthConfig, generate_sequence
-    from ..io import atomic_write
+    from ..io import atomic_write, write_side_by_side
     from ..model import load_model
     from ..sh import render_presets
     from ..temporal import light_error
@@ -115,7 +93,8 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk", body=body,
                  target_masks=paths["masks"], plate=paths["plate"], n_dirs=n_dirs, progress=progress)
     paths["avatar"], paths["avatar_lights"] = res.video, res.lights_file
-    paths["side_by_side"] = side_by_side(out / "side_by_side.mp4", [paths["target"], res.video], sample.meta["fps"])
+    paths["side_by_side"] = write_side_by_side(out / "side_by_side.mp4", [paths["target"], res.video],
+                                               sample.meta["fps"])
     true = torch.from_numpy(sample.arrays["light"])
     errors = {k: float(light_error(v, true)) for k, v in (("raw", res.lights_raw), ("smoothed", res.lights_smoothed))}
     png = light_curves_png(res.lights_raw, res.lights_smoothed, true, res.outliers, res.switches,

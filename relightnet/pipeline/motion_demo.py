@@ -69,7 +69,7 @@ def _walk(n_frames: int, fps: float, seed: int) -> dict:
 def motion_transfer_demo(out_dir, target, target_masks, plate, size: int, n_frames: int, body, model,
                          n_dirs: int = 64, fps: float = 30.0, progress: bool = True) -> dict:
     """The demo's ``motion/`` step (module docstring): ``source.mp4``, ``avatar.mp4`` in the target,
-    ``side_by_side.mp4`` (source | avatar), and the fit's MPJPE against the source's truth.
+    ``side_by_side.mp4`` (source | avatar), and the fit's PA-MPJPE against the source's truth.
 
     Args:
         out_dir: folder to write into. target, target_masks, plate: the demo's target clip, its
@@ -81,8 +81,8 @@ def motion_transfer_demo(out_dir, target, target_masks, plate, size: int, n_fram
         after the best rotation, scale and translation per frame).
     """
     from ..fit import FitBody, fit_file, pa_mpjpe, to_default_avatar
+    from ..io import write_side_by_side
     from .avatar import avatar
-    from .demo import side_by_side
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -92,7 +92,7 @@ def motion_transfer_demo(out_dir, target, target_masks, plate, size: int, n_fram
     fitted = fit_file(source, fb=fb)
     res = avatar(target, out / "avatar.mp4", model=model, motion=to_default_avatar(fitted.motion, fb).body_params(),
                  body=body, target_masks=target_masks, plate=plate, n_dirs=n_dirs, progress=progress)
-    sbs = side_by_side(out / "side_by_side.mp4", [source, res.video], fps)
+    sbs = write_side_by_side(out / "side_by_side.mp4", [source, res.video], fps)
     with torch.no_grad():
         true_out = body(truth)
         true_pts = fb.landmarks(true_out.verts, true_out.joints)
