@@ -14,7 +14,17 @@ from ..raster import Camera, interpolate, perspective_projection, rasterize
 from .body_model import FitBody
 from .solve import FitResult
 
-__all__ = ["fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames"]
+__all__ = ["CHUNK_PIXELS", "chunk_frames", "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames"]
+
+#: Pixels of the frames rasterized or drawn together (frames × H × W): 8 frames of 512², one frame from 2 MP
+#: up. A 12.5 MP frame alone takes ~1 GB here (the frame and its overlay as float, the rasterizer's buffers).
+CHUNK_PIXELS = 1 << 21
+
+
+def chunk_frames(size: tuple[int, int], most: int = 8) -> int:
+    """How many frames of (H, W) to rasterize or draw together: at most ``most``, within :data:`CHUNK_PIXELS`
+    (at least 1)."""
+    return max(1, min(int(most), CHUNK_PIXELS // max(int(size[0]) * int(size[1]), 1)))
 
 
 def fit_camera(result: FitResult, batch: int = 1) -> Camera:
@@ -36,10 +46,13 @@ def _frags(result: FitResult, fb: FitBody, start: int, stop: int):
     return out, rasterize(cam.transform(out.verts), out.faces, result.size)
 
 
-def fit_silhouettes(result: FitResult, fb: FitBody, chunk: int = 8) -> torch.Tensor:
-    """(T, H, W) float32 masks of the fitted body in the input's camera."""
-    T = result.pose.shape[0]
-    return torch.cat([_frags(result, fb, a, min(a + chunk, T))[1].mask.float() for a in range(0, T, chunk)])
+def fit_silhouettes(result: FitResult, fb: FitBody, chunk: int | None = None, start: int = 0,
+                    stop: int | None = None) -> torch.Tensor:
+    """(stop − start, H, W) float32 masks of the fitted body in the input's camera, frames [start, stop)
+    (default: all T), rasterized ``chunk`` frames at a time (default: :func:`chunk_frames`)."""
+    stop = result.pose.shape[0] if stop is None else stop
+    chunk = chunk_frames(result.size) if chunk is None else chunk
+    return torch.cat([_frags(result, fb, a, min(a + chunk, stop))[1].mask.float() for a in range(start, stop, chunk)])
 
 
 def overlay_frames(frames: torch.Tensor, result: FitResult, fb: FitBody, start: int = 0,

@@ -25,3 +25,20 @@ def test_preview_and_masks_of_a_video(tmp_path, fit_body):
     # the overlay changes the frame where the body is, and only there
     changed = np.abs(frames - 90).max(-1) > 20
     assert changed[masks].mean() > 0.9 and changed[~masks].mean() < 0.05
+
+
+def test_frames_are_rasterized_a_few_at_a_time(fit_body):
+    """8 frames of a small video together, one frame at a time from 2 MP up; any chunking gives the same masks."""
+    from relightnet.fit import CHUNK_PIXELS, chunk_frames, fit_silhouettes
+
+    assert chunk_frames((192, 192)) == 8 and chunk_frames((1080, 1920)) == 1 and chunk_frames((3120, 4000)) == 1
+    assert chunk_frames((512, 512)) * 512 * 512 <= CHUNK_PIXELS
+    T, size = 5, (40, 32)
+    trans = torch.tensor([0.0, -0.9, -2.2]).expand(T, 3).clone()
+    trans[:, 0] = torch.linspace(-0.3, 0.3, T)
+    res = FitResult(torch.zeros(T, len(FIT_BONES), 3), trans, fit_body.body.phenotype_tensor(None)[0],
+                    default_intrinsics(size, 60.0), size, torch.zeros(T), torch.zeros(T, dtype=torch.bool), 0.0)
+    whole = fit_silhouettes(res, fit_body)
+    assert whole.shape == (T, *size) and whole.sum() > 0
+    assert torch.equal(fit_silhouettes(res, fit_body, chunk=2), whole)
+    assert torch.equal(fit_silhouettes(res, fit_body, chunk=1, start=1, stop=4), whole[1:4])
