@@ -15,7 +15,8 @@ def _blobs(T: int, size, seed: int = 0) -> np.ndarray:
     y, x = np.mgrid[:H, :W]
     out = np.zeros((T, H, W), bool)
     for t in range(T):
-        cy, cx, ry, rx = rng.uniform(0, H), rng.uniform(0, W), rng.uniform(1, max(H / 2, 2)), rng.uniform(1, max(W / 2, 2))
+        cy, cx = rng.uniform(0, H), rng.uniform(0, W)
+        ry, rx = rng.uniform(1, max(H / 2, 2)), rng.uniform(1, max(W / 2, 2))
         out[t] = ((y - cy) / ry) ** 2 + ((x - cx) / rx) ** 2 < 1
     out[1] = False
     out[2] = True
