@@ -42,3 +42,25 @@ def test_frames_are_rasterized_a_few_at_a_time(fit_body):
     assert whole.shape == (T, *size) and whole.sum() > 0
     assert torch.equal(fit_silhouettes(res, fit_body, chunk=2), whole)
     assert torch.equal(fit_silhouettes(res, fit_body, chunk=1, start=1, stop=4), whole[1:4])
+
+
+def test_overlay_blends_the_covered_pixels_as_the_whole_image_formula_did(fit_body):
+    """The overlay is blended at the covered pixels only; every pixel equals the old whole-image formula's
+    (frames × (1 − a) + colour × a, clamped, a = opacity × coverage), bit for bit, also for strided frames."""
+    from relightnet.fit import fit_silhouettes, overlay_frames
+    from relightnet.fit.preview import _frags
+    from relightnet.raster import interpolate
+
+    T, size = 2, (40, 32)
+    trans = torch.tensor([[0.1, -0.9, -2.2], [-0.1, -0.9, -2.4]])
+    res = FitResult(torch.zeros(T, len(FIT_BONES), 3), trans, fit_body.body.phenotype_tensor(None)[0],
+                    default_intrinsics(size, 60.0), size, torch.zeros(T), torch.zeros(T, dtype=torch.bool), 0.0)
+    g = torch.Generator().manual_seed(0)
+    frames = torch.randint(0, 256, (T, *size, 3), dtype=torch.uint8, generator=g).permute(0, 3, 1, 2).float() / 255
+    out, fr = _frags(res, fit_body, 0, T)
+    n = interpolate(out.normals, fr, out.faces)
+    colour = torch.tensor([0.55, 0.75, 1.0])[None, :, None, None] * (0.25 + 0.75 * n[..., 2].clamp(0, 1))[:, None]
+    a = 0.6 * fr.mask.float()[:, None]
+    old = (frames * (1 - a) + colour * a).clamp(0, 1)
+    new = overlay_frames(frames, res, fit_body)
+    assert torch.equal(new, old) and fit_silhouettes(res, fit_body).mean() > 0.05
