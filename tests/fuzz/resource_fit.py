@@ -55,23 +55,24 @@ def person_clip(path: Path, n: int, small: tuple[int, int] = SMALL, up: int = UP
 def fit_at_limit(folder: Path, n: int = 4) -> Case:
     """A person's video of 4000 × 3120 (12.48 MP) fitted, with the fitted masks written: within the budget."""
     person_clip(folder / "clip.mp4", n)
-    argv = ["-q", "fit", "clip.mp4", "--out", "motion.npz", "--mask-out", "fitted.mkv", "--iters", "20",
-            "--warm-iters", "10", "--threads", "1"]
+    argv = ["-q", "fit", "clip.mp4", "--out", "motion.npz", "--mask-out", "fitted.mkv", "--iters", "8",
+            "--warm-iters", "4", "--threads", "1"]  # the memory is the frames' (segmentation, masks), not the steps'
     return Case(argv, "clip.mp4", expect="ok", outputs=("motion.npz", "fitted.mkv"))
 
 
 def avatar_motion_from_at_limit(folder: Path) -> Case:
-    """``avatar --motion-from`` a 12.5 MP person's video (4 frames), into a small target: within the budget."""
+    """``avatar --motion-from`` a 12.5 MP person's video (2 frames: the fit's 120 steps), into a small target:
+    within the budget."""
     from resource_media import video
 
-    person_clip(folder / "source.mp4", 4)
-    video(folder / "target.mp4", 4)
+    person_clip(folder / "source.mp4", 2)
+    video(folder / "target.mp4", 2)
     argv = ["-q", "avatar", "--motion-from", "source.mp4", "--target", "target.mp4", "--light", "studio",
             "--no-occlusion", "--n-dirs", "16", "--out", "out.mp4"]
     return Case(argv, "source.mp4", expect="ok", outputs=("out.mp4", "out.lights.npz", "out.lights.png"))
 
 
-#: (16 frames take ~1 to 2.5 min on a loaded 2-core machine, past the cases' wall cap: measured in SECURITY.md.)
+#: (Longer clips take minutes on a loaded 2-core machine, past the cases' wall cap: measured in SECURITY.md.)
 SLOW = {"fit-12.5MP-4-frames", "avatar-motion-from-12.5MP"}
 
 CASES = {
