@@ -1,9 +1,10 @@
 """Fit the Anny body to a person in a photo or a video (motion capture from landmarks and masks).
 
 The evidence (:class:`Observations`: BlazePose's 33 landmarks in pixels and metres, the person
-mask) comes from :mod:`relightnet.segment`; :data:`LANDMARK_SOURCES` is the one correspondence
-between those landmarks and Anny's points. :func:`fit_observations` fits the bones of
-:data:`FIT_BONES`, the global orientation and translation and (optionally) the shape;
+mask, kept packed: :class:`PackedMasks`) comes from :mod:`relightnet.segment`;
+:data:`LANDMARK_SOURCES` is the one correspondence between those landmarks and Anny's points.
+:func:`fit_observations` fits the bones of :data:`FIT_BONES`, the global orientation and translation
+and (optionally) the shape;
 :func:`smooth_motion` smooths a video's track and :func:`place_in_world` turns it into an Anny
 motion file's content; :func:`retarget_motion` hands it to another body; :func:`fit_file` does
 it all for a photo or video file; :mod:`.metrics` measures a fit against the truth.
@@ -28,13 +29,14 @@ from .job import (
                   write_preview,
 )
 from .landmarks import LANDMARK_SOURCES, AnnyLandmarks, landmark_weights
+from .masks import PackedMasks
 from .metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
 from .observe import Observations, fill_missing, observe_frames, world_to_view_axes
-from .preview import fit_camera, fit_meshes, fit_silhouettes, overlay_frames
+from .preview import CHUNK_PIXELS, chunk_frames, fit_camera, fit_meshes, fit_silhouettes, overlay_frames
 from .prior import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
 from .retarget import leg_length, retarget_motion, to_default_avatar
 from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
-from .solve import FitResult, FitWeights, fit_observations
+from .solve import MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
                   WORLD_UNIT,
@@ -55,12 +57,12 @@ __all__ = [
     "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",
     "acceleration_error", "foot_skating", "landmark_error", "mask_iou", "mpjpe", "pa_mpjpe",
-    "Observations", "fill_missing", "observe_frames", "world_to_view_axes",
-    "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames",
+    "PackedMasks", "Observations", "fill_missing", "observe_frames", "world_to_view_axes",
+    "CHUNK_PIXELS", "chunk_frames", "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames",
     "FIT_BONES", "JOINT_LIMITS", "limit_bounds", "limit_penalty", "rest_penalty",
     "leg_length", "retarget_motion", "to_default_avatar",
     "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
-    "FitResult", "FitWeights", "fit_observations",
+    "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
     "HIP_SLOTS", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "person_scale", "reprojection_term",
     "silhouette_targets", "silhouette_term", "world_term",
 ]

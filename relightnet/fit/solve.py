@@ -34,7 +34,7 @@ from .terms import acceleration_term, person_scale, reprojection_term, silhouett
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["FitWeights", "FitResult", "fit_observations"]
+__all__ = ["FitWeights", "FitResult", "fit_observations", "MAX_WINDOW_PIXELS"]
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ def _evidence(fb: FitBody, obs: Observations, start: int, stop: int) -> dict:
     o = obs.slice(start, stop)
     w = landmark_weights(o.landmarks[..., 3], fb.landmarks.mapped)
     ev = {"lm": o.landmarks, "w": w, "world": world_to_view_axes(o.world), "scale": person_scale(o.landmarks, w)}
-    ev["sil"] = silhouette_targets(o.masks) if o.masks is not None else None
+    ev["sil"] = silhouette_targets(o.masks.unpack()) if o.masks is not None else None  # this window's only
     return ev
 
 
@@ -100,6 +100,10 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
         total = total + wts.smooth * acceleration_term(pts, before)
     return total, e2d, pts
 
+
+#: Pixels of silhouette evidence one window holds (frames × H × W; a float32 distance map each): 8 frames at
+#: the 12.5 MP pixel limit, 400 MB. A longer window of such frames is refused, not allowed to pass the budget.
+MAX_WINDOW_PIXELS = 100_000_000
 
 #: A shape fit recomputes the rest body (the costly part) and steps the shape every this many iterations.
 SHAPE_EVERY = 5
@@ -169,14 +173,23 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         intrinsics: ``(fx, fy, cx, cy)`` of the frames (:mod:`relightnet.fit.camera`).
         body: a :class:`FitBody` (made here when None; pass one for many fits).
         iters: Adam iterations of the first window; warm_iters: of each later window.
-        window: frames fitted together.
+        window: frames fitted together (at most :data:`MAX_WINDOW_PIXELS` pixels of them).
         fit_shape: also fit height, weight and proportions (on the first window).
 
     Returns:
         :class:`FitResult` (unsmoothed; see :func:`relightnet.fit.smooth_motion`).
+
+    Raises:
+        InputError: iterations or window below 1; a window of more pixels than :data:`MAX_WINDOW_PIXELS`.
     """
     if iters < 1 or warm_iters < 1 or window < 1:
         raise InputError(f"fit: iters, warm_iters and window must be >= 1, got {iters}, {warm_iters}, {window}")
+    H, W = (int(x) for x in obs.size)
+    n = min(window, obs.n_frames)
+    if obs.masks is not None and n > 1 and n * H * W > MAX_WINDOW_PIXELS:
+        raise InputError(f"fit: a window of {n} frames of {W}x{H} would hold {n * H * W * 4 / 2**30:.1f} GiB of "
+                         f"silhouette distance maps; at most {max(MAX_WINDOW_PIXELS // (H * W), 1)} frames of this "
+                         "size are fitted together (a smaller --window)")
     t0 = time.perf_counter()
     fb = body if body is not None else FitBody()
     base = torch.tensor([PHENOTYPES[n][2] for n in PHENOTYPES])
@@ -197,6 +210,7 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         transs.append(win.trans.detach())
         res.append(r)
         prev, before = win.sub[-1:].detach(), pts[-2:].detach()
+        del ev  # this window's distance maps go before the next window's are made (two would be 800 MB at 12.5 MP)
         logger.debug("fit: frames %d-%d, residual %.4f", start, stop - 1, float(r.mean()))
     phen = phenotype_from_free(free, base)[0].detach()
     return FitResult(torch.cat(subs), torch.cat(transs), phen, tuple(float(x) for x in intrinsics),

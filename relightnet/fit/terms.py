@@ -87,24 +87,26 @@ class SilhouetteTargets:
 
 
 def silhouette_targets(masks: torch.Tensor, n_outline: int = 256) -> SilhouetteTargets:
-    """Distance transforms and outline samples of (B, H, W) masks (computed once per frame)."""
+    """Distance transforms and outline samples of (B, H, W) masks (bool, or above 0.5 is the person;
+    computed once per frame, each written into the one (B, 1, H, W) float32 result)."""
     from scipy import ndimage
 
     d = check_shape(masks, ["B", "H", "W"], name="masks")
-    outs, lines, valid = [], [], []
-    for m in masks.detach().cpu().numpy() > 0.5:
+    outside = np.zeros((d["B"], 1, d["H"], d["W"]), np.float32)
+    lines, valid = [], []
+    m_all = masks.detach().cpu().numpy()
+    for i, m in enumerate(m_all if m_all.dtype == np.bool_ else m_all > 0.5):
         if not m.any():
-            outs.append(np.zeros(m.shape, np.float32))
             lines.append(np.zeros((n_outline, 2), np.float32))
             valid.append(False)
             continue
-        outs.append(ndimage.distance_transform_edt(~m).astype(np.float32))
+        outside[i, 0] = ndimage.distance_transform_edt(~m)
         edge = m & ~ndimage.binary_erosion(m)
         ys, xs = np.nonzero(edge)
         pick = np.linspace(0, len(xs) - 1, n_outline).round().astype(int)
         lines.append(np.stack([xs[pick] + 0.5, ys[pick] + 0.5], 1).astype(np.float32))
         valid.append(True)
-    return SilhouetteTargets(torch.from_numpy(np.stack(outs))[:, None], torch.from_numpy(np.stack(lines)),
+    return SilhouetteTargets(torch.from_numpy(outside), torch.from_numpy(np.stack(lines)),
                              torch.tensor(valid).reshape(d["B"]))
 
 
