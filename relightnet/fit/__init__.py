@@ -37,9 +37,11 @@ from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion,
 from .solve import FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
+                  SILHOUETTE_HEIGHT,
                   WORLD_UNIT,
                   SilhouetteTargets,
                   acceleration_term,
+                  outline_matches,
                   person_scale,
                   reprojection_term,
                   silhouette_targets,
@@ -61,6 +63,6 @@ __all__ = [
     "leg_length", "retarget_motion",
     "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
     "FitResult", "FitWeights", "fit_observations",
-    "HIP_SLOTS", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "person_scale", "reprojection_term",
-    "silhouette_targets", "silhouette_term", "world_term",
+    "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "outline_matches",
+    "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "world_term",
 ]

@@ -119,8 +119,9 @@ class FitBody(nn.Module):
         J = self.num_joints
         eye = torch.eye(4, dtype=self.body.dtype).expand(1, J, 4, 4)
         raw = anny(pose_parameters=eye, phenotype_kwargs=phenotype)
-        zero = self.body(pose=torch.zeros(1, J, 3, dtype=self.body.dtype), phenotype=phenotype)
-        offset = (zero.joints[0] - anny_to_world(raw["bone_poses"][0, :, :3, 3])).mean(0)
+        # The body's ``ground="rest"`` shift, from this same zero-pose pass (no second forward).
+        min_y = self.body._zero_pose_min_y(raw)[0]
+        offset = torch.stack([torch.zeros_like(min_y), -min_y, torch.zeros_like(min_y)])
         W0, P = raw["bone_poses"][0], raw["rest_bone_poses"][0]
         W0f_inv = torch.linalg.inv(W0[self.bone_index])  # (N, 4, 4)
         C = W0f_inv[self.group_slot] @ W0 @ torch.linalg.inv(P)  # (J, 4, 4): T_j = W_f(j) C_j

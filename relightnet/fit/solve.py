@@ -30,7 +30,15 @@ from .init import initial_orientation, initial_translation
 from .landmarks import landmark_weights
 from .observe import Observations, world_to_view_axes
 from .prior import FIT_BONES, limit_bounds, limit_penalty, rest_penalty
-from .terms import acceleration_term, person_scale, reprojection_term, silhouette_targets, silhouette_term, world_term
+from .terms import (
+                    acceleration_term,
+                    outline_matches,
+                    person_scale,
+                    reprojection_term,
+                    silhouette_targets,
+                    silhouette_term,
+                    world_term,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -85,17 +93,24 @@ def _evidence(fb: FitBody, obs: Observations, start: int, stop: int) -> dict:
     o = obs.slice(start, stop)
     w = landmark_weights(o.landmarks[..., 3], fb.landmarks.mapped)
     ev = {"lm": o.landmarks, "w": w, "world": world_to_view_axes(o.world), "scale": person_scale(o.landmarks, w)}
-    ev["sil"] = silhouette_targets(o.masks) if o.masks is not None else None
+    ev["sil"] = silhouette_targets(o.masks, size=obs.size) if o.masks is not None else None
     return ev
 
 
-def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_sil: bool) -> tuple:
+#: The silhouette's outline points are matched to their nearest vertices every this many steps.
+MATCH_EVERY = 4
+
+
+def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_sil: bool, step: int = 0) -> tuple:
     pts, sv = fb.points(win.sub, win.trans, rest)
     e2d = reprojection_term(pts, ev["lm"], ev["w"], intr, ev["scale"])
     total = wts.reprojection * e2d + wts.world * world_term(pts, ev["world"], ev["w"])
     total = total + wts.limits * limit_penalty(win.sub, *bounds) + wts.rest * rest_penalty(win.sub)
     if use_sil and ev["sil"] is not None:
-        total = total + wts.silhouette * silhouette_term(project_points(sv, intr), ev["sil"], ev["scale"])
+        px = project_points(sv, intr)
+        if step % MATCH_EVERY == 0 or "matches" not in ev:
+            ev["matches"] = outline_matches(px, ev["sil"])
+        total = total + wts.silhouette * silhouette_term(px, ev["sil"], ev["scale"], ev["matches"])
     if wts.smooth > 0:
         total = total + wts.smooth * acceleration_term(pts, before)
     return total, e2d, pts
@@ -103,9 +118,14 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
 
 #: A shape fit recomputes the rest body (the costly part) and steps the shape every this many iterations.
 SHAPE_EVERY = 5
+#: Early stop of a warm-started window (the first window, which also fits the shape, runs all its
+#: iterations): after the root-only phase it stops when its loss has not fallen by this fraction
+#: in :data:`PATIENCE` iterations (Adam's steps are noisy; one step's change says little).
+STOP_TOL = 1e-3
+PATIENCE = 6
 
 
-def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool, before) -> tuple:
+def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool, before, tol: float) -> tuple:
     bounds = limit_bounds(win.sub.dtype)
     params = [win.sub, win.trans] + ([win.free] if fit_shape else [])
     for p in params:
@@ -115,12 +135,13 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
     n_global = iters // 4
     with torch.no_grad():
         rest = fb.rest(phenotype_from_free(win.free, base))
+    best, since = float("inf"), 0
     for i in range(iters):
         shape_step = fit_shape and i >= n_global and i % SHAPE_EVERY == 0
         if shape_step:
             rest = fb.rest(phenotype_from_free(win.free, base))
         opt.zero_grad(set_to_none=True)
-        total, _, _ = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=i >= n_global)
+        total, _, _ = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=i >= n_global, step=i)
         loss = total.sum()
         if shape_step:
             opt_shape.zero_grad(set_to_none=True)
@@ -133,6 +154,11 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
             opt_shape.step()
             with torch.no_grad():
                 rest = fb.rest(phenotype_from_free(win.free, base))
+        if i >= n_global and tol > 0 and not fit_shape:
+            value = float(loss.detach())
+            best, since = (value, 0) if value < best * (1 - tol) else (best, since + 1)
+            if since >= PATIENCE:
+                break
     with torch.no_grad():
         rest = fb.rest(phenotype_from_free(win.free, base))
         _, e2d, pts = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=True)
@@ -161,7 +187,7 @@ def _start(fb: FitBody, ev: dict, base, free, intr, prev_sub) -> _Window:
 
 def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None, iters: int = 120,
                      warm_iters: int = 50, window: int = 8, fit_shape: bool = True,
-                     weights: FitWeights = FitWeights()) -> FitResult:
+                     weights: FitWeights = FitWeights(), tol: float = STOP_TOL) -> FitResult:
     """Fit Anny to T frames of evidence (T = 1: a photo).
 
     Args:
@@ -171,12 +197,14 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         iters: Adam iterations of the first window; warm_iters: of each later window.
         window: frames fitted together.
         fit_shape: also fit height, weight and proportions (on the first window).
+        tol: early stop (:data:`STOP_TOL`; 0: always run every iteration).
 
     Returns:
         :class:`FitResult` (unsmoothed; see :func:`relightnet.fit.smooth_motion`).
     """
-    if iters < 1 or warm_iters < 1 or window < 1:
-        raise InputError(f"fit: iters, warm_iters and window must be >= 1, got {iters}, {warm_iters}, {window}")
+    if iters < 1 or warm_iters < 1 or window < 1 or not 0 <= tol < 1:
+        raise InputError(f"fit: iters, warm_iters and window must be >= 1 and tol in [0, 1), got {iters}, "
+                         f"{warm_iters}, {window}, {tol}")
     t0 = time.perf_counter()
     fb = body if body is not None else FitBody()
     base = torch.tensor([PHENOTYPES[n][2] for n in PHENOTYPES])
@@ -191,7 +219,7 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         win = _start(fb, ev, base, free, intrinsics, prev)
         first = start == 0
         r, pts = _optimise(fb, win, ev, base, intrinsics, weights, iters if first else warm_iters,
-                           fit_shape and first, before)
+                           fit_shape and first, before, tol)
         free = win.free.detach()
         subs.append(win.sub.detach())
         transs.append(win.trans.detach())
