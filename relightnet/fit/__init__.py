@@ -16,7 +16,15 @@ Example:
 
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics, project_points
-from .init import CORE_SLOTS, TORSO_SLOTS, initial_orientation, initial_translation, kabsch
+from .init import (
+                   CORE_SLOTS,
+                   MAX_TURN_DEG,
+                   TORSO_SLOTS,
+                   initial_orientation,
+                   initial_translation,
+                   kabsch,
+                   relative_turn,
+)
 from .job import (
                   PHOTO_SUFFIXES,
                   FitOptions,
@@ -52,7 +60,8 @@ from .terms import (
 __all__ = [
     "SHAPE_NAMES", "FitBody", "phenotype_from_free",
     "DEFAULT_FOV_DEG", "default_intrinsics", "exif_intrinsics", "project_points",
-    "CORE_SLOTS", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
+    "CORE_SLOTS", "MAX_TURN_DEG", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
+    "relative_turn",
     "PHOTO_SUFFIXES", "FitOptions", "FitOutput", "fit_file", "media_frames", "motion_for_avatar", "write_fit_masks",
     "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",

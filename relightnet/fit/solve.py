@@ -8,9 +8,11 @@ minimises per frame
 (:mod:`.terms`, :mod:`.prior`): first the root rotation and translation alone (the first
 quarter of the iterations, no silhouette), then every fitted bone. A video's first window
 also fits the shape (:data:`SHAPE_NAMES`, shared over the shot, pulled toward the defaults);
-later windows keep it, start from the previous window's last pose, orientation included (a
-warm start), and take
-``warm_iters`` iterations; their acceleration term includes the two frames before them.
+later windows keep it, start from the previous window's last pose (a warm start) with its
+orientation turned, frame by frame, as the world landmarks' torso turns since that frame
+(:func:`relightnet.fit.relative_turn`: a person turning in place is followed, a left/right
+swap is not), and take at most ``warm_iters`` iterations (they stop early once the loss stalls);
+their acceleration term includes the two frames before them.
 Afterwards :func:`relightnet.fit.smooth_motion` smooths the whole track.
 """
 
@@ -23,10 +25,11 @@ from dataclasses import dataclass
 import torch
 
 from ..body.anny_model import PHENOTYPES
+from ..body.base import matrix_to_rotvec, rotvec_to_matrix
 from ..checks import InputError
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
 from .camera import project_points
-from .init import initial_orientation, initial_translation
+from .init import initial_orientation, initial_translation, relative_turn
 from .landmarks import landmark_weights
 from .observe import Observations, world_to_view_axes
 from .prior import FIT_BONES, limit_bounds, limit_penalty, rest_penalty
@@ -167,19 +170,23 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
     return e2d.sqrt(), pts
 
 
-def _start(fb: FitBody, ev: dict, base, free, intr, prev_sub) -> _Window:
-    """Initial window: the pose of ``prev_sub`` (the previous window's last frame) or, for the first
-    window, the rest pose turned as the landmarks say; the translation from the landmarks."""
+def _start(fb: FitBody, ev: dict, base, free, intr, prev: dict | None) -> _Window:
+    """Initial window. The first: the rest pose turned as the landmarks say. Later ones: the
+    previous window's last pose (``prev["sub"]``), its orientation turned by the torso's turn in
+    the world landmarks since that frame (``prev["world"]``, ``prev["w"]``; no absolute front/back
+    guess). The translation from the landmarks."""
     B = ev["lm"].shape[0]
     with torch.no_grad():
         rest = fb.rest(phenotype_from_free(free, base))
         zero = torch.zeros(1, len(FIT_BONES), 3)
         rest_pts, _ = fb.points(zero, torch.zeros(1, 3), rest)
-        if prev_sub is None:  # the first window: the orientation from the landmarks, the rest pose
+        if prev is None:
             sub = zero.expand(B, -1, -1).clone()
             sub[:, 0] = initial_orientation(rest_pts[0], ev["world"], ev["w"])
-        else:  # later windows: the previous frame's pose, orientation included (no front/back flips)
-            sub = prev_sub.expand(B, -1, -1).clone()
+        else:
+            sub = prev["sub"].expand(B, -1, -1).clone()
+            turn = relative_turn(torch.cat([prev["world"][None], ev["world"]]), torch.cat([prev["w"][None], ev["w"]]))
+            sub[:, 0] = matrix_to_rotvec((turn @ rotvec_to_matrix(sub[:, 0])).double()).to(sub.dtype)
         pts, _ = fb.points(sub, torch.zeros(B, 3), rest)
         trans = initial_translation(pts, ev["lm"], ev["w"], intr)
     return _Window(sub, trans, free.clone())
@@ -224,7 +231,8 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         subs.append(win.sub.detach())
         transs.append(win.trans.detach())
         res.append(r)
-        prev, before = win.sub[-1:].detach(), pts[-2:].detach()
+        prev = {"sub": win.sub[-1:].detach(), "world": ev["world"][-1], "w": ev["w"][-1]}
+        before = pts[-2:].detach()
         logger.debug("fit: frames %d-%d, residual %.4f", start, stop - 1, float(r.mean()))
     phen = phenotype_from_free(free, base)[0].detach()
     return FitResult(torch.cat(subs), torch.cat(transs), phen, tuple(float(x) for x in intrinsics),
