@@ -14,7 +14,7 @@ Example:
     >>> out.motion.pose.shape  # (T, 104, 3)
 """
 
-from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
+from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free, rest_near
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics, project_points
 from .init import (
                    CORE_SLOTS,
@@ -58,7 +58,7 @@ from .terms import (
 )
 
 __all__ = [
-    "SHAPE_NAMES", "FitBody", "phenotype_from_free",
+    "SHAPE_NAMES", "FitBody", "phenotype_from_free", "rest_near",
     "DEFAULT_FOV_DEG", "default_intrinsics", "exif_intrinsics", "project_points",
     "CORE_SLOTS", "MAX_TURN_DEG", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
     "relative_turn",

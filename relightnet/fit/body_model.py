@@ -18,7 +18,7 @@ from ..checks import check_shape
 from .landmarks import AnnyLandmarks
 from .prior import FIT_BONES
 
-__all__ = ["FitBody", "SHAPE_NAMES", "phenotype_from_free"]
+__all__ = ["FitBody", "SHAPE_NAMES", "phenotype_from_free", "rest_near"]
 
 #: The phenotype values a shape fit frees (the others keep :data:`relightnet.body.PHENOTYPES` defaults).
 SHAPE_NAMES = ("height", "weight", "proportions")
@@ -37,6 +37,17 @@ def phenotype_from_free(free: torch.Tensor, base: torch.Tensor) -> torch.Tensor:
         lo, hi, _ = PHENOTYPES[n]
         out = out.index_put((torch.tensor([names.index(n)]),), (lo + (hi - lo) * torch.sigmoid(free[j]))[None])
     return out[None]
+
+
+def rest_near(rest: dict, jacobian: dict, delta: torch.Tensor) -> dict:
+    """The rest body (:meth:`FitBody.rest`) at free shape values ``free₀ + delta``, to first order.
+
+    Args:
+        rest: :meth:`FitBody.rest` at free₀; jacobian: its derivatives (:meth:`FitBody.rest_linearised`),
+            each entry (F, ...) for the F = len(SHAPE_NAMES) free values; delta: (F,).
+    """
+    check_shape(delta, [len(SHAPE_NAMES)], name="delta")
+    return {k: rest[k] + torch.tensordot(delta.to(rest[k]), jacobian[k], 1) for k in rest}
 
 
 class FitBody(nn.Module):
@@ -145,6 +156,21 @@ class FitBody(nn.Module):
         M = torch.linalg.inv(W0[self.parent_index]) @ W0[self.bone_index]
         M[0] = W0[self.bone_index[0]]  # the root: W_root = W⁰_root D_root
         return {"blend": blend, "M": M, "offset": offset}
+
+    @torch.no_grad()
+    def rest_linearised(self, free: torch.Tensor, base: torch.Tensor, step: float = 1e-2) -> tuple[dict, dict]:
+        """The rest body at free shape values ``free`` (F,) and its derivatives in each (forward
+        differences of ``step``; the sigmoid's slope is at most 1/4, so the phenotype moves at most
+        ``step``/4 of its range): what :func:`rest_near` needs. ``base``: (6,) the other phenotype values.
+        """
+        check_shape(free, [len(SHAPE_NAMES)], name="free")
+        rest = self.rest(phenotype_from_free(free, base))
+        jac = {k: [] for k in rest}
+        for j in range(len(SHAPE_NAMES)):
+            moved = self.rest(phenotype_from_free(free + step * torch.eye(len(SHAPE_NAMES), dtype=free.dtype)[j], base))
+            for k in rest:
+                jac[k].append((moved[k] - rest[k]) / step)
+        return rest, {k: torch.stack(v) for k, v in jac.items()}
 
     def points(self, sub: torch.Tensor, trans: torch.Tensor, rest: dict) -> tuple[torch.Tensor, torch.Tensor]:
         """Landmark points (B, 33, 3) and silhouette vertices (B, S, 3) without skinning the whole mesh.

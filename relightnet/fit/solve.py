@@ -27,7 +27,7 @@ import torch
 from ..body.anny_model import PHENOTYPES
 from ..body.base import matrix_to_rotvec, rotvec_to_matrix
 from ..checks import InputError
-from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
+from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free, rest_near
 from .camera import project_points
 from .init import initial_orientation, initial_translation, relative_turn
 from .landmarks import landmark_weights
@@ -119,8 +119,11 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
     return total, e2d, pts
 
 
-#: A shape fit recomputes the rest body (the costly part) and steps the shape every this many iterations.
+#: A shape fit steps the shape every this many iterations, on a first-order model of the rest
+#: body (:func:`relightnet.fit.rest_near`) re-linearised every :data:`RELINEARISE_EVERY`
+#: iterations (each linearisation costs four rest bodies; the exact rest body ends the window).
 SHAPE_EVERY = 5
+RELINEARISE_EVERY = 20
 #: Early stop of a warm-started window (the first window, which also fits the shape, runs all its
 #: iterations): after the root-only phase it stops when its loss has not fallen by this fraction
 #: in :data:`PATIENCE` iterations (Adam's steps are noisy; one step's change says little).
@@ -138,11 +141,14 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
     n_global = iters // 4
     with torch.no_grad():
         rest = fb.rest(phenotype_from_free(win.free, base))
-    best, since = float("inf"), 0
+    best, since, lin_at = float("inf"), 0, None
     for i in range(iters):
         shape_step = fit_shape and i >= n_global and i % SHAPE_EVERY == 0
         if shape_step:
-            rest = fb.rest(phenotype_from_free(win.free, base))
+            if lin_at is None or i - lin_at >= RELINEARISE_EVERY:
+                free0, lin_at = win.free.detach().clone(), i
+                rest0, jac = fb.rest_linearised(free0, base)
+            rest = rest_near(rest0, jac, win.free - free0)
         opt.zero_grad(set_to_none=True)
         total, _, _ = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=i >= n_global, step=i)
         loss = total.sum()
@@ -156,7 +162,7 @@ def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool
         if shape_step:
             opt_shape.step()
             with torch.no_grad():
-                rest = fb.rest(phenotype_from_free(win.free, base))
+                rest = rest_near(rest0, jac, win.free - free0)
         if i >= n_global and tol > 0 and not fit_shape:
             value = float(loss.detach())
             best, since = (value, 0) if value < best * (1 - tol) else (best, since + 1)

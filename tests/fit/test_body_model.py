@@ -36,3 +36,23 @@ def test_fast_points_are_differentiable_in_shape(fit_body):
     height = pts[0, 0, 1] - pts[0, 29, 1]  # nose above heel
     height.backward()
     assert float(free.grad[0]) > 0  # "height" makes the body taller
+
+
+def test_linearised_rest_is_first_order(fit_body):
+    """rest_near's error vanishes to second order: halving the step quarters it (about), and it is
+    a small part of the change it models."""
+    from relightnet.fit import phenotype_from_free, rest_near
+
+    base = fit_body.body.phenotype_tensor(None)[0]
+    free0 = torch.tensor([0.2, -0.3, 0.1])
+    rest0, jac = fit_body.rest_linearised(free0, base, step=1e-3)
+    direction = torch.tensor([1.0, -0.5, 0.8])
+    errs, changes = [], []
+    for h in (0.4, 0.2):
+        with torch.no_grad():
+            exact = fit_body.rest(phenotype_from_free(free0 + h * direction, base))["blend"]
+        near = rest_near(rest0, jac, h * direction)["blend"]
+        errs.append(float((near - exact).abs().max()))
+        changes.append(float((exact - rest0["blend"]).abs().max()))
+    assert errs[0] < 0.1 * changes[0] and errs[1] < 0.1 * changes[1], (errs, changes)
+    assert errs[1] < 0.5 * errs[0], errs  # second order: ~1/4, at most 1/2 with the differences' own error
