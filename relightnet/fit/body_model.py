@@ -98,6 +98,11 @@ class FitBody(nn.Module):
         self.register_buffer("group_slot", torch.tensor([slot[g] for g in group]), persistent=False)
         self.register_buffer("parent_index", torch.tensor(parent), persistent=False)
         self.parent_slot = [slot[p] for p in parent]
+        depth = [0] * len(parent)
+        for i in range(1, len(parent)):  # FIT_BONES lists parents before children
+            depth[i] = depth[self.parent_slot[i]] + 1
+        #: The fitted bones by depth in the tree (each level's frames are one batched product).
+        self.levels = [[i for i in range(len(parent)) if depth[i] == lv] for lv in range(max(depth) + 1)]
         self.register_buffer("reference_axes", body.anny.reference_bone_orientations[self.bone_index].to(body.dtype),
                              persistent=False)
 
@@ -181,12 +186,16 @@ class FitBody(nn.Module):
         CU = ANNY_TO_WORLD.to(sub) @ self.reference_axes.to(sub)  # (N, 3, 3)
         D = CU.transpose(1, 2) @ rotvec_to_matrix(sub) @ CU  # (B, N, 3, 3): rotations in reference axes
         M = rest["M"].to(sub)
-        frames = []
-        for i in range(len(FIT_BONES)):
-            Mi = M[i].expand(d["B"], 4, 4)
-            base = Mi if i == 0 else frames[self.parent_slot[i]] @ Mi
-            frames.append(torch.cat([base[:, :, :3] @ D[:, i], base[:, :, 3:]], 2))
-        W = torch.stack(frames, 1)[:, :, :3, :]  # (B, N, 3, 4)
+        done, row = None, {}  # the frames so far (B, n, 4, 4), and each bone's row in them
+        for level in self.levels:
+            if done is None:
+                base = M[level].expand(d["B"], -1, 4, 4)
+            else:
+                base = done[:, [row[self.parent_slot[i]] for i in level]] @ M[level]
+            f = torch.cat([base[..., :3] @ D[:, level], base[..., 3:]], -1)
+            done = f if done is None else torch.cat([done, f], 1)
+            row.update({i: len(row) + k for k, i in enumerate(level)})
+        W = done[:, [row[i] for i in range(len(FIT_BONES))], :3, :]  # (B, N, 3, 4)
         p = anny_to_world((W.transpose(1, 2).reshape(d["B"], 3, -1) @ rest["blend"]).transpose(1, 2))
         p = p + (rest["offset"] + trans)[:, None]
         k, s = len(self.landmarks.coco_slot), len(self.silhouette_vertices)
