@@ -127,7 +127,7 @@ def _speed(fb, args) -> None:
     T, w, c = rows["video"]
     rows["video, warm windows only"] = (T - T1, w - w1, c - c1)
     for kind, (n, wall, cpu) in rows.items():
-        print(f"| {kind} 720p | {n} | {args.iters} first window, {args.warm_iters} later (early stop) | "
+        print(f"| {kind} 720p | {n} | {args.iters} first window, {args.warm_iters} later | "
               f"{1000 * wall / n:.0f} | {1000 * cpu / n:.0f} | {1000 * cpu / n / args.threads:.0f} |", flush=True)
 
 
