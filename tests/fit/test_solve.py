@@ -22,3 +22,14 @@ def test_fit_recovers_a_known_pose(fit_body):
     assert bool((err < 0.5 * err_rest).all()), (err, err_rest)
     assert bool((res.residual_2d < 0.03).all()), res.residual_2d
     assert res.pose.shape == (2, len(fit_body.bone_index), 3) and not bool(res.interpolated.any())
+
+
+def test_fit_restores_the_thread_setting(fit_body):
+    obs, intr, _ = known_clip(fit_body, T=1)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        fit_observations(obs, intr, fit_body, iters=4, warm_iters=2, window=1)
+        assert torch.get_num_threads() == 2  # the fit ran on one thread and gave the setting back
+    finally:
+        torch.set_num_threads(before)
