@@ -15,9 +15,17 @@ Example:
     >>> out.motion.pose.shape  # (T, 104, 3)
 """
 
-from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free
+from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free, rest_near
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics, project_points
-from .init import CORE_SLOTS, TORSO_SLOTS, initial_orientation, initial_translation, kabsch
+from .init import (
+                   CORE_SLOTS,
+                   MAX_TURN_DEG,
+                   TORSO_SLOTS,
+                   initial_orientation,
+                   initial_translation,
+                   kabsch,
+                   relative_turn,
+)
 from .job import (
                   PHOTO_SUFFIXES,
                   FitOptions,
@@ -39,9 +47,11 @@ from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion,
 from .solve import MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
+                  SILHOUETTE_HEIGHT,
                   WORLD_UNIT,
                   SilhouetteTargets,
                   acceleration_term,
+                  outline_matches,
                   person_scale,
                   reprojection_term,
                   silhouette_targets,
@@ -50,9 +60,10 @@ from .terms import (
 )
 
 __all__ = [
-    "SHAPE_NAMES", "FitBody", "phenotype_from_free",
+    "SHAPE_NAMES", "FitBody", "phenotype_from_free", "rest_near",
     "DEFAULT_FOV_DEG", "default_intrinsics", "exif_intrinsics", "project_points",
-    "CORE_SLOTS", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
+    "CORE_SLOTS", "MAX_TURN_DEG", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
+    "relative_turn",
     "PHOTO_SUFFIXES", "FitOptions", "FitOutput", "fit_file", "media_frames", "motion_for_avatar", "write_fit_masks",
     "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",
@@ -63,6 +74,6 @@ __all__ = [
     "leg_length", "retarget_motion", "to_default_avatar",
     "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
     "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
-    "HIP_SLOTS", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "person_scale", "reprojection_term",
-    "silhouette_targets", "silhouette_term", "world_term",
+    "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "outline_matches",
+    "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "world_term",
 ]

@@ -39,3 +39,14 @@ def test_a_window_beyond_the_pixel_budget_is_refused_before_any_work(fit_body):
     assert 8 * 3120 * 4000 <= MAX_WINDOW_PIXELS < 9 * 3120 * 4000
     with pytest.raises(InputError, match=r"a window of 9 frames of 4000x3120 .* at most 8 frames"):
         fit_observations(obs, default_intrinsics(size, 60.0), fit_body, window=9)
+
+
+def test_fit_restores_the_thread_setting(fit_body):
+    obs, intr, _ = known_clip(fit_body, T=1)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        fit_observations(obs, intr, fit_body, iters=4, warm_iters=2, window=1)
+        assert torch.get_num_threads() == 2  # the fit ran on one thread and gave the setting back
+    finally:
+        torch.set_num_threads(before)
