@@ -97,17 +97,22 @@ class SilhouetteTargets:
 def _working_masks(masks: torch.Tensor, size, height: int) -> tuple[np.ndarray, tuple[float, float]]:
     """(B, h, w) bool masks resampled (area average, then > 0.5) so the tallest person is about
     ``height`` pixels (never finer than the masks or the images), and the factors (x, y) image
-    pixels → working pixels."""
-    m = masks.detach().float().cpu()
+    pixels → working pixels. Frames are resampled one at a time (a window of full-size frames is
+    never copied to float as a whole)."""
+    m = masks.detach().cpu()
     mh, mw = m.shape[-2:]
     H, W = (int(size[0]), int(size[1])) if size is not None else (mh, mw)
-    rows = torch.nonzero((m > 0.5).any(2).any(0)).flatten()
+    on = m if m.dtype == torch.bool else m > 0.5
+    rows = torch.nonzero(on.any(2).any(0)).flatten()
     person = float(rows.max() - rows.min() + 1) * H / mh if len(rows) else float(H)
     r = min(1.0, height / person, mh / H)
     h, w = max(1, round(H * r)), max(1, round(W * r))
-    if (h, w) != (mh, mw):
-        m = F.interpolate(m[:, None], size=(h, w), mode="area")[:, 0]
-    return (m > 0.5).numpy(), (w / W, h / H)
+    if (h, w) == (mh, mw):
+        return on.numpy(), (w / W, h / H)
+    out = np.empty((m.shape[0], h, w), np.bool_)
+    for i, frame in enumerate(m):
+        out[i] = (F.interpolate(frame.float()[None, None], size=(h, w), mode="area")[0, 0] > 0.5).numpy()
+    return out, (w / W, h / H)
 
 
 def silhouette_targets(masks: torch.Tensor, n_outline: int = 256, size=None,
@@ -127,10 +132,11 @@ def silhouette_targets(masks: torch.Tensor, n_outline: int = 256, size=None,
     outs, lines, valid = [], [], []
     for m in work:
         if not m.any():
+            outs.append(np.zeros(m.shape, np.float32))
             lines.append(np.zeros((n_outline, 2), np.float32))
             valid.append(False)
             continue
-        outside[i, 0] = ndimage.distance_transform_edt(~m)
+        outs.append(ndimage.distance_transform_edt(~m).astype(np.float32))
         edge = m & ~ndimage.binary_erosion(m)
         ys, xs = np.nonzero(edge)
         pick = np.linspace(0, len(xs) - 1, n_outline).round().astype(int)
