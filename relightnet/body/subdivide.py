@@ -64,7 +64,8 @@ def subdivide_faces(faces: torch.Tensor, n_verts: int, select: torch.Tensor) -> 
     f = faces[sel]
     e = torch.stack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]], 1)  # (S, 3, 2): ab, bc, ca
     key = e.sort(dim=2).values.reshape(-1, 2)
-    edges, inv = torch.unique(key, dim=0, return_inverse=True)
+    code, inv = torch.unique(key[:, 0] * n_verts + key[:, 1], return_inverse=True)  # 1-D: far faster than dim=0
+    edges = torch.stack([code // n_verts, code % n_verts], 1)
     mid = (inv + n_verts).reshape(-1, 3)
     ab, bc, ca = mid[:, 0], mid[:, 1], mid[:, 2]
     a, b, c = f[:, 0], f[:, 1], f[:, 2]
