@@ -73,14 +73,15 @@ def _cast(eng: RayEngine, idx: torch.Tensor, verts, normals, dirs, offset: float
 
 
 def _estimate(lit_a, lit_b, cos_a, cos_b, cos_m, threshold: float):
-    """Endpoint visibilities (N, D) → (midpoint lit (N, D) estimate, shadow edge (N,) bool)."""
-    va, vb = lit_a > 0, lit_b > 0
-    ka, kb = cos_a > 0, cos_b > 0
-    both = ka & kb
-    differ = ((va != vb) & both).float()
-    d = (differ * cos_m).sum(1) / cos_m.sum(1).clamp_min(1e-12)
-    one = torch.where(ka, va.float(), torch.where(kb, vb.float(), torch.ones_like(cos_m)))
-    vis = torch.where(both, 0.5 * (va.float() + vb.float()), one)
+    """Endpoint visibilities (N, D) → (midpoint lit (N, D) estimate, shadow edge (N,) bool).
+
+    ``lit`` is 0 below an endpoint's horizon, so with k = [cos > 0] the estimate (both above: the
+    mean; one: its own; neither: visible) is (V_a + V_b) / max(k_a + k_b, 1) + [k_a + k_b = 0]."""
+    va, vb = (lit_a > 0).float(), (lit_b > 0).float()
+    ka, kb = (cos_a > 0).float(), (cos_b > 0).float()
+    k = ka + kb
+    d = ((va - vb).abs() * ka * kb * cos_m).sum(1) / cos_m.sum(1).clamp_min(1e-12)
+    vis = (va + vb) / k.clamp_min(1.0) + (k == 0).float()
     return vis * cos_m, d > threshold
 
 
