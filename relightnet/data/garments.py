@@ -20,6 +20,12 @@ vertex follows a body vertex), hanging surfaces :func:`relightnet.body.garments.
 (rebuilt every frame around the pelvis or head joint, so clips move them with the body).
 :func:`dress_frame` builds the pieces of one posed frame; :mod:`relightnet.data.clothed`
 puts them together with the body into one mesh and one texture.
+
+Layers do not cross (generator version 3): a hat's rings enclose the hair's surface (points
+sampled on its faces, :func:`surface_samples`) and rise above its crown, long hair and hoods
+enclose the top's torso, each :data:`LAYER_GAP` clear of the layer inside; a top's shell
+moves each vertex at most half the room in front of it (:func:`room_in_front`), so the
+shells of an arm and of the torso beside it do not meet.
 """
 
 from __future__ import annotations
