@@ -30,6 +30,7 @@ from .garments import GarmentPiece, radial_directions, ring_surface, shell_surfa
 from .motion import MOTION_KINDS, make_motion
 from .motion_io import Z_UP_TO_Y_UP, Motion, load_motion, reorient_motion, save_motion
 from .smpl_model import SMPL_JOINT_NAMES, SMPL_KEYS, SMPLBody, load_smpl_file, smpl_to_world, spherical_uv
+from .subdivide import SubdividedFaces, midpoint_values, subdivide_faces
 
 __all__ = [
     "BodyModel", "BodyOutput", "GROUND_MODES", "vertex_normals", "rotvec_to_matrix", "matrix_to_rotvec",
@@ -42,4 +43,5 @@ __all__ = [
     "REGIONS", "ANNY_PARTS", "Albedo", "anny_part_labels", "region_labels", "skin_color", "default_albedo",
     "vertex_to_texture",
     "GarmentPiece", "shell_surface", "ring_surface", "radial_directions",
+    "SubdividedFaces", "subdivide_faces", "midpoint_values",
 ]

@@ -136,6 +136,7 @@ class DressedBody:
         m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
                          body, self._tab, tex, self._field, assets.atlas)
         n_pieces = sum(len(p[1].verts) for p in pieces)
+        self._edges = m.midpoints[:, 1:]  # the subdivided outer sides' midpoints follow every frame's pieces
         self._inner = self._thickness(m, pieces, n_pieces)
         self.faces, self.types, self.n_body_verts = m.faces, m.types, body.num_verts
         self.uv, self.uv_faces = m.uv, m.uv_faces
@@ -144,10 +145,10 @@ class DressedBody:
     def _thickness(self, m, pieces: list, n_pieces: int) -> float | None:
         """How the clothed mesh lays out each piece: its vertices alone (None), or followed by an inner side
         moved this far against the normals (two-sided cloth); read off the rest frame."""
-        V = self.body.num_verts
-        if m.verts.shape[1] == V + n_pieces:
+        V, nv = self.body.num_verts, m.verts.shape[1] - len(m.midpoints)
+        if nv == V + n_pieces:
             return None
-        if m.verts.shape[1] != V + 2 * n_pieces:
+        if nv != V + 2 * n_pieces:
             raise InputError("--outfit: the garment pieces disagree with the clothed mesh (a bug)")
         p = pieces[0][1]
         return float((m.verts[0, V:V + len(p.verts)] - m.verts[0, V + len(p.verts):V + 2 * len(p.verts)]).norm(dim=1)
@@ -175,13 +176,15 @@ class DressedBody:
     def __call__(self, params=None, **kwargs) -> BodyOutput:
         """Pose the body (arguments as the body model's) and dress each frame: a :class:`BodyOutput` of
         the dressed mesh (verts, normals (B, V', 3); faces (F', 3); joints of the body)."""
+        from ..body.subdivide import midpoint_values
+
         with torch.no_grad():
             out = self.body(params, **kwargs)
         vs, ns = [], []
         for b in range(out.batch_size):
             arrays = [self._piece_arrays(p[1]) for p in self._pieces(out.verts[b], out.normals[b], out.joints[b])]
-            vs.append(torch.cat([out.verts[b], *[a[0] for a in arrays]]))
-            ns.append(torch.cat([out.normals[b], *[a[1] for a in arrays]]))
+            vs.append(midpoint_values(torch.cat([out.verts[b], *[a[0] for a in arrays]]), self._edges))
+            ns.append(midpoint_values(torch.cat([out.normals[b], *[a[1] for a in arrays]]), self._edges, unit=True))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
                           out.joints, out.joint_names)
 
