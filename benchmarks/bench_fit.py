@@ -19,84 +19,12 @@ the segmentation.
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import torch
 
-from relightnet.data import SynthConfig, clip_geometry, generate_sequence
-from relightnet.data.framing import camera_intrinsics
-from relightnet.fit import FitBody, fit_observations, observe_frames, project_points
-from relightnet.fit.metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
-from relightnet.fit.preview import fit_silhouettes
-from relightnet.fit.retarget import retarget_motion
-from relightnet.fit.smooth import place_in_world, smooth_motion
-from relightnet.segment import PersonModels
-
-
-def _points(fb: FitBody, result) -> torch.Tensor:
-    with torch.no_grad():
-        rest = fb.rest(fb.body.phenotype_tensor(result.phenotype[None]))
-        return fb.points(result.pose, result.trans, rest)[0]
-
-
-def _clip(cfg, index, fb, models, args) -> dict:
-    sample = generate_sequence(cfg, "test", index, args.frames, body=fb.body)
-    geo = clip_geometry(cfg, "test", index, args.frames, body=fb.body)
-    frames = torch.from_numpy(sample.arrays["image_composite"]).permute(0, 3, 1, 2).float() / 255
-    true_mask = torch.from_numpy(sample.arrays["mask"]).float().reshape(args.frames, cfg.res, cfg.res)
-    t0 = time.perf_counter()
-    obs = observe_frames(iter(frames), models, name=f"clip {index}")
-    t_seg = time.perf_counter() - t0
-    intr = camera_intrinsics(geo.camera)
-    c0 = time.process_time()
-    raw = fit_observations(obs, intr, fb, args.iters, args.warm_iters, args.window)
-    cpu_fit = time.process_time() - c0
-    smooth = smooth_motion(raw, args.sigma)
-    lm = fb.landmarks
-    coco = torch.zeros(33, dtype=torch.bool)
-    coco[lm.coco_slot] = True
-    true_pts = torch.zeros(args.frames, 33, 3)
-    true_pts[:, lm.coco_slot] = torch.einsum("ks,bsd->bkd", lm.coco_weights, geo.verts[:, lm.coco_vertices])
-    p_raw, p_s = _points(fb, raw), _points(fb, smooth)
-    ys = torch.nonzero(true_mask.sum((0, 2)) > 0).flatten()
-    height = float(ys.max() - ys.min() + 1) if len(ys) else float(cfg.res)
-    sil = fit_silhouettes(smooth, fb)
-    world = place_in_world(smooth, fb)
-    w_pts = _points(fb, _as_result(smooth, world, fb))
-    moved = retarget_motion(world, fb)  # the avatar's motion: the same body, feet held on the ground
-    r_pts = _points(fb, _as_result(smooth, moved, fb))
-    return {
-        "mpjpe": float(mpjpe(p_s, true_pts, coco).mean()), "pa_mpjpe": float(pa_mpjpe(p_s, true_pts, coco).mean()),
-        "lm2d": float(landmark_error(project_points(p_s, intr), project_points(true_pts, intr), coco,
-                                     torch.full((args.frames,), height)).median()),
-        "iou_body": float(mask_iou(sil, _body_masks(geo, intr, (cfg.res, cfg.res))).mean()),
-        "iou_true": float(mask_iou(sil, true_mask).mean()), "iou_seg": float(mask_iou(sil, obs.masks.unpack()).mean()),
-        "seg_iou_true": float(mask_iou(obs.masks.unpack(), true_mask).mean()),
-        "accel_raw": float(acceleration_error(p_raw, true_pts, coco).mean()),
-        "accel_smooth": float(acceleration_error(p_s, true_pts, coco).mean()),
-        "skate_fit": foot_skating(w_pts), "skate_retarget": foot_skating(r_pts),
-        "ms_fit": 1000 * raw.seconds / args.frames, "cpu_ms_fit": 1000 * cpu_fit / args.frames,
-        "ms_seg": 1000 * t_seg / args.frames,
-        "motion": sample.meta["pose"].get("name", "?"),
-    }
-
-
-def _body_masks(geo, intr, size) -> torch.Tensor:
-    """(T, H, W) the true body's silhouettes (the body's faces only, no garments), view-space verts."""
-    from relightnet.raster import Camera, perspective_projection, rasterize
-
-    T = geo.verts.shape[0]
-    P = perspective_projection(*intr, size)
-    cam = Camera(torch.eye(4)[None].expand(T, 4, 4), P.expand(T, 4, 4), size)
-    return rasterize(cam.transform(geo.verts), geo.faces[:geo.n_body_faces], size).mask.float()
-
-
-def _as_result(result, motion, fb):
-    """The world-placed motion as a FitResult (to reuse the landmark code)."""
-    from dataclasses import replace
-
-    return replace(result, pose=motion.pose[:, fb.bone_index], trans=motion.trans)
+from relightnet.fit import FitBody, FitOptions, fit_observations
+from relightnet.pipeline.fit_eval import evaluate_fit, format_fit_report
 
 
 def _timed(fb, obs, intr, args, iters, warm) -> tuple[float, float]:
@@ -147,23 +75,14 @@ def main() -> None:
     if args.speed:
         _speed(FitBody(), args)
         return
-    cfg = SynthConfig(seed=0, res=args.res, lmax=2, n_dirs=16, counts={"train": 0, "val": 0, "test": args.clips},
-                      hdri_test=("night", "sunrise"), noise_std=0.0, partial_crop_prob=0.0,
-                      sequence_frames=args.frames, clip_lights="constant")
-    fb, models = FitBody(), PersonModels(threads=args.threads)
-    rows = []
-    for i in range(args.clips):
-        r = _clip(cfg, i, fb, models, args)
-        rows.append(r)
+    options = FitOptions(iters=args.iters, warm_iters=args.warm_iters, window=args.window, smooth_sigma=args.sigma)
+
+    def show(i, r):
         print(f"clip {i} ({r['motion']}): " + ", ".join(f"{k} {v:.3g}" for k, v in r.items() if k != "motion"),
               flush=True)
-    keys = [k for k in rows[0] if k != "motion"]
-    print("\n| metric | " + " | ".join(f"clip {i}" for i in range(len(rows))) + " | median |")
-    print("|---|" + "---|" * (len(rows) + 1))
-    for k in keys:
-        vals = [r[k] for r in rows]
-        print(f"| {k} | " + " | ".join(f"{v:.3g}" for v in vals) + f" | {statistics.median(vals):.3g} |")
 
+    result = evaluate_fit(args.clips, args.frames, args.res, options, args.threads, progress=show)
+    print("\n" + format_fit_report(result))
 
 if __name__ == "__main__":
     main()

@@ -108,3 +108,15 @@ def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
     assert main([*photo[1:], "--fov", "50", "--out", str(tmp_path / "x.npz")]) == 1
     assert "--fov is the plate's field of view" in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists()
+
+
+def test_evaluate_fit_writes_its_report(tmp_path, capsys):
+    out = tmp_path / "fit"
+    assert main(["evaluate", "--fit", "--fit-clips", "1", "--fit-frames", "2", "--fit-res", "128",
+                 "--out", str(out)]) == 0
+    metrics = json.loads((out / "fit_metrics.json").read_text())
+    assert metrics["frames"] == 2 and len(metrics["clips"]) == 1 and metrics["median"]["mpjpe"] > 0
+    assert "| mpjpe |" in capsys.readouterr().out and "| iou_body |" in (out / "fit_report.md").read_text()
+    assert main(["evaluate", "--fit", "--data", str(tmp_path), "--out", str(tmp_path / "x")]) == 1
+    assert "--data: not used with --fit" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
