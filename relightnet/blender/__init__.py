@@ -16,6 +16,7 @@ from .frames import (
     transform_to_blender,
     world_to_blender,
 )
+from .geometry import MAX_SCENE_FACES, blend_face_count, check_blend_geometry
 from .scene import export_body_scene, export_scene
 from .world import WorldLight, envmap_world_image, lift_sh, sh_world_image, world_light
 
@@ -26,4 +27,5 @@ __all__ = [
     "WorldLight", "world_light", "sh_world_image", "envmap_world_image", "lift_sh",
     "export_scene", "export_body_scene",
     "CYCLES_TO_RELIGHTNET", "CyclesFrame", "configure_cycles", "open_blend", "render_blend", "render_current",
+    "MAX_SCENE_FACES", "blend_face_count", "check_blend_geometry",
 ]

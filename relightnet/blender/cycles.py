@@ -31,6 +31,7 @@ import torch
 
 from ..checks import InputError
 from ._bpy import import_bpy, quiet
+from .geometry import check_blend_geometry
 
 logger = logging.getLogger(__name__)
 
@@ -139,6 +140,7 @@ def open_blend(path) -> object:
     if not path.is_file():
         raise InputError(f"{path}: no such .blend file")
     bpy.context.preferences.filepaths.use_scripts_auto_execute = False
+    check_blend_geometry(path)  # before Blender builds the scene's modifiers
     try:  # the file's scripts never run: no auto-run text blocks or handlers, Python drivers disabled
         with quiet((1, 2)):  # (Blender prints a driver it did not run over several lines: logged at DEBUG)
             bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False, use_scripts=False)

@@ -26,10 +26,11 @@ MARKERS = ("text-block-ran", "driver-ran")
 
 
 def write_blend(path: Path, side: int = 64, percent: int = 100, samples: int = 4, frames: int = 1,
-                scripts: bool = False) -> Path:
+                scripts: bool = False, modifier: dict | None = None) -> Path:
     """A .blend of a camera looking at a lit cube: ``side``² pixels at ``percent`` %, ``samples`` Cycles samples,
     ``frames`` frames; with ``scripts``, a text block registered to run on load and a Python driver on the
-    camera, each writing its marker file (:data:`MARKERS`) beside the .blend if it runs."""
+    camera, each writing its marker file (:data:`MARKERS`) beside the .blend if it runs; ``modifier``: one
+    modifier on the cube, ``{"type": TYPE, attribute: value, ...}``."""
     from relightnet.blender._bpy import quiet, reset
 
     bpy = reset()
@@ -43,6 +44,11 @@ def write_blend(path: Path, side: int = 64, percent: int = 100, samples: int = 4
     cube.data.from_pydata([(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], [],
                           [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)])
     scene.collection.objects.link(cube)
+    if modifier is not None:
+        m = cube.modifiers.new("m", modifier["type"])
+        for k, v in modifier.items():
+            if k != "type":
+                setattr(m, k, v)
     world = bpy.data.worlds.new("world")
     world.color = (0.8, 0.8, 0.8)
     scene.world = world
@@ -106,6 +112,26 @@ def autorun_scripts(folder: Path) -> Case:
     return _render("scripts.blend", expect="ok")
 
 
+def subdivided_cube(folder: Path) -> Case:
+    """A cube under a subdivision surface of render level 11, Blender's most (6 · 4¹¹ = 25 M faces): refused
+    before it is built."""
+    write_blend(folder / "subsurf.blend", modifier={"type": "SUBSURF", "levels": 1, "render_levels": 11})
+    return _render("subsurf.blend")
+
+
+def arrayed_cube(folder: Path) -> Case:
+    """A cube arrayed 5 million times (30 M faces; Blender alone, opening it, took 2.8 GB before the check
+    came before the opening): refused before it is built."""
+    write_blend(folder / "array.blend", modifier={"type": "ARRAY", "count": 5_000_000})
+    return _render("array.blend")
+
+
+def geometry_nodes(folder: Path) -> Case:
+    """A geometry-nodes modifier (its output unknown until evaluated): refused."""
+    write_blend(folder / "nodes.blend", modifier={"type": "NODES"})
+    return _render("nodes.blend")
+
+
 def slow_render(folder: Path) -> Case:
     """2000² pixels (4 MP) × 4096 samples on one thread: hours, so the wall cap kills it mid-frame."""
     write_blend(folder / "slow.blend", side=2000, samples=4096)
@@ -120,6 +146,9 @@ CASES = {
     "blend-64x64-under-max-pixels-1000": max_pixels_option,
     "blend-autorun-text-and-driver": autorun_scripts,
     "blend-4MP-4096-spp-killed": slow_render,
+    "blend-subdivision-level-11": subdivided_cube,
+    "blend-array-of-5e6": arrayed_cube,
+    "blend-geometry-nodes": geometry_nodes,
 }
 #: Wall-clock cap of the killed case (seconds): long enough for Blender to start rendering.
 KILL_AFTER = 20.0

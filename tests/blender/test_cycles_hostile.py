@@ -27,6 +27,9 @@ REFUSED = {
     "blend-16.7M-spp-at-1-percent": "asks for 16777216 Cycles samples per pixel",
     "blend-1e6-frames-with-spp-4": "asks for 1000000 frames",
     "blend-64x64-under-max-pixels-1000": "64x64 pixels (0.0 MP) is above the limit",
+    "blend-subdivision-level-11": "ask for 25,165,824 faces",
+    "blend-array-of-5e6": "ask for 30,000,000 faces",
+    "blend-geometry-nodes": "a geometry-nodes modifier",
 }
 
 
