@@ -28,8 +28,8 @@ from .base import (
 )
 from .garments import GarmentPiece, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from .motion import MOTION_KINDS, make_motion
-from .shoes import SHOE_KINDS, shoe_surface
 from .motion_io import Z_UP_TO_Y_UP, Motion, load_motion, reorient_motion, save_motion
+from .shoes import SHOE_KINDS, shoe_surface
 from .smpl_model import SMPL_JOINT_NAMES, SMPL_KEYS, SMPLBody, load_smpl_file, smpl_to_world, spherical_uv
 
 __all__ = [

@@ -233,9 +233,10 @@ def _outward(verts: torch.Tensor, faces: torch.Tensor, centre: torch.Tensor) -> 
 def hem_field(faces: torch.Tensor, verts: torch.Tensor, reach: float = 5.0) -> torch.Tensor:
     """(Vg,) a field on a piece that is 0 on its open border and rises inward to 1: the distance of every
     vertex to the border (its vertices and edge midpoints) in units of ``reach`` times the border's median
-    edge length, clipped at 1 (coincident vertices, such as a ring's seam, are one). Its iso-lines inside the border are offset curves of the border, on which
-    the stair-steps of a border that follows face edges are rounded off (an offset of a zig-zag by more
-    than its depth is a row of wide arcs); a piece without a border is 1 everywhere.
+    edge length, clipped at 1 (coincident vertices, such as a ring's seam, are one). Its iso-lines inside the
+    border are offset curves of the border, on which the stair-steps of a border that follows face edges are
+    rounded off (an offset of a zig-zag by more than its depth is a row of wide arcs); a piece without a
+    border is 1 everywhere.
 
     Args:
         faces: (Fg, 3) the piece's faces. verts: (Vg, 3) its positions (e.g. at rest).
