@@ -209,13 +209,6 @@ def _motion_for(motion_frames, n: int) -> tuple[dict, int]:
     return frame_slice(params, 0, m, n_motion), m
 
 
-def _follow(params: dict, offsets: torch.Tensor) -> dict:
-    """The motion's parameters with the root moved by (T, 3) world offsets (metres) every frame."""
-    trans = params.get("trans")
-    trans = torch.zeros_like(offsets) if trans is None else torch.as_tensor(trans)
-    return {**params, "trans": trans + offsets.to(trans)}
-
-
 def _camera_for(camera: Camera | None, size) -> Camera:
     """The avatar's camera: the default one at the video's size, or the given one if its size matches."""
     camera = default_camera(size) if camera is None else camera
@@ -304,8 +297,7 @@ def avatar(
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
     if replace_person:  # over the clean plate, standing where the person stands in each frame
-        backgrounds, camera, offsets = stand_in_frames(target, out, n, body_model, target_masks, mask_source)
-        params = _follow(params, offsets[:n])
+        backgrounds, camera, params = stand_in_frames(target, out, n, body_model, target_masks, mask_source, params)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,

@@ -314,10 +314,14 @@ def check_stand_in(replace_person: bool, plate, camera) -> None:
         raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
 
 
-def stand_in_frames(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment"):
+def stand_in_frames(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment",
+                    params: dict | None = None):
     """:func:`stand_in` for the avatar job: (the plate repeated as the frames to composite over, the camera,
-    the (T, 3) root offsets of the avatar's path)."""
+    the motion's parameters ``params`` with the root moved along the person's path every frame)."""
     import itertools
 
     plate, camera, offsets = stand_in(target, out, n_frames, body, target_masks, mask_source)
-    return itertools.repeat(plate.plate), camera, offsets
+    params = {} if params is None else params
+    trans = params.get("trans")
+    trans = torch.zeros(n_frames, 3) if trans is None else torch.as_tensor(trans)
+    return itertools.repeat(plate.plate), camera, {**params, "trans": trans + offsets[:len(trans)].to(trans)}

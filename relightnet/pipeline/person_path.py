@@ -30,7 +30,6 @@ import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
-from .clean_plate import Placement
 
 __all__ = ["MEDIAN_WINDOW", "KNOT_SPACING", "OUTLIER_SHARE", "OUTLIER_WINDOW", "smooth_track", "path_offsets"]
 
@@ -110,10 +109,11 @@ def smooth_track(boxes: list, fallback) -> np.ndarray:
     return out
 
 
-def path_offsets(size, placement: Placement, track: np.ndarray, body_height: float,
+def path_offsets(size, placement, track: np.ndarray, body_height: float,
                  fov_deg: float = 35.0) -> torch.Tensor:
     """(T, 3) world offsets (metres) of the avatar's root from the origin, so that with the camera of
-    :func:`~relightnet.pipeline.clean_plate.placed_camera` (``size`` (H, W), ``placement`` the median)
+    :func:`~relightnet.pipeline.clean_plate.placed_camera` (``size`` (H, W), ``placement`` the median
+    :class:`~relightnet.pipeline.clean_plate.Placement`)
     a body of ``body_height`` metres standing at the offset has its feet at ``track[t, :2]`` and spans
     ``track[t, 2]`` pixels (pinhole, the camera looking along −z)."""
     check_shape(torch.as_tensor(track), ["T", 3], name="track")
