@@ -38,7 +38,7 @@ from ..names import OUTFITS
 from .outfit_parts import hem_cut, shoe_panel, shoe_rig
 
 __all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_SHOES", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody",
-           "dressed_body", "avatar_look"]
+           "dressed_body", "outfit_field", "avatar_look"]
 
 #: What each named outfit wears (upper, lower, head, hair) and the seed of its look.
 OUTFIT_SLOTS = {
@@ -137,7 +137,7 @@ class DressedBody:
         from ..body import AnnyBody
         from ..data.clothed import clothed_mesh
         from ..data.sample import prepare_assets
-        from ..data.textures import paint_albedo, region_field, uv_atlas
+        from ..data.textures import paint_albedo, uv_atlas
         from ..render.frame import TexturedAlbedo
 
         if not isinstance(body, AnnyBody):
@@ -145,10 +145,7 @@ class DressedBody:
         self.body, self.outfit = body, outfit
         assets = prepare_assets(body)
         look = outfit.look
-        # Painted on a 1024² atlas through a region field blurred over ~4 vertex rings (as the default albedo,
-        # :mod:`.smooth_albedo`), so the painted edges (a dress's neckline, bare arms) are as smooth as the hems.
-        ids = assets.region_labels(look["sleeves"], look["legs"], "none" if look["hair"] is None else "short")
-        self._field = region_field(body.faces.cpu().numpy(), ids.numpy(), iters=16)
+        self._field = outfit_field(body, look, assets)
         self._tab = assets.garment_tables()
         atlas = uv_atlas(body, 1024)
         tex = paint_albedo(atlas, self._field, look)
@@ -252,6 +249,22 @@ class DressedBody:
             ns.append(torch.cat([n, shoe_n[b]]))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
                           out.joints, out.joint_names)
+
+
+def outfit_field(body, look: dict, assets=None) -> np.ndarray:
+    """(V, R) the region field an outfit's body is painted through: the look's region labels with the feet
+    (under the shoes) given to the legs' region — the trousers' colour under long legs, else skin — so no
+    painted shoe edge shows above a shoe, blurred over 16 steps (about four vertex rings, as the default
+    albedo, :mod:`.smooth_albedo`) and painted on a 1024² atlas, so painted edges (a dress's neckline,
+    bare arms) are as smooth as the hems. ``assets``: the body's :class:`~relightnet.data.sample.SynthAssets`."""
+    from ..body import REGIONS
+    from ..data.sample import prepare_assets
+    from ..data.textures import region_field
+
+    assets = prepare_assets(body) if assets is None else assets
+    ids = assets.region_labels(look["sleeves"], look["legs"], "none" if look["hair"] is None else "short").clone()
+    ids[ids == REGIONS.index("shoes")] = REGIONS.index("bottom" if look["legs"] == "long" else "skin")
+    return region_field(body.faces.cpu().numpy(), ids.numpy(), iters=16)
 
 
 def avatar_look(body, albedo="default", outfit: str | None = None) -> tuple:

@@ -57,13 +57,12 @@ def test_dressed_mesh_is_the_body_then_its_garments_every_frame(coat, anny_body)
 def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
     from relightnet.data.clothed import clothed_mesh
     from relightnet.data.sample import prepare_assets
-    from relightnet.data.textures import paint_albedo, region_field, uv_atlas
+    from relightnet.data.textures import paint_albedo, uv_atlas
+    from relightnet.pipeline.outfits import outfit_field
 
     a = prepare_assets(anny_body)
     look, g = coat.outfit.look, coat.outfit.garments
-    # Painted as the avatar paints: a 1024² atlas, the region field blurred over 16 steps.
-    field = region_field(anny_body.faces.numpy(), a.region_labels(look["sleeves"], look["legs"], "short").numpy(),
-                         iters=16)
+    field = outfit_field(anny_body, look, a)  # painted as the avatar paints: its field, a 1024² atlas
     atlas = uv_atlas(anny_body, 1024)
     r = anny_body()
     m = clothed_mesh(g, look, r.verts, r.normals, r.joints, anny_body, a.garment_tables(),
