@@ -113,3 +113,11 @@ def test_no_stair_stepped_hem_in_any_outfit(anny_body, name):
     have = ~np.isnan(j_new)
     assert have.sum() >= 2 and float(np.nanmax(j_new)) < 0.85, (name, j_new, j_old)
     assert float(j_new[have].mean()) < float(np.nanmean(j_old[have])), (name, j_new, j_old)
+
+
+def test_every_outfit_wears_shoes_and_random_ones_draw_their_kind():
+    from relightnet.body.shoes import SHOE_KINDS
+
+    assert {draw_outfit(n).shoes for n in OUTFITS} <= set(SHOE_KINDS) and set(OUTFIT_SHOES) == set(OUTFITS)
+    kinds = [draw_outfit(f"random:{s}").shoes for s in range(12)]
+    assert set(kinds) == set(SHOE_KINDS) and kinds == [draw_outfit(f"random:{s}").shoes for s in range(12)]
