@@ -13,7 +13,8 @@ the camera-facing hemisphere, :func:`relightnet.sh.scale_invariant_light_error`)
 - ``plate``: :func:`relightnet.sh.plate_light` of the background, through an 8-bit sRGB round
   trip (as a photo), with the sample's camera intrinsics (``plate@60``: a centred 60° pinhole);
 - ``person``: the shipped CNN on the composite (person over the background, its mask);
-- ``both``: :func:`relightnet.sh.combine_person_plate` of the two.
+- ``both``: :func:`relightnet.sh.combine_person_plate` of the two (the plate where its frame shows the
+  light, the person elsewhere).
 
 The families are the env maps (``night`` and ``sunrise`` are held out from the CNN's training).
 The generator's plates are what its crop camera sees (a full-body framing: about 28° across), so a
@@ -38,7 +39,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.color import linear_to_srgb, srgb_to_linear  # noqa: E402
-from relightnet.sh import combine_person_plate, plate_light, scale_invariant_light_error  # noqa: E402
+from relightnet.sh import combine_person_plate, plate_light, plate_view, scale_invariant_light_error  # noqa: E402
 
 CONFIG = """seed: 25
 res: 128
@@ -57,8 +58,8 @@ METHODS = ("constant", "plate", "plate@60", "person", "both")
 def _make(data: Path) -> None:
     cfg = data.with_suffix(".yaml")
     cfg.write_text(CONFIG)
-    subprocess.run([sys.executable, "-m", "relightnet", "synth", "--config", str(cfg), "--out", str(data),
-                    "--workers", "2", "-q"], check=True)
+    subprocess.run([sys.executable, "-m", "relightnet", "-q", "synth", "--config", str(cfg), "--out", str(data),
+                    "--workers", "2"], check=True)
 
 
 def _estimates(data: Path) -> tuple[dict, list[str]]:
@@ -81,10 +82,12 @@ def _estimates(data: Path) -> tuple[dict, list[str]]:
             const = torch.zeros_like(truth)
             const[0] = truth[0]
             person = predict.light(it["image_composite"], it["mask"][0]).double()
-            on_plate = plate_light(plate, 2, intrinsics=meta["camera"]["intrinsics"]).double()
+            intr = meta["camera"]["intrinsics"]
+            on_plate = plate_light(plate, 2, intrinsics=intr).double()
+            view = plate_view(*plate.shape[:2], intrinsics=intr)
             for m, v in (("truth", truth), ("constant", const), ("plate", on_plate),
                          ("plate@60", plate_light(plate, 2, 60.0).double()), ("person", person),
-                         ("both", combine_person_plate(person, on_plate).double())):
+                         ("both", combine_person_plate(person, on_plate, view).double())):
                 est[m].append(v)
             families.append(meta["light"]["hdri"])
     return {k: torch.stack(v) for k, v in est.items()}, families

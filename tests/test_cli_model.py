@@ -79,7 +79,7 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
 
 
 def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
-    from relightnet.sh import combine_person_plate, load_plate_light
+    from relightnet.sh import combine_person_plate, load_plate, load_plate_light
 
     g = np.random.default_rng(0)
     plate = np.concatenate([np.full((30, 80, 3), 220), np.full((30, 80, 3), 40)]).astype(np.uint8)
@@ -100,10 +100,23 @@ def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
     assert main([*photo, "--out", str(tmp_path / "person.npz")]) == 0
     assert main([*photo, "--plate", str(tmp_path / "plate.png"), "--fov", "50", "--out", str(tmp_path / "b.npz")]) == 0
     torch.testing.assert_close(load_light(tmp_path / "b.npz"),
-                               combine_person_plate(load_light(tmp_path / "person.npz"), on_plate))
+                               combine_person_plate(load_light(tmp_path / "person.npz"),
+                                                    *load_plate(tmp_path / "plate.png", hfov_deg=50.0)))
     capsys.readouterr()
     assert main(["estimate-light", "--out", str(tmp_path / "x.npz")]) == 1
     assert "give a photo of a person (IMAGE), a background plate (--plate), or both" in capsys.readouterr().err
     assert main([*photo[1:], "--fov", "50", "--out", str(tmp_path / "x.npz")]) == 1
     assert "--fov is the plate's field of view" in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists()
+
+
+def test_evaluate_fit_writes_its_report(tmp_path, capsys):
+    out = tmp_path / "fit"
+    assert main(["evaluate", "--fit", "--fit-clips", "1", "--fit-frames", "2", "--fit-res", "128",
+                 "--out", str(out)]) == 0
+    metrics = json.loads((out / "fit_metrics.json").read_text())
+    assert metrics["frames"] == 2 and len(metrics["clips"]) == 1 and metrics["median"]["mpjpe"] > 0
+    assert "| mpjpe |" in capsys.readouterr().out and "| iou_body |" in (out / "fit_report.md").read_text()
+    assert main(["evaluate", "--fit", "--data", str(tmp_path), "--out", str(tmp_path / "x")]) == 1
+    assert "--data: not used with --fit" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()

@@ -40,11 +40,11 @@ def run(args: argparse.Namespace) -> int:
     light = load_light(args.light) if args.light else None
     plate_light = None
     if args.light_from in ("plate", "both"):  # the plate given, else the target's first frame
-        from ..sh.plate import load_plate_light
+        from ..sh.plate import load_plate
 
-        plate_light = load_plate_light(args.plate or args.target, hfov_deg=args.fov)
+        plate_light = load_plate(args.plate or args.target, hfov_deg=args.fov)
         if args.light_from == "plate":
-            light = plate_light
+            light = plate_light.light
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
     res = avatar(args.target, out, model=predictor, motion=motion, body=args.body, albedo=args.albedo,

@@ -27,6 +27,7 @@ def run(args: argparse.Namespace) -> int:
         f"  target | avatar, side by side:               {p['side_by_side']}",
         f"  light curves raw/smoothed/true:              {p['lights_plot']}",
         f"  dressed avatar in place of a walking person: {p['replace_avatar']} (plate: {p['replace_plate']})",
+        f"  motion transfer, source | avatar:            {p['motion_side_by_side']}",
         f"  2D vs 3D vs ground truth report:             {p['compare']}/report.md",
         f"  preset light previews:                       {out}/lights/*.png",
     ]
@@ -40,7 +41,8 @@ def register(sub) -> None:
         sub, "demo",
         "Run the whole job on embedded defaults (shipped CNN, Anny, shipped env maps): make a target clip of a "
         "person walking under a changing light, put the Anny avatar into it lit by the light the CNN estimates "
-        "(3D path), and compare the 2D and 3D paths against ground truth on generated sequences.",
+        "(3D path), make it perform a generated person's fitted walk (motion transfer), and compare the 2D and 3D "
+        "paths against ground truth on generated sequences.",
         "  relightnet demo\n  relightnet demo --out /tmp/demo --size 128 --frames 12 --compare-clips 1\n",
     )
     p.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")

@@ -8,7 +8,7 @@ import logging
 from pathlib import Path
 
 from ..errors import InputError
-from .argtypes import work_size
+from .argtypes import pos_int, work_size
 from .inputs import read_photo
 from .options import add_command, add_mask_source_arg, add_model_args
 from .paths import out_dir, out_file
@@ -35,6 +35,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
     out = out_dir(args.out)
+    if args.fit:
+        return _evaluate_fit(args, out)
     if (args.data is None) == (args.photos is None):
         raise InputError("--data, --photos: give one, not both" if args.data else
                          "give --data (a dataset folder made by 'relightnet synth') or --photos (a folder of photos)")
@@ -79,6 +81,29 @@ def _evaluate_light(args: argparse.Namespace, model, out: Path) -> int:
     return 0
 
 
+def _evaluate_fit(args: argparse.Namespace, out: Path) -> int:
+    from ..io import atomic_write
+    from ..pipeline.fit_eval import evaluate_fit, format_fit_report
+
+    unused = [o for o, given in (("--data", args.data), ("--photos", args.photos), ("--checkpoint", args.checkpoint),
+                                 ("--light", args.light), ("--clips", args.clips), ("--ablation", args.ablation),
+                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test")) if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used with --fit (it generates its own test clips)")
+    result = evaluate_fit(args.fit_clips, args.fit_frames, args.fit_res,
+                          progress=lambda i, r: logger.info("clip %d (%s): MPJPE %.1f mm, IoU %.3f", i, r["motion"],
+                                                            r["mpjpe"], r["iou_body"]))
+    text = format_fit_report(result)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / "fit_report.md", "w") as f:
+        f.write(f"# Fitting Anny: {args.fit_clips} generated test clips of {args.fit_frames} frames at "
+                f"{args.fit_res}²\n\n{text}\n")
+    with atomic_write(out / "fit_metrics.json", "w") as f:
+        json.dump(result, f, indent=2)
+    print(text)  # the command's own output (stdout), not a log message
+    return 0
+
+
 def _evaluate_photos(args: argparse.Namespace, out: Path) -> int:
     from ..model.checkpoint import load_model
     from ..pipeline.photo_checks import format_photo_report, list_photos, photo_checks, write_photo_report
@@ -102,7 +127,7 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
-    from ..sh.plate import combine_person_plate, load_plate_light
+    from ..sh.plate import combine_person_plate, load_plate
 
     if args.image is None and args.plate is None:
         raise InputError("give a photo of a person (IMAGE), a background plate (--plate), or both")
@@ -111,14 +136,14 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
     plate = None
     if args.plate is not None:
-        plate = load_plate_light(args.plate, hfov_deg=args.fov or 60.0)
+        plate = load_plate(args.plate, hfov_deg=args.fov or 60.0)
     light = None
     if args.image is not None:
         image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
         predict = make_predictor(args.backend, args.checkpoint, args.device, size=args.size)
         light = predict.light(image, mask).cpu()
     if plate is not None:
-        light = plate if light is None else combine_person_plate(light, plate)
+        light = plate.light if light is None else combine_person_plate(light, *plate)
     save_light(out, light)
     logger.info("wrote %s (light from %s)", out, " and ".join(
         w for w, v in (("the person", args.image), ("the plate", args.plate)) if v is not None))
@@ -146,7 +171,7 @@ def register(sub) -> None:
                    f"from {a.out}/last.pt")
 
     p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines, or on real "
-                    "photos of people (--photos).",
+                    "photos of people (--photos); or the motion-capture fit on generated clips (--fit).",
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"
                     "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
                     "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
@@ -154,7 +179,8 @@ def register(sub) -> None:
                     "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
                     "--out reports/light\n"
                     "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
-                    "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n")
+                    "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n"
+                    "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n")
     add_model_args(p, backend=False)
     p.add_argument("--data", help="dataset folder made by 'relightnet synth' (or --photos)")
     p.add_argument("--photos", metavar="DIR",
@@ -174,6 +200,13 @@ def register(sub) -> None:
                         "(light_report.md, light_metrics.json)")
     p.add_argument("--clips", nargs="+", metavar="DATA",
                    help="with --light: clip datasets (clip_lights constant/switch) for drift and lag")
+    p.add_argument("--fit", action="store_true",
+                   help="the motion-capture report instead: 'relightnet fit' on generated test clips whose true "
+                        "body is known (MPJPE, PA-MPJPE, 2D error, silhouette IoU, acceleration, foot skating, "
+                        "time; fit_report.md, fit_metrics.json)")
+    p.add_argument("--fit-clips", type=pos_int, default=3, help="with --fit: clips (default: 3)")
+    p.add_argument("--fit-frames", type=pos_int, default=12, help="with --fit: frames per clip (default: 12)")
+    p.add_argument("--fit-res", type=work_size, default=256, help="with --fit: clip size (default: 256)")
     p.set_defaults(func=run_evaluate)
 
     p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person (the CNN), of a "
@@ -185,7 +218,8 @@ def register(sub) -> None:
                     "  relightnet estimate-light person.png --out light_ke18.npy    # Kanamori-Endo format (BGR)\n")
     p.add_argument("image", nargs="?", help="image file (PNG/JPEG) of a person")
     p.add_argument("--plate", help="background plate (image, or a video's first frame): its light, read from the "
-                   "picture itself (the person's estimate, with IMAGE, is used on the camera side)")
+                   "picture itself (with IMAGE: the plate where its frame shows the light, the person's estimate "
+                   "elsewhere)")
     p.add_argument("--fov", type=float, default=None, help="the plate's horizontal field of view in degrees "
                    "(default: 60)")
     p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "

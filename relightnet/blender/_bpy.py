@@ -69,7 +69,22 @@ def import_bpy():
             f"Blender support needs the 'bpy' module (pip install 'relightnet[blender]', bpy=={BPY_VERSION}, "
             f"Python 3.11): {e}"
         ) from None
+    _drop_session_tempdir(bpy)
+    bpy.context.preferences.filepaths.use_scripts_auto_execute = False  # a .blend's scripts never run
     return bpy
+
+
+def _drop_session_tempdir(bpy) -> None:
+    """Remove the folder Blender makes in TMPDIR when it is imported (``bpy.app.tempdir``) while it is empty.
+
+    Blender removes it at a normal exit only, so a killed render left it behind. relightnet never needs it
+    (renders are saved to named files; Blender does not make it again), so once it is gone a killed process
+    leaves nothing in TMPDIR.
+    """
+    folder = bpy.app.tempdir
+    if folder and os.path.basename(os.path.normpath(folder)).startswith("blender_"):
+        with contextlib.suppress(OSError):  # not empty, or gone already: left to Blender
+            os.rmdir(folder)
 
 
 def reset():

@@ -20,7 +20,6 @@ import contextlib
 import logging
 import os
 import re
-import shutil
 import tempfile
 import time
 from collections.abc import Iterator
@@ -139,9 +138,10 @@ def open_blend(path) -> object:
         raise InputError(f"{path}: expected a Blender .blend file")
     if not path.is_file():
         raise InputError(f"{path}: no such .blend file")
-    try:
-        with quiet((1,)):
-            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    bpy.context.preferences.filepaths.use_scripts_auto_execute = False
+    try:  # the file's scripts never run: no auto-run text blocks or handlers, Python drivers disabled
+        with quiet((1, 2)):  # (Blender prints a driver it did not run over several lines: logged at DEBUG)
+            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False, use_scripts=False)
     except RuntimeError as e:
         msg = str(e).strip().splitlines()[-1] if str(e).strip() else "unreadable"
         raise InputError(f"{path}: cannot open with Blender ({msg})") from None
@@ -151,11 +151,12 @@ def open_blend(path) -> object:
     return scene
 
 
-def render_current(exr_path, progress=None) -> tuple[np.ndarray, float]:
+def render_current(exr_path=None, progress=None) -> tuple[np.ndarray, float]:
     """Render the current frame of Blender's current scene to an EXR file.
 
     Args:
-        exr_path: where the RGBA float32 EXR goes (written by Blender, then read back).
+        exr_path: where the RGBA float32 EXR goes (written by Blender once the frame is rendered, then read
+            back); None: a temporary folder made after the render and removed.
         progress: optional callable ``(done_samples, total_samples)``, called while rendering.
 
     Returns:
@@ -175,15 +176,18 @@ def render_current(exr_path, progress=None) -> tuple[np.ndarray, float]:
         with quiet((1,)):
             bpy.ops.render.render()
         seconds = time.perf_counter() - t0
-        with quiet((1,)):
-            bpy.data.images["Render Result"].save_render(filepath=str(exr_path))
     finally:
         handlers.remove(on_stats)
-    img = bpy.data.images.load(str(exr_path), check_existing=False)
-    try:
-        px = read_image_pixels(img)
-    finally:
-        bpy.data.images.remove(img)
+    with contextlib.ExitStack() as stack:
+        if exr_path is None:
+            exr_path = Path(stack.enter_context(tempfile.TemporaryDirectory())) / "frame.exr"
+        with quiet((1,)):
+            bpy.data.images["Render Result"].save_render(filepath=str(exr_path))
+        img = bpy.data.images.load(str(exr_path), check_existing=False)
+        try:
+            px = read_image_pixels(img)
+        finally:
+            bpy.data.images.remove(img)
     if px.shape[-1] == 3:
         px = np.concatenate([px, np.ones_like(px[..., :1])], axis=-1)
     return px, seconds
@@ -214,23 +218,24 @@ def _frame_range(scene, frames) -> range:
     return range(a, b)
 
 
-@contextlib.contextmanager
-def _staging(out: Path | None):
-    """A folder for Blender's raw frames: in ``out``, named for this process (:func:`~relightnet.io.atomic.temp_path`)
-    so the next render into ``out`` removes it if this one is killed; removed at the end."""
+def _render_frame(out: Path | None, t: int, tick) -> tuple[np.ndarray, float, Path | None]:
+    """Render frame ``t``; with ``out``, Blender saves it under a temporary name beside ``frame_NNNNN.exr``
+    (:func:`~relightnet.io.atomic.temp_path`: the next render into ``out`` removes it if this one is killed
+    while saving) that exists only once the frame is rendered, renamed when read back. So a render killed
+    mid-frame leaves nothing in ``out`` (and nothing in TMPDIR: :func:`~relightnet.blender._bpy.import_bpy`)."""
     if out is None:
-        with tempfile.TemporaryDirectory() as tmp:
-            yield tmp
-        return
+        return (*render_current(None, tick), None)
     from ..io.atomic import remove_stale, temp_path
 
-    remove_stale(out / "frames")
-    tmp = temp_path(out / "frames", "stage")
-    tmp.mkdir()
+    exr = out / f"frame_{t:05d}.exr"
+    remove_stale(exr)
+    raw = temp_path(exr, "render")
     try:
-        yield str(tmp)
+        px, seconds = render_current(raw, tick)
+        os.replace(raw, exr)
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        raw.unlink(missing_ok=True)
+    return px, seconds, exr
 
 
 def render_blend(
@@ -276,7 +281,10 @@ def render_blend(
     check_render_settings(path, r.resolution_x, r.resolution_y, r.resolution_percentage, scene.cycles.samples,
                           len(todo))
     if out is not None:
+        from ..io.atomic import remove_stale
+
         out.mkdir(parents=True, exist_ok=True)
+        remove_stale(out / "frames")  # the staging folder of a killed render of an older version
     total = len(todo) * scene.cycles.samples
     bar = None
     if progress:
@@ -284,28 +292,26 @@ def render_blend(
 
         bar = tqdm(total=total, desc="cycles", unit="spp", leave=True)
     scale = None if exposure == "auto" else float(exposure)
-    with _staging(out) as tmp:
-        try:
-            for k, t in enumerate(todo):
+    try:
+        for k, t in enumerate(todo):
+            with quiet((1, 2)):  # the frame's drivers are evaluated (a Python one is refused, in several lines)
                 scene.frame_set(scene.frame_start + t)
 
-                def tick(done, n, base=k * scene.cycles.samples):
-                    if bar is not None:
-                        bar.n = base + min(done, n)
-                        bar.refresh()
+            def tick(done, n, base=k * scene.cycles.samples):
+                if bar is not None:
+                    bar.n = base + min(done, n)
+                    bar.refresh()
 
-                raw = Path(tmp) / f"frame_{t:05d}.exr"
-                px, seconds = render_current(raw, tick)
-                rgba = torch.from_numpy(px)
-                exr = png = None
-                if out is not None:
-                    exr, png = out / raw.name, out / raw.with_suffix(".png").name
-                    os.replace(raw, exr)
-                    if scale is None:
-                        scale = auto_exposure(rgba[..., :3], rgba[..., 3] > 0.5)
-                    write_image(png, rgba[..., :3] * scale)
-                logger.debug("frame %d: %.2f s", t, seconds)
-                yield CyclesFrame(t, rgba, seconds, exr, png)
-        finally:
-            if bar is not None:
-                bar.close()
+            px, seconds, exr = _render_frame(out, t, tick)
+            rgba = torch.from_numpy(px)
+            png = None
+            if out is not None:
+                png = exr.with_suffix(".png")
+                if scale is None:
+                    scale = auto_exposure(rgba[..., :3], rgba[..., 3] > 0.5)
+                write_image(png, rgba[..., :3] * scale)
+            logger.debug("frame %d: %.2f s", t, seconds)
+            yield CyclesFrame(t, rgba, seconds, exr, png)
+    finally:
+        if bar is not None:
+            bar.close()

@@ -31,6 +31,7 @@ from .motion import MOTION_KINDS, make_motion
 from .motion_io import Z_UP_TO_Y_UP, Motion, load_motion, reorient_motion, save_motion
 from .shoes import SHOE_KINDS, shoe_surface
 from .smpl_model import SMPL_JOINT_NAMES, SMPL_KEYS, SMPLBody, load_smpl_file, smpl_to_world, spherical_uv
+from .subdivide import SubdividedFaces, midpoint_values, subdivide_faces
 
 __all__ = [
     "BodyModel", "BodyOutput", "GROUND_MODES", "vertex_normals", "rotvec_to_matrix", "matrix_to_rotvec",
@@ -44,4 +45,5 @@ __all__ = [
     "vertex_to_texture",
     "GarmentPiece", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip",
     "SHOE_KINDS", "shoe_surface",
+    "SubdividedFaces", "subdivide_faces", "midpoint_values",
 ]

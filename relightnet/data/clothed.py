@@ -15,6 +15,11 @@ generator's solid patterns continue around them.
 Every piece is two-sided (:data:`THICKNESS`): an inner copy faces the body, so looking into
 a sleeve, under a skirt or into a hood shows a surface facing the camera with its own PRT.
 
+Every piece's outer side is subdivided once (:func:`relightnet.body.subdivide_faces`): its vertices
+are twice as dense, so the per-vertex transport follows shadows between garment layers more
+closely; the PRT ray casts the new midpoint vertices only at shadow edges
+(:func:`relightnet.prt.refined_transport`, with ``ClothedMesh.midpoints``).
+
 Covered faces: body faces under a shell (its copied faces, less two rings of vertices at
 its edges, where the body shows through openings by design) or inside a skirt between
 waist and hem. A pixel that shows one is body showing through cloth;
@@ -30,6 +35,7 @@ import torch
 
 from ..body import REGIONS
 from ..body.garments import GarmentPiece
+from ..body.subdivide import midpoint_values, subdivide_faces
 from .garments import GarmentTables, dress_frame
 from .textures import ALBEDO_MAX, ALBEDO_MIN, garment_texels, hair_texels
 
@@ -50,6 +56,8 @@ class ClothedMesh:
         covered: (F',) bool body faces hidden under garments. hidden: (V',) bool vertices all of
             whose faces are covered (their transport is never seen). n_body_faces: F.
         types: the garment types worn (:data:`~relightnet.data.garments.GARMENT_TYPES`).
+        midpoints: (M, 3) int64 rows (vertex, endpoint a, endpoint b) of the vertices added by
+            subdividing the garments' outer sides (the last M vertices).
     """
 
     verts: torch.Tensor
@@ -63,6 +71,7 @@ class ClothedMesh:
     hidden: torch.Tensor
     n_body_faces: int
     types: list
+    midpoints: torch.Tensor
 
 
 #: Cloth thickness (metres): every piece gets an inner side this far in, facing the body.
@@ -168,11 +177,13 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     uvs = [_panel_uv(body_uv, 0, n_panels)]
     if outer:
         uvs.append(_panel_uv(body_uv, 1, n_panels))
-    uv_faces, fcs, fields = [body.uv_faces], [faces], [field]
+    uv_faces, fcs, fields, outer_f = [body.uv_faces], [faces], [field], [torch.zeros(faces.shape[0], dtype=torch.bool)]
     covered = torch.zeros(faces.shape[0], dtype=torch.bool)
     nv, nuv = V, sum(len(u) for u in uvs)
     for _kind, piece, region, where in frames[0]:
         fcs.append(piece.faces + nv)
+        half = piece.faces.shape[0] // 2  # two-sided: the outer side's faces come first
+        outer_f.append(torch.arange(piece.faces.shape[0]) < half)
         if piece.source is not None:
             uv_faces.append(_uv_faces(piece, body.uv_faces) + (len(body_uv) if where == "outer" else 0))
             sel = torch.zeros(faces.shape[0], dtype=torch.bool)
@@ -193,11 +204,17 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     all_n = torch.cat([normals, *[torch.stack([f[i][1].normals for f in frames]) for i in range(len(frames[0]))]], 1)
     faces_all = torch.cat(fcs)
     cov = torch.cat([covered, torch.zeros(faces_all.shape[0] - faces.shape[0], dtype=torch.bool)])
+    outer_f = torch.cat(outer_f)
+    sub = subdivide_faces(faces_all, all_v.shape[1], outer_f)
+    uv_all = torch.cat(uvs).float()
+    sub_uv = subdivide_faces(torch.cat(uv_faces), len(uv_all), outer_f)
+    faces_all, cov = sub.faces, cov[sub.parent]
+    all_v, all_n = midpoint_values(all_v.float(), sub.edges), midpoint_values(all_n.float(), sub.edges, unit=True)
+    regions = midpoint_values(torch.from_numpy(np.concatenate(fields)), sub.edges).numpy()
     seen = torch.zeros(all_v.shape[1], dtype=torch.bool)
     seen[faces_all[~cov].flatten()] = True
-    return ClothedMesh(all_v.float(), all_n.float(), faces_all, torch.cat(uvs).float(), torch.cat(uv_faces), tex,
-                       np.concatenate(fields), cov, ~seen, int(faces.shape[0]),
-                       [p[0] for p in frames[0]])
+    return ClothedMesh(all_v, all_n, faces_all, midpoint_values(uv_all, sub_uv.edges), sub_uv.faces, tex,
+                       regions, cov, ~seen, int(faces.shape[0]), [p[0] for p in frames[0]], sub.midpoints)
 
 
 def hidden_body_share(pix_face: torch.Tensor, covered: torch.Tensor, n_body_faces: int) -> float:

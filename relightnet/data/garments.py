@@ -20,6 +20,12 @@ vertex follows a body vertex), hanging surfaces :func:`relightnet.body.garments.
 (rebuilt every frame around the pelvis or head joint, so clips move them with the body).
 :func:`dress_frame` builds the pieces of one posed frame; :mod:`relightnet.data.clothed`
 puts them together with the body into one mesh and one texture.
+
+Layers do not cross (generator version 3): a hat's rings enclose the hair's surface (points
+sampled on its faces, :func:`surface_samples`) and rise above its crown, long hair and hoods
+enclose the top's torso, each :data:`LAYER_GAP` clear of the layer inside; a top's shell
+moves each vertex at most half the room in front of it (:func:`room_in_front`), so the
+shells of an arm and of the torso beside it do not meet.
 """
 
 from __future__ import annotations
@@ -35,7 +41,8 @@ from ..body.garments import GarmentPiece, radial_directions, ring_surface, shell
 from ..checks import InputError
 
 __all__ = ["GARMENT_SLOTS", "DEFAULT_GARMENT_PROBS", "GARMENT_TYPES", "garment_probs", "sample_garments",
-           "GarmentTables", "garment_tables", "dress_frame", "garment_types"]
+           "GarmentTables", "garment_tables", "dress_frame", "garment_types", "LAYER_GAP", "room_in_front",
+           "surface_samples"]
 
 #: The four slots a person fills and the choices of each (the first: nothing as geometry).
 GARMENT_SLOTS = {
@@ -196,6 +203,22 @@ def _all_in(faces: torch.Tensor, vsel: torch.Tensor) -> torch.Tensor:
     return vsel[faces].all(1)
 
 
+def room_in_front(verts: torch.Tensor, normals: torch.Tensor, faces: torch.Tensor, idx: torch.Tensor) -> torch.Tensor:
+    """(N,) distance (metres) from body vertices ``idx`` (N,) along their normals to the next body surface
+    in front (an arm beside the torso, the other arm), inf where the ray escapes. verts, normals: (V, 3);
+    faces: (F, 3)."""
+    from ..prt import make_engine
+
+    eng = make_engine(verts, faces, threads=1)
+    o = verts[idx].double() + 1e-4 * normals[idx].double()
+    t = eng.intersect(o.float().numpy(), normals[idx].float().numpy()).t
+    return torch.from_numpy(t).double() + 1e-4
+
+
+#: Gap (metres) between a garment layer and the layer it encloses (hat over hair, hair or hood over a coat).
+LAYER_GAP = 0.008
+
+
 def _upper_shell(kind, g, verts, normals, faces, tab, body, outfit) -> GarmentPiece:
     sleeves = outfit["sleeves"] if kind == "loose_top" else "long"
     lab = tab.region(body, sleeves, outfit["legs"])
@@ -208,7 +231,13 @@ def _upper_shell(kind, g, verts, normals, faces, tab, body, outfit) -> GarmentPi
         fsel &= ~((c[:, 0].abs() < g["coat_gap"] / 2) & (c[:, 2] > 0.0) & ~tab.arm[faces].any(1))
     base = {"loose_top": g["looseness"], "jacket": g["looseness"] + 0.008, "open_coat": g["looseness"] + 0.012}[kind]
     off = base + g["fold_amp"] * _fold_noise(tab.rest, g["fold_seed"])
-    return shell_surface(verts, normals, faces, fsel, off, sag=g["sag"])
+    # At most half the room in front of each vertex (offset and sag alike), so that the shells of
+    # surfaces facing each other (an arm beside the torso) do not meet or cross.
+    src = torch.unique(faces[fsel])
+    reach = off[src].double() + g["sag"]
+    scale = torch.ones(len(verts), dtype=torch.float64)
+    scale[src] = (0.5 * room_in_front(verts, normals, faces, src) / reach).clamp(max=1.0)
+    return shell_surface(verts, normals, faces, fsel, (off * scale).float(), sag=g["sag"] * scale)
 
 
 def _lower_shell(kind, g, verts, normals, faces, joints, tab, body, outfit, jidx) -> GarmentPiece:
@@ -278,29 +307,73 @@ def dress_frame(g: dict, verts, normals, faces, joints, tab: GarmentTables, body
                              folds=tuple(tuple(f) for f in g["folds"]))
         pieces.append(("dress" if g["upper"] == "dress" else "skirt", piece,
                        REGIONS.index("top" if g["upper"] == "dress" else "bottom"), 0))
+    coat = None
+    if g["upper"] in ("loose_top", "jacket", "open_coat"):  # its torso part, which hair and hoods enclose
+        shell = pieces[0][1]
+        coat = surface_samples(shell.verts, shell.faces[~tab.arm[shell.source[shell.faces]].any(1)], 2)
+    return pieces + _head_pieces(g, verts, normals, faces, tab, body, outfit, topo, (head, front, top, eye_y),
+                                 coat), topo
+
+
+def _around(points: torch.Tensor, centre: torch.Tensor, clearance: float, gap: float) -> torch.Tensor:
+    """(N, 3) points moved horizontally toward (or away from) the vertical axis through ``centre`` so
+    that a :func:`ring_surface` of ``clearance`` clears the original points by ``gap`` (radius ≥ 0)."""
+    rel = points.double() - centre.double()
+    rel[:, 1] = 0.0
+    r = rel.norm(dim=1, keepdim=True)
+    moved = rel * ((r + gap - clearance).clamp_min(0.0) / r.clamp_min(1e-9))
+    return (points.double() + moved - rel).to(points.dtype)
+
+
+def _head_pieces(g, verts, normals, faces, tab, body, outfit, topo, frame, coat) -> list:
+    """The hat or hood and the hair of :func:`dress_frame`, layered: the hat encloses the hair, hair
+    and hoods enclose the coat's torso (``coat``: (N, 3) or None), each :data:`LAYER_GAP` clear of it."""
+    head, front, top, eye_y = frame
+    not_arm = ~tab.arm
+    out, hair = [], None
     volume = g["hair_volume"] if g["hair"] in ("volume", "long") else 0.0
-    if g["head"] == "hat":
-        y1 = eye_y + g["hat_depth"]
-        piece = ring_surface(verts[tab.head], head, front, top + volume + 0.012, y1, 10, 40, volume + 0.012,
-                             min_radius=0.03, cap=True)
-        pieces.append(("hat", piece, REGIONS.index("hair"), 1))
-    elif g["head"] == "hood":
-        pts = verts[not_arm & (verts[:, 1] > eye_y - 0.45)]
-        c = g["hood_clearance"]
-        rows = topo.setdefault("hood_rows", _open_rows(top + c, eye_y - 0.3, 16, eye_y + 0.07))
-        piece = ring_surface(pts, head, front, top + c, eye_y - 0.3, 16, 48, c, min_radius=0.03, open_rows=rows,
-                             open_halfwidth=math.radians(60), cap=True)
-        pieces.append(("hood", piece, REGIONS.index("top"), 1))
     if g["hair"] == "volume":
         lab = tab.region(body, outfit["sleeves"], outfit["legs"])
         fsel = _all_in(faces, lab == REGIONS.index("hair"))
         off = g["hair_volume"] * (0.6 + 0.4 * _fold_noise(tab.rest * 3, g["fold_seed"] + 2))
-        pieces.append(("volume_hair", shell_surface(verts, normals, faces, fsel, off), REGIONS.index("hair"), "body"))
+        hair = ("volume_hair", shell_surface(verts, normals, faces, fsel, off), REGIONS.index("hair"), "body")
     elif g["hair"] == "long":
-        pts = verts[not_arm & (verts[:, 1] > eye_y - 0.6)]
+        pts = _enclosing(verts[not_arm & (verts[:, 1] > eye_y - 0.6)], coat, head, volume)
         y1 = eye_y - 0.2 - g["hair_length"]
         rows = topo.setdefault("hair_rows", _open_rows(top + volume, y1, 14, eye_y + 0.05))
         piece = ring_surface(pts, head, front, top + volume, y1, 14, 48, volume, min_radius=0.03, open_rows=rows,
                              open_halfwidth=math.radians(80), cap=True)
-        pieces.append(("long_hair", piece, REGIONS.index("hair"), 2))
-    return pieces, topo
+        hair = ("long_hair", piece, REGIONS.index("hair"), 2)
+    if g["head"] == "hat":
+        y1, y0 = eye_y + g["hat_depth"], top + volume + 0.012
+        inner = None if hair is None else surface_samples(hair[1].verts, hair[1].faces, 4)
+        if inner is not None:  # above the hair's crown too
+            y0 = max(y0, float(inner[:, 1].max()) + LAYER_GAP)
+        pts = _enclosing(verts[tab.head], inner, head, volume + 0.012)
+        piece = ring_surface(pts, head, front, y0, y1, 10, 40, volume + 0.012, min_radius=0.03, cap=True)
+        out.append(("hat", piece, REGIONS.index("hair"), 1))
+    elif g["head"] == "hood":
+        c = g["hood_clearance"]
+        pts = _enclosing(verts[not_arm & (verts[:, 1] > eye_y - 0.45)], coat, head, c)
+        rows = topo.setdefault("hood_rows", _open_rows(top + c, eye_y - 0.3, 16, eye_y + 0.07))
+        piece = ring_surface(pts, head, front, top + c, eye_y - 0.3, 16, 48, c, min_radius=0.03, open_rows=rows,
+                             open_halfwidth=math.radians(60), cap=True)
+        out.append(("hood", piece, REGIONS.index("top"), 1))
+    return out + ([hair] if hair is not None else [])
+
+
+def surface_samples(verts: torch.Tensor, faces: torch.Tensor, n: int) -> torch.Tensor:
+    """(F·(n+1)(n+2)/2, 3) points on the faces (F, 3) of a mesh with vertices (V, 3): a barycentric grid of
+    step 1/n on each face (its corners included), so that a surface enclosing them encloses the faces."""
+    i, j = torch.meshgrid(torch.arange(n + 1), torch.arange(n + 1), indexing="ij")
+    keep = (i + j) <= n
+    b = torch.stack([i[keep], j[keep], n - i[keep] - j[keep]], 1).to(verts.dtype) / n  # (P, 3)
+    return torch.einsum("pk,fkc->fpc", b, verts[faces]).reshape(-1, 3)
+
+
+def _enclosing(body_pts: torch.Tensor, inner: torch.Tensor | None, centre: torch.Tensor, clearance: float):
+    """The points a ring surface of ``clearance`` must enclose: the body's, and an inner layer's (N, 3) moved
+    so that it is cleared by :data:`LAYER_GAP`."""
+    if inner is None:
+        return body_pts
+    return torch.cat([body_pts, _around(inner, centre, clearance, LAYER_GAP).to(body_pts.dtype)])

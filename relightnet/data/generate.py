@@ -17,8 +17,9 @@ world's up is tilted from z by the pitch). The square crop
 
 Arrays (H = W = ``cfg.res``; float32 linear unless stated):
 
-- ``transport`` (H, W, K): per-vertex PRT (``vertex_transport``, occlusion by ray casting,
-  ``cfg.n_dirs`` directions of a Fibonacci set randomly rotated per sample) interpolated
+- ``transport`` (H, W, K): per-vertex PRT (``refined_transport``: occlusion by ray casting,
+  ``cfg.n_dirs`` directions of a Fibonacci set randomly rotated per sample; the midpoints of
+  the garments' subdivided outer sides are ray cast at shadow edges only) interpolated
   with the rasterizer's perspective-correct barycentrics. With a bounce (probability
   ``cfg.bounce_prob``, ``meta["flags"]["bounce"]``) it includes one interreflection off
   *grey* reflectors (each vertex's mean RGB albedo), so transport stays scalar (H, W, K).

@@ -25,7 +25,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..prt import vertex_transport
+from ..prt import refined_transport, vertex_transport
 from ..raster import texture_pixels
 from ..sh import rotation_world_to_light, sh_rotation_matrix
 from .clothed import ClothedMesh, clothed_mesh
@@ -106,6 +106,8 @@ def person_transport(cfg: SynthConfig, person: PersonStage) -> PersonStage:
 
     Without a bounce, vertices hidden under garments on every side (``mesh.hidden``) are not
     ray cast (transport 0: a pixel never shows them unless the body pokes through the cloth).
+    The midpoints of the garments' subdivided outer sides are ray cast only at shadow edges
+    (:func:`relightnet.prt.refined_transport`).
     """
     m = person.mesh
     kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=person.dir_seed, threads=torch.get_num_threads(),
@@ -115,8 +117,8 @@ def person_transport(cfg: SynthConfig, person: PersonStage) -> PersonStage:
     occ, un = [], []
     for t in range(m.verts.shape[0]):
         v, n = m.verts[t], m.normals[t]
-        occ.append(vertex_transport(v, m.faces, n, occlusion=True, bounces=int(person.bounce), albedo=grey,
-                                    vertices=keep, **kw))
+        occ.append(refined_transport(v, m.faces, n, m.midpoints, bounces=int(person.bounce), albedo=grey,
+                                     vertices=keep, **kw))
         un.append(vertex_transport(v, m.faces, n, occlusion=False, **kw))
     return dataclasses.replace(person, transport=torch.stack(occ), transport_unoccluded=torch.stack(un))
 

@@ -16,7 +16,7 @@ from .textures import UVAtlas, region_field, uv_atlas
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets", "assets_for"]
 
 #: Bumped whenever the output of the generator changes for a given config.
-GENERATOR_VERSION = "2"
+GENERATOR_VERSION = "3"
 #: Side of the UV albedo texture.
 TEXTURE_SIZE = 512
 

@@ -18,7 +18,7 @@ from ..checks import check_shape
 from .landmarks import AnnyLandmarks
 from .prior import FIT_BONES
 
-__all__ = ["FitBody", "SHAPE_NAMES", "phenotype_from_free"]
+__all__ = ["FitBody", "SHAPE_NAMES", "phenotype_from_free", "rest_near"]
 
 #: The phenotype values a shape fit frees (the others keep :data:`relightnet.body.PHENOTYPES` defaults).
 SHAPE_NAMES = ("height", "weight", "proportions")
@@ -37,6 +37,17 @@ def phenotype_from_free(free: torch.Tensor, base: torch.Tensor) -> torch.Tensor:
         lo, hi, _ = PHENOTYPES[n]
         out = out.index_put((torch.tensor([names.index(n)]),), (lo + (hi - lo) * torch.sigmoid(free[j]))[None])
     return out[None]
+
+
+def rest_near(rest: dict, jacobian: dict, delta: torch.Tensor) -> dict:
+    """The rest body (:meth:`FitBody.rest`) at free shape values ``free₀ + delta``, to first order.
+
+    Args:
+        rest: :meth:`FitBody.rest` at free₀; jacobian: its derivatives (:meth:`FitBody.rest_linearised`),
+            each entry (F, ...) for the F = len(SHAPE_NAMES) free values; delta: (F,).
+    """
+    check_shape(delta, [len(SHAPE_NAMES)], name="delta")
+    return {k: rest[k] + torch.tensordot(delta.to(rest[k]), jacobian[k], 1) for k in rest}
 
 
 class FitBody(nn.Module):
@@ -87,6 +98,11 @@ class FitBody(nn.Module):
         self.register_buffer("group_slot", torch.tensor([slot[g] for g in group]), persistent=False)
         self.register_buffer("parent_index", torch.tensor(parent), persistent=False)
         self.parent_slot = [slot[p] for p in parent]
+        depth = [0] * len(parent)
+        for i in range(1, len(parent)):  # FIT_BONES lists parents before children
+            depth[i] = depth[self.parent_slot[i]] + 1
+        #: The fitted bones by depth in the tree (each level's frames are one batched product).
+        self.levels = [[i for i in range(len(parent)) if depth[i] == lv] for lv in range(max(depth) + 1)]
         self.register_buffer("reference_axes", body.anny.reference_bone_orientations[self.bone_index].to(body.dtype),
                              persistent=False)
 
@@ -119,8 +135,9 @@ class FitBody(nn.Module):
         J = self.num_joints
         eye = torch.eye(4, dtype=self.body.dtype).expand(1, J, 4, 4)
         raw = anny(pose_parameters=eye, phenotype_kwargs=phenotype)
-        zero = self.body(pose=torch.zeros(1, J, 3, dtype=self.body.dtype), phenotype=phenotype)
-        offset = (zero.joints[0] - anny_to_world(raw["bone_poses"][0, :, :3, 3])).mean(0)
+        # The body's ``ground="rest"`` shift, from this same zero-pose pass (no second forward).
+        min_y = self.body._zero_pose_min_y(raw)[0]
+        offset = torch.stack([torch.zeros_like(min_y), -min_y, torch.zeros_like(min_y)])
         W0, P = raw["bone_poses"][0], raw["rest_bone_poses"][0]
         W0f_inv = torch.linalg.inv(W0[self.bone_index])  # (N, 4, 4)
         C = W0f_inv[self.group_slot] @ W0 @ torch.linalg.inv(P)  # (J, 4, 4): T_j = W_f(j) C_j
@@ -145,6 +162,21 @@ class FitBody(nn.Module):
         M[0] = W0[self.bone_index[0]]  # the root: W_root = W⁰_root D_root
         return {"blend": blend, "M": M, "offset": offset}
 
+    @torch.no_grad()
+    def rest_linearised(self, free: torch.Tensor, base: torch.Tensor, step: float = 1e-2) -> tuple[dict, dict]:
+        """The rest body at free shape values ``free`` (F,) and its derivatives in each (forward
+        differences of ``step``; the sigmoid's slope is at most 1/4, so the phenotype moves at most
+        ``step``/4 of its range): what :func:`rest_near` needs. ``base``: (6,) the other phenotype values.
+        """
+        check_shape(free, [len(SHAPE_NAMES)], name="free")
+        rest = self.rest(phenotype_from_free(free, base))
+        jac = {k: [] for k in rest}
+        for j in range(len(SHAPE_NAMES)):
+            moved = self.rest(phenotype_from_free(free + step * torch.eye(len(SHAPE_NAMES), dtype=free.dtype)[j], base))
+            for k in rest:
+                jac[k].append((moved[k] - rest[k]) / step)
+        return rest, {k: torch.stack(v) for k, v in jac.items()}
+
     def points(self, sub: torch.Tensor, trans: torch.Tensor, rest: dict) -> tuple[torch.Tensor, torch.Tensor]:
         """Landmark points (B, 33, 3) and silhouette vertices (B, S, 3) without skinning the whole mesh.
 
@@ -154,12 +186,16 @@ class FitBody(nn.Module):
         CU = ANNY_TO_WORLD.to(sub) @ self.reference_axes.to(sub)  # (N, 3, 3)
         D = CU.transpose(1, 2) @ rotvec_to_matrix(sub) @ CU  # (B, N, 3, 3): rotations in reference axes
         M = rest["M"].to(sub)
-        frames = []
-        for i in range(len(FIT_BONES)):
-            Mi = M[i].expand(d["B"], 4, 4)
-            base = Mi if i == 0 else frames[self.parent_slot[i]] @ Mi
-            frames.append(torch.cat([base[:, :, :3] @ D[:, i], base[:, :, 3:]], 2))
-        W = torch.stack(frames, 1)[:, :, :3, :]  # (B, N, 3, 4)
+        done, row = None, {}  # the frames so far (B, n, 4, 4), and each bone's row in them
+        for level in self.levels:
+            if done is None:
+                base = M[level].expand(d["B"], -1, 4, 4)
+            else:
+                base = done[:, [row[self.parent_slot[i]] for i in level]] @ M[level]
+            f = torch.cat([base[..., :3] @ D[:, level], base[..., 3:]], -1)
+            done = f if done is None else torch.cat([done, f], 1)
+            row.update({i: len(row) + k for k, i in enumerate(level)})
+        W = done[:, [row[i] for i in range(len(FIT_BONES))], :3, :]  # (B, N, 3, 4)
         p = anny_to_world((W.transpose(1, 2).reshape(d["B"], 3, -1) @ rest["blend"]).transpose(1, 2))
         p = p + (rest["offset"] + trans)[:, None]
         k, s = len(self.landmarks.coco_slot), len(self.silhouette_vertices)

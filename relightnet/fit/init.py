@@ -12,7 +12,8 @@ import torch
 from ..body.base import matrix_to_rotvec
 from ..checks import check_shape
 
-__all__ = ["TORSO_SLOTS", "CORE_SLOTS", "kabsch", "initial_orientation", "initial_translation"]
+__all__ = ["TORSO_SLOTS", "CORE_SLOTS", "MAX_TURN_DEG", "kabsch", "initial_orientation", "relative_turn",
+           "initial_translation"]
 
 #: Shoulders and hips: the landmarks that fix the torso's orientation.
 TORSO_SLOTS = (11, 12, 23, 24)
@@ -49,6 +50,37 @@ def initial_orientation(rest_points: torch.Tensor, world_view: torch.Tensor, wei
     B = world_view.shape[0]
     R = kabsch(rest_points[s].expand(B, -1, -1), world_view[:, s], weights[:, s])
     return matrix_to_rotvec(R.double()).to(world_view.dtype)
+
+
+#: A torso turn between two frames larger than this (degrees) is taken for a landmark error (a
+#: left/right swap when the person shows a side or the back) and not followed.
+MAX_TURN_DEG = 100.0
+
+
+def relative_turn(world_view: torch.Tensor, weights: torch.Tensor, max_deg: float = MAX_TURN_DEG) -> torch.Tensor:
+    """(T − 1, 3, 3) the torso's turn from frame 0 to each later frame, chained frame to frame.
+
+    What a warm start adds to a fitted frame's orientation: the turn the world landmarks show
+    since then (relative, so BlazePose's absolute front/back ambiguity does not enter; chained
+    over consecutive frames, each a small turn). A step above ``max_deg`` or with a torso
+    landmark unseen counts as no turn.
+
+    Args:
+        world_view: (T, 33, 3) world landmarks in view axes (frame 0: the reference); weights: (T, 33).
+    """
+    d = check_shape(world_view, ["T", 33, 3], name="world_view")
+    check_shape(weights, [d["T"], 33], name="weights")
+    s = list(TORSO_SLOTS)
+    w = torch.minimum(weights[:-1, s], weights[1:, s])
+    step = kabsch(world_view[:-1, s], world_view[1:, s], w)  # (T − 1, 3, 3): frame t − 1 → t
+    cos = ((step.diagonal(dim1=-2, dim2=-1).sum(-1) - 1) / 2).clamp(-1, 1)
+    ok = (torch.rad2deg(torch.acos(cos)) <= max_deg) & (w > 0).all(1)
+    step = torch.where(ok[:, None, None], step, torch.eye(3, dtype=step.dtype).expand_as(step))
+    out, acc = [], torch.eye(3, dtype=step.dtype)
+    for R in step:
+        acc = R @ acc
+        out.append(acc)
+    return torch.stack(out)
 
 
 def initial_translation(points: torch.Tensor, landmarks: torch.Tensor, weights: torch.Tensor,

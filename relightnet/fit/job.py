@@ -25,6 +25,9 @@ logger = logging.getLogger(__name__)
 __all__ = ["PHOTO_SUFFIXES", "FitOptions", "FitOutput", "media_frames", "fit_file", "motion_for_avatar",
            "write_preview", "write_fit_masks"]
 
+#: Frames of the whole posed mesh made together (a video's foot skating is measured on its landmarks).
+_BODY_CHUNK = 16
+
 #: Inputs read as a photo; anything else is read as a video.
 PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
 
@@ -62,7 +65,7 @@ def media_frames(path: str | Path) -> tuple[Iterator[torch.Tensor], float, bool]
     if path.suffix.lower() in PHOTO_SUFFIXES:
         return iter([read_image(path).permute(2, 0, 1).contiguous()]), 30.0, True
     info = video_info(path)
-    frames = (torch.from_numpy(f).permute(2, 0, 1).float() / 255 for f in read_video(path))
+    frames = (torch.from_numpy(f).permute(2, 0, 1).float().div_(255) for f in read_video(path))  # one float copy
     return frames, float(info.fps), False
 
 
@@ -106,7 +109,7 @@ def _chunks(frames: Iterator[torch.Tensor], n: int) -> Iterator[torch.Tensor]:
 def write_preview(path: str | Path, source: str | Path, result: FitResult, fb: FitBody, fps: float) -> Path:
     """Write the fitted mesh over the source's frames: a PNG for a photo, a video otherwise."""
     from ..io import VideoWriter, write_image
-    from .preview import overlay_frames
+    from .preview import chunk_frames, overlay_frames
 
     path = Path(path)
     frames, _, photo = media_frames(source)
@@ -116,27 +119,35 @@ def write_preview(path: str | Path, source: str | Path, result: FitResult, fb: F
         return path
     with VideoWriter(path, fps=fps) as w:
         t = 0
-        for chunk in _chunks(frames, 8):
+        for chunk in _chunks(frames, chunk_frames(result.size)):
             for img in overlay_frames(chunk, result, fb, start=t):
-                w.write((img.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy())
+                w.write(img.mul_(255).round_().to(torch.uint8).permute(1, 2, 0).numpy())  # in place: 12.5 MP
             t += chunk.shape[0]
     return path
 
 
 def write_fit_masks(path: str | Path, result: FitResult, fb: FitBody, fps: float) -> Path:
-    """Write the fitted body's silhouettes in the input's camera: a PNG (photo) or a mask video."""
+    """Write the fitted body's silhouettes in the input's camera: a PNG (photo) or a mask video.
+
+    The frames are rasterized a few at a time (:func:`~relightnet.fit.preview.chunk_frames`), never all at once.
+    """
     from ..io import VideoWriter, write_image
-    from .preview import fit_silhouettes
+    from .preview import chunk_frames, fit_silhouettes
 
     path = Path(path)
-    masks = fit_silhouettes(result, fb)
-    rgb = (masks > 0.5).to(torch.uint8).mul(255)[..., None].expand(-1, -1, -1, 3).contiguous()
+    T, n = result.pose.shape[0], chunk_frames(result.size)
+
+    def rgb(a: int) -> torch.Tensor:  # (B, H, W, 3) uint8 silhouettes of frames [a, a + n)
+        masks = fit_silhouettes(result, fb, start=a, stop=min(a + n, T))
+        return (masks > 0.5).to(torch.uint8).mul(255)[..., None].expand(-1, -1, -1, 3)
+
     if path.suffix.lower() == ".png":
-        write_image(path, rgb[0], srgb=False)
+        write_image(path, rgb(0)[0].contiguous(), srgb=False)
         return path
-    with VideoWriter(path, fps=fps) as w:
-        for m in rgb:
-            w.write(m.numpy())
+    with VideoWriter(path, fps=fps, gray=True) as w:  # .mkv: one plane, half ffv1's memory at 12.5 MP
+        for a in range(0, T, n):
+            for m in rgb(a):
+                w.write(m.contiguous().numpy())
     return path
 
 
@@ -149,16 +160,19 @@ def motion_for_avatar(source: str | Path, options: FitOptions = FitOptions()) ->
         The avatar body's parameters (``AnnyMotion.body_params()``): pose (T, J, 3), trans (T, 3),
         phenotype (1, 6).
     """
-    from ..body import PHENOTYPES
     from .metrics import foot_skating
-    from .retarget import retarget_motion
+    from .retarget import to_default_avatar
 
     fb = FitBody()
     fitted = fit_file(source, options, fb=fb)
-    moved = retarget_motion(fitted.motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))
-    with torch.no_grad():
-        out = fb.body(pose=moved.pose, trans=moved.trans, phenotype=moved.phenotype[None])
-        skate = foot_skating(fb.landmarks(out.verts, out.joints))
+    moved = to_default_avatar(fitted.motion, fb)
+    with torch.no_grad():  # the whole mesh, a few frames at a time (~1 MB a frame): only the landmarks are kept
+        points = []
+        for a in range(0, moved.n_frames, _BODY_CHUNK):
+            sl = slice(a, a + _BODY_CHUNK)
+            out = fb.body(pose=moved.pose[sl], trans=moved.trans[sl], phenotype=moved.phenotype[None])
+            points.append(fb.landmarks(out.verts, out.joints))
+        skate = foot_skating(torch.cat(points))
     logger.info("%s: fitted %d frame(s) in %.1f s; retargeted to the avatar, foot skating %.1f mm/frame", source,
                 moved.n_frames, fitted.raw.seconds, skate)
     return moved.body_params()

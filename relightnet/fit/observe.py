@@ -4,6 +4,8 @@
 :func:`observe_frames` makes it with the shipped person segmentation (the largest person,
 the video tracker of :mod:`relightnet.segment.video`), and :func:`fill_missing` interpolates
 the landmarks of frames where no person was found (they are flagged, and their mask is empty).
+The masks are kept packed (:class:`~relightnet.fit.masks.PackedMasks`: the person's box, one bit a
+pixel, deflated), so a video's evidence grows by about its outline a frame, not by a frame.
 """
 
 from __future__ import annotations
@@ -13,8 +15,9 @@ from dataclasses import dataclass, replace
 
 import torch
 
-from ..checks import InputError, check_shape
+from ..checks import InputError, ShapeError, check_shape
 from ..segment.models import LANDMARK_NAMES
+from .masks import PackedMasks
 
 __all__ = ["Observations", "observe_frames", "fill_missing", "world_to_view_axes"]
 
@@ -28,14 +31,15 @@ class Observations:
     Attributes:
         landmarks: (T, 33, 5) x, y pixels, z, visibility, presence (:class:`relightnet.segment.PersonMask`).
         world: (T, 33, 3) metres around the hips, BlazePose axes (x right, y down, z away).
-        masks: (T, H, W) float32 person masks in {0, 1} (zeros where not found), or None.
+        masks: the T person masks of (H, W) as :class:`PackedMasks` (empty where not found), or None;
+            a (T, H, W) tensor in {0, 1} given here is packed (above 0.5 is the person).
         found: (T,) bool, whether the person was found in the frame.
         size: (H, W).
     """
 
     landmarks: torch.Tensor
     world: torch.Tensor
-    masks: torch.Tensor | None
+    masks: PackedMasks | None
     found: torch.Tensor
     size: tuple[int, int]
 
@@ -43,8 +47,12 @@ class Observations:
         d = check_shape(self.landmarks, ["T", _N, 5], name="landmarks")
         check_shape(self.world, [d["T"], _N, 3], name="world")
         check_shape(self.found, [d["T"]], name="found")
-        if self.masks is not None:
+        if isinstance(self.masks, torch.Tensor):
             check_shape(self.masks, [d["T"], int(self.size[0]), int(self.size[1])], name="masks")
+            object.__setattr__(self, "masks", PackedMasks.from_masks(self.masks))
+        elif self.masks is not None and (len(self.masks) != d["T"] or self.masks.size != tuple(self.size)):
+            raise ShapeError(f"masks: expected {d['T']} masks of {tuple(self.size)}, got {len(self.masks)} of "
+                             f"{self.masks.size}")
 
     @property
     def n_frames(self) -> int:
@@ -94,20 +102,21 @@ def observe_frames(frames: Iterable[torch.Tensor], models=None, name: str = "vid
     """
     from ..segment.video import track_person
 
-    lms, wds, masks, found, size = [], [], [], [], None
+    lms, wds, masks, found = [], [], None, []
     for frame, res in track_person(frames, models, name=name):
-        size = tuple(frame.shape[1:])
+        if masks is None:
+            masks = PackedMasks(tuple(frame.shape[1:]))
         if res is None:
             lms.append(torch.zeros(_N, 5))
             wds.append(torch.zeros(_N, 3))
-            masks.append(torch.zeros(size))
+            masks.append_empty()
             found.append(False)
         else:
             lms.append(res.landmarks[:_N].float())
             wds.append(res.world[:_N].float())
-            masks.append(res.mask.float())
+            masks.append(res.mask > 0.5)
             found.append(True)
-    if size is None:
+    if masks is None:
         raise InputError(f"{name}: no frames")
-    obs = Observations(torch.stack(lms), torch.stack(wds), torch.stack(masks), torch.tensor(found), size)
+    obs = Observations(torch.stack(lms), torch.stack(wds), masks, torch.tensor(found), masks.size)
     return fill_missing(obs, name)

@@ -17,7 +17,7 @@ from ..body.anny_motion import AnnyMotion
 from .body_model import FitBody
 from .smooth import FOOT_SLOTS
 
-__all__ = ["leg_length", "retarget_motion"]
+__all__ = ["leg_length", "retarget_motion", "to_default_avatar"]
 
 _HIP_ANKLE = ((23, 27), (24, 28))
 
@@ -64,3 +64,10 @@ def retarget_motion(motion: AnnyMotion, fb: FitBody, phenotype: torch.Tensor | N
     pts = _points(fb, motion.pose, trans, target)
     trans[:, 1] -= float(pts[:, list(FOOT_SLOTS), 1].min())
     return replace(motion, trans=trans, phenotype=target.clone())
+
+
+def to_default_avatar(motion: AnnyMotion, fb: FitBody) -> AnnyMotion:
+    """:func:`retarget_motion` to the default avatar: Anny of the default phenotype, feet held."""
+    from ..body import PHENOTYPES
+
+    return retarget_motion(motion, fb, torch.tensor([v[2] for v in PHENOTYPES.values()]))

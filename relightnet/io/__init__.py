@@ -17,6 +17,7 @@ _WHERE = {
     "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
     "VideoInfo": "video", "VideoWriter": "video", "count_frames": "video", "frames_with_masks": "video",
     "read_masks": "video", "read_video": "video", "video_info": "video",
+    "write_side_by_side": "side_by_side",
 }
 
 __all__ = list(_WHERE)

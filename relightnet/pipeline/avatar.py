@@ -132,7 +132,7 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
 
 
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
-                  fps: float, progress: bool, plate_light: torch.Tensor | None = None) -> _TargetLight:
+                  fps: float, progress: bool, plate_light=None) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
     ``lights_file`` when its fingerprint matches), smoothed over time; with ``plate_light``, each
     smoothed light combined with it (:func:`relightnet.sh.combine_person_plate`)."""
@@ -150,7 +150,8 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
     if plate_light is not None:
         from ..sh.plate import combine_person_plate
 
-        smoothed, method = combine_person_plate(smoothed, plate_light.to(smoothed)), f"{method}+plate"
+        smoothed = combine_person_plate(smoothed, plate_light.light.to(smoothed), plate_light.view)
+        method = f"{method}+plate"
     return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None, method)
 
 
@@ -246,7 +247,7 @@ def avatar(
     antialias: bool = False,
     model_name: str = "model",
     progress: bool = True,
-    mask_source: str = "segment", plate_light: torch.Tensor | None = None,
+    mask_source: str = "segment", plate_light=None,
     replace_person: bool = False, outfit: str | None = None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
@@ -274,7 +275,7 @@ def avatar(
         model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
-        plate_light: (K, 3) the plate's light, combined with the estimates (``relightnet.sh.combine_person_plate``).
+        plate_light: a :class:`relightnet.sh.Plate`, combined with the estimates (``sh.combine_person_plate``).
         replace_person, outfit: take the person's place (:func:`.clean_plate.stand_in`); dress (:func:`.avatar_look`).
 
     Returns:

@@ -12,7 +12,11 @@
 4. ``lights/<preset>.png``: previews of the preset lights;
 5. ``replace/``: the dressed avatar (``--outfit casual``) in place of a person walking across a
    generated scene (``avatar --replace-person``), with the clean plate's PSNR against the true
-   background in ``summary.json``.
+   background in ``summary.json``;
+6. ``motion/``: motion transfer (:mod:`.motion_demo`): a generated source person walks
+   (``source.mp4``), the avatar performs the fitted walk in the target (``avatar.mp4``;
+   ``avatar --motion-from``), ``side_by_side.mp4`` shows source | avatar; the fit's PA-MPJPE
+   against the source's truth in ``summary.json``.
 """
 
 from __future__ import annotations
@@ -53,15 +57,6 @@ def _write_target(out: Path, sample) -> dict:
     return paths
 
 
-def _side_by_side(out: Path, left, right, fps: float) -> Path:
-    from ..io import VideoWriter, read_video
-
-    with VideoWriter(out, fps=fps) as v:
-        for a, b in zip(read_video(left), read_video(right), strict=False):
-            v.write(np.concatenate([a, b], axis=1))
-    return out
-
-
 def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int = 64, compare_clips: int = 2,
              compare_size: int = 128, compare_frames: int = 24, progress: bool = True) -> dict:
     """Write the demo into ``out_dir``; returns the paths written by name.
@@ -74,13 +69,14 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     """
     from ..body import AnnyBody
     from ..data import SynthConfig, generate_sequence
-    from ..io import atomic_write
+    from ..io import atomic_write, write_side_by_side
     from ..model import load_model
     from ..sh import render_presets
     from ..temporal import light_error
     from ..temporal.plot import light_curves_png
     from .avatar import avatar
     from .backends import TorchPredictor
+    from .motion_demo import motion_transfer_demo
     from .walk_target import replaced_person_demo
 
     out = Path(out_dir)
@@ -89,15 +85,16 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     model = load_model()
     paths: dict = {}
 
-    logger.info("demo 1/4: generating the target clip (%d frames at %d²)", frames, size)
+    logger.info("demo 1/6: generating the target clip (%d frames at %d²)", frames, size)
     sample = generate_sequence(SynthConfig(res=size, n_dirs=n_dirs), "test", DEMO_CLIP, frames, body=body)
     paths.update(_write_target(out, sample))
 
-    logger.info("demo 2/4: avatar lit by the target's estimated light")
+    logger.info("demo 2/6: avatar lit by the target's estimated light")
     res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk", body=body,
                  target_masks=paths["masks"], plate=paths["plate"], n_dirs=n_dirs, progress=progress)
     paths["avatar"], paths["avatar_lights"] = res.video, res.lights_file
-    paths["side_by_side"] = _side_by_side(out / "side_by_side.mp4", paths["target"], res.video, sample.meta["fps"])
+    paths["side_by_side"] = write_side_by_side(out / "side_by_side.mp4", [paths["target"], res.video],
+                                               sample.meta["fps"])
     true = torch.from_numpy(sample.arrays["light"])
     errors = {k: float(light_error(v, true)) for k, v in (("raw", res.lights_raw), ("smoothed", res.lights_smoothed))}
     png = light_curves_png(res.lights_raw, res.lights_smoothed, true, res.outliers, res.switches,
@@ -106,19 +103,25 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
         f.write(png)
     paths["lights_plot"] = out / "lights.png"
 
-    logger.info("demo 2/4: the dressed avatar in place of a walking person (clean plate with a known truth)")
+    logger.info("demo 3/6: the dressed avatar in place of a walking person (clean plate with a known truth)")
     replaced = replaced_person_demo(out / "replace", size, frames, body, n_dirs, progress=progress)
     paths.update({k: v for k, v in replaced.items() if isinstance(v, Path)})
 
-    logger.info("demo 3/4: 2D vs 3D comparison on %d generated sequences", compare_clips)
+    logger.info("demo 4/6: motion transfer: the avatar performs a generated person's walk in the target")
+    moved = motion_transfer_demo(out / "motion", paths["target"], paths["masks"], paths["plate"], size, frames, body,
+                                 TorchPredictor(model), n_dirs, sample.meta["fps"], progress)
+    paths.update({k: v for k, v in moved.items() if isinstance(v, Path)})
+
+    logger.info("demo 5/6: 2D vs 3D comparison on %d generated sequences", compare_clips)
     paths["compare"] = _run_compare(out / "compare", body, compare_clips, compare_size, compare_frames,
                                     n_dirs, progress)
 
-    logger.info("demo 4/4: preset light previews")
+    logger.info("demo 6/6: preset light previews")
     paths["lights"] = render_presets(out / "lights", size=128)
     summary = {"target_clip": {"split": "test", "index": DEMO_CLIP, "frames": frames, "size": size,
                                "light": sample.meta["lights"]}, "light_error": errors,
-               "replaced_person": {k: v for k, v in replaced.items() if not isinstance(v, Path)}}
+               "replaced_person": {k: v for k, v in replaced.items() if not isinstance(v, Path)},
+               "motion_transfer": {k: v for k, v in moved.items() if not isinstance(v, Path)}}
     with atomic_write(out / "summary.json", "w") as f:
         f.write(json.dumps(summary, indent=1) + "\n")
     paths["summary"] = out / "summary.json"

@@ -143,12 +143,16 @@ class HemCut:
 
 
 def hem_cut(faces: torch.Tensor, verts: torch.Tensor, uv: torch.Tensor, uv_faces: torch.Tensor, shells: list,
-            level: float = 0.5) -> HemCut:
+            midpoints: torch.Tensor | None = None, level: float = 0.5) -> HemCut:
     """Cut the shells of a dressed mesh along iso-lines of :func:`~relightnet.body.garments.hem_field`.
 
     Args:
         faces: (F, 3) the dressed mesh. verts: (V, 3) its rest positions. uv: (Vt, 2), uv_faces: (F, 3) its UVs.
-        shells: (first vertex, vertex count, reach) of each piece to cut (its faces index only that range).
+        shells: (first vertex, vertex count, reach) of each piece to cut (the field is read off its faces that
+            lie in that range, e.g. a two-sided piece's inner side when its outer side is subdivided).
+        midpoints: (M, 3) rows (vertex, endpoint a, endpoint b) of vertices added at edge midpoints (a
+            subdivided outer side, :class:`~relightnet.body.SubdividedFaces`): their field is the mean of
+            their endpoints'.
         level: the iso-value of the fields (:func:`~relightnet.body.garments.hem_field`): the hem lies
             ``level · reach`` border edge lengths inside the old border.
     """
@@ -157,6 +161,8 @@ def hem_cut(faces: torch.Tensor, verts: torch.Tensor, uv: torch.Tensor, uv_faces
     for start, count, reach in shells:
         own = ((faces >= start) & (faces < start + count)).all(1)
         field[start:start + count] = hem_field(faces[own] - start, verts[start:start + count], reach)
+    if midpoints is not None and len(midpoints):
+        field[midpoints[:, 0]] = 0.5 * (field[midpoints[:, 1]] + field[midpoints[:, 2]])
     corner = field[faces]
     f2, edges, t = iso_clip(faces, corner, level, n_verts)
     uf2, uv_edges, uv_t = iso_clip(uv_faces, corner, level, len(uv))

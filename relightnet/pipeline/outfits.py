@@ -156,9 +156,12 @@ class DressedBody:
         m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
                          body, self._tab, tex, self._field, atlas)
         n_pieces = sum(len(p[1].verts) for p in pieces)
+        self._edges = m.midpoints[:, 1:]  # the subdivided outer sides' midpoints follow every frame's pieces
+        self._mid = m.midpoints
         self._inner = self._thickness(m, pieces, n_pieces)
         self._rest = rest.verts[0].detach()
-        self.cut = hem_cut(m.faces, m.verts[0], m.uv, m.uv_faces, self._shell_ranges(pieces) if hems else [])
+        self.cut = hem_cut(m.faces, m.verts[0], m.uv, m.uv_faces, self._shell_ranges(pieces) if hems else [],
+                           m.midpoints)
         self.shoes = shoe_rig(body, self._rest, rest.joints[0].detach(), outfit.shoes)
         n_cut = m.verts.shape[1] + len(self.cut.edges)
         self.faces = torch.cat([self.cut.faces, self.shoes.faces + n_cut])
@@ -177,6 +180,7 @@ class DressedBody:
             n = len(p[1].verts) * (1 if self._inner is None else 2)
             vp[start:start + n] = k
             start += n
+        vp[self._mid[:, 0]] = vp[self._mid[:, 1]]
         vp = torch.cat([vp, vp[self.cut.edges[:, 0]], torch.full((len(self.shoes.rest),), len(pieces))])
         return vp[self.faces[:, 0]]
 
@@ -206,10 +210,10 @@ class DressedBody:
     def _thickness(self, m, pieces: list, n_pieces: int) -> float | None:
         """How the clothed mesh lays out each piece: its vertices alone (None), or followed by an inner side
         moved this far against the normals (two-sided cloth); read off the rest frame."""
-        V = self.body.num_verts
-        if m.verts.shape[1] == V + n_pieces:
+        V, nv = self.body.num_verts, m.verts.shape[1] - len(m.midpoints)
+        if nv == V + n_pieces:
             return None
-        if m.verts.shape[1] != V + 2 * n_pieces:
+        if nv != V + 2 * n_pieces:
             raise InputError("--outfit: the garment pieces disagree with the clothed mesh (a bug)")
         p = pieces[0][1]
         return float((m.verts[0, V:V + len(p.verts)] - m.verts[0, V + len(p.verts):V + 2 * len(p.verts)]).norm(dim=1)
@@ -237,14 +241,17 @@ class DressedBody:
     def __call__(self, params=None, **kwargs) -> BodyOutput:
         """Pose the body (arguments as the body model's) and dress each frame: a :class:`BodyOutput` of
         the dressed mesh (verts, normals (B, V', 3); faces (F', 3); joints of the body)."""
+        from ..body.subdivide import midpoint_values
+
         with torch.no_grad():
             out = self.body(params, **kwargs)
         shoe_v, shoe_n = self.shoes.pose(self._rest, out.verts.detach())
         vs, ns = [], []
         for b in range(out.batch_size):
             arrays = [self._piece_arrays(p[1]) for p in self._pieces(out.verts[b], out.normals[b], out.joints[b])]
-            v, n = self.cut.apply(torch.cat([out.verts[b], *[a[0] for a in arrays]]),
-                                  torch.cat([out.normals[b], *[a[1] for a in arrays]]))
+            v = midpoint_values(torch.cat([out.verts[b], *[a[0] for a in arrays]]), self._edges)
+            n = midpoint_values(torch.cat([out.normals[b], *[a[1] for a in arrays]]), self._edges, unit=True)
+            v, n = self.cut.apply(v, n)
             vs.append(torch.cat([v, shoe_v[b]]))
             ns.append(torch.cat([n, shoe_n[b]]))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),

@@ -7,6 +7,7 @@ returns (V, K) transport vectors ``T_k = ∫ V · max(n·ω, 0) · Y_k(ω) dω``
 
 from .interreflection import BounceOperator, bounce_operator, check_albedo, interreflect
 from .mesh_checks import MeshWarning, check_mesh, check_normals, mesh_scale, nonmanifold_edge_count
+from .refine import SHADOW_EDGE, refined_transport
 from .transport import transport_directions, vertex_transport
 from .visibility import (
     ENGINES,
@@ -23,7 +24,7 @@ from .visibility import (
 )
 
 __all__ = [
-    "vertex_transport", "transport_directions",
+    "vertex_transport", "transport_directions", "refined_transport", "SHADOW_EDGE",
     "vertex_visibility", "vertex_rays", "VertexRays", "make_engine", "available_engines", "ENGINES",
     "RayEngine", "RayHits", "EmbreeEngine", "MitsubaEngine", "Open3DEngine",
     "BounceOperator", "bounce_operator", "interreflect", "check_albedo",

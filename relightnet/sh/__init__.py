@@ -30,7 +30,19 @@ from .metrics import (
     irradiance_samples,
     scale_invariant_light_error,
 )
-from .plate import DEFAULT_HFOV, combine_person_plate, load_plate_light, plate_envmap, plate_light
+from .plate import (
+    DEFAULT_HFOV,
+    SEEN_FADE_DEG,
+    Plate,
+    PlateView,
+    combine_person_plate,
+    load_plate,
+    load_plate_light,
+    plate_envmap,
+    plate_light,
+    plate_seen,
+    plate_view,
+)
 from .presets import (
     ambient_light,
     directional_light,
@@ -68,5 +80,6 @@ __all__ = [
     "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
     "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
     "parse_light_words", "words_envmap",
-    "DEFAULT_HFOV", "combine_person_plate", "load_plate_light", "plate_envmap", "plate_light",
+    "DEFAULT_HFOV", "SEEN_FADE_DEG", "Plate", "PlateView", "combine_person_plate", "load_plate", "load_plate_light",
+    "plate_envmap", "plate_light", "plate_seen", "plate_view",
 ]

@@ -19,6 +19,9 @@ on a lat-long map and fills the rest by one rule:
    receives and what the plate cannot show; the mirror keeps the plate's left/right and
    sky/ground structure and its colour, and adds no front/back asymmetry it cannot know.
 
+With a person in front of the plate, :func:`combine_person_plate` keeps the person's estimate
+and takes the plate only where its frame shows the light (:func:`plate_seen`).
+
 Units: the plate is decoded to linear light (inverse sRGB; no normalisation, the exposure is
 kept) and divided by π, the generator's convention (a white Lambertian person shows irradiance
 E = π × radiance, docs/design.md "Transport and shading"): a white person lit by a uniform
@@ -28,6 +31,7 @@ plate of value p shows p.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import torch
 import torch.nn.functional as F
@@ -36,10 +40,44 @@ from ..checks import InputError, check_finite, check_shape, sh_order_from_count
 from .directions import latlong_directions
 from .projection import project_envmap
 
-__all__ = ["plate_envmap", "plate_light", "load_plate_light", "combine_person_plate", "DEFAULT_HFOV"]
+__all__ = ["plate_envmap", "plate_light", "load_plate_light", "load_plate", "combine_person_plate", "plate_view",
+           "plate_seen", "Plate", "PlateView", "DEFAULT_HFOV", "SEEN_FADE_DEG"]
 
 #: The horizontal field of view assumed for a plate when none is given (degrees): a normal lens.
 DEFAULT_HFOV = 60.0
+#: How far outside the plate's frame (degrees) its weight in :func:`combine_person_plate` falls
+#: to 0: a soft edge, so the blend has no step for the SH projection to ring on.
+SEEN_FADE_DEG = 10.0
+
+
+class PlateView(NamedTuple):
+    """The pinhole a plate was seen through: ``fx, fy, cx, cy`` and its ``width, height``, in pixels."""
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    width: int
+    height: int
+
+
+class Plate(NamedTuple):
+    """A plate's light (K, 3) (:func:`plate_light`) and the view it was seen through."""
+
+    light: torch.Tensor
+    view: PlateView
+
+
+def plate_view(height: int, width: int, hfov_deg: float = DEFAULT_HFOV, intrinsics=None) -> PlateView:
+    """The view of a ``height`` × ``width`` plate: its ``intrinsics`` when known, else a centred
+    pinhole of horizontal field of view ``hfov_deg`` (square pixels)."""
+    if intrinsics is not None:
+        fx, fy, cx, cy = (float(v) for v in intrinsics)
+        return PlateView(fx, fy, cx, cy, int(width), int(height))
+    if not 0 < hfov_deg < 170:
+        raise InputError(f"plate field of view: expected 0 to 170 degrees, got {hfov_deg:g}")
+    f = 0.5 * width / math.tan(math.radians(hfov_deg) / 2)
+    return PlateView(f, f, 0.5 * width, 0.5 * height, int(width), int(height))
 
 
 def _downsample(img: torch.Tensor, work: int) -> torch.Tensor:
@@ -71,16 +109,11 @@ def plate_envmap(plate: torch.Tensor, hfov_deg: float = DEFAULT_HFOV, h: int = 6
     if not plate.is_floating_point():
         raise InputError(f"plate: expected a floating-point linear image, got {plate.dtype}")
     check_finite(plate, "plate")
-    if not 0 < hfov_deg < 170:
-        raise InputError(f"plate field of view: expected 0 to 170 degrees, got {hfov_deg:g}")
+    view = plate_view(plate.shape[0], plate.shape[1], hfov_deg, intrinsics)
     img = _downsample(plate.double().clamp_min(0), work)
     ph, pw = img.shape[:2]
-    if intrinsics is None:
-        fx = fy = 0.5 * pw / math.tan(math.radians(hfov_deg) / 2)
-        cx, cy = 0.5 * pw, 0.5 * ph
-    else:
-        s = pw / plate.shape[1]
-        fx, fy, cx, cy = (float(v) * s for v in intrinsics)
+    s = pw / plate.shape[1]
+    fx, fy, cx, cy = view.fx * s, view.fy * s, view.cx * s, view.cy * s
     dirs, _ = latlong_directions(h, 2 * h, dtype=torch.float64)
     x, y, z = dirs.unbind(-1)
     zf = -z.abs()  # behind the camera: mirrored to the front
@@ -122,14 +155,15 @@ def plate_light(plate: torch.Tensor, lmax: int = 2, hfov_deg: float = DEFAULT_HF
     return project_envmap(env.double(), lmax).float()
 
 
-def load_plate_light(path, lmax: int = 2, hfov_deg: float = DEFAULT_HFOV, frame: int = 0) -> torch.Tensor:
-    """The SH light of a plate file: an image (sRGB, 8 or 16 bit) or a video's frame ``frame``.
+def load_plate(path, lmax: int = 2, hfov_deg: float = DEFAULT_HFOV, frame: int = 0) -> Plate:
+    """A plate file's light and view: an image (sRGB, 8 or 16 bit) or a video's frame ``frame``.
 
     Decoding is bounded by the pixel limit (:mod:`relightnet.io.limits`); the pixels are
     linearised by the inverse sRGB curve, exposure kept.
 
     Returns:
-        (K, 3) float32, as :func:`plate_light`.
+        :class:`Plate`: the (K, 3) float32 light of :func:`plate_light` and the centred pinhole
+        of ``hfov_deg`` at the plate's size.
 
     Raises:
         InputError: a missing or unreadable file, or a video without that frame (named).
@@ -153,22 +187,57 @@ def load_plate_light(path, lmax: int = 2, hfov_deg: float = DEFAULT_HFOV, frame:
             raise InputError(f"plate {p}: the video has no frame {frame}")
     else:
         rgb = read_image(p, linear=True)
-    return plate_light(rgb, lmax, hfov_deg)
+    return Plate(plate_light(rgb, lmax, hfov_deg), plate_view(rgb.shape[0], rgb.shape[1], hfov_deg))
 
 
-def combine_person_plate(person: torch.Tensor, plate: torch.Tensor, width: float = 0.5) -> torch.Tensor:
-    """One light from the person-based estimate and the plate's: each where it sees best.
+def load_plate_light(path, lmax: int = 2, hfov_deg: float = DEFAULT_HFOV, frame: int = 0) -> torch.Tensor:
+    """The (K, 3) float32 SH light of a plate file: :func:`load_plate`'s ``light``."""
+    return load_plate(path, lmax, hfov_deg, frame).light
 
-    The person's estimate is trusted on the camera side (the person faces the camera; light
-    from behind them barely reaches the visible pixels), the plate's on the far side (what
-    the plate shows). Radiance is blended by the weight ``w(ω) = clamp(½ + x_light / (2·width))``
-    on the person's light, on a Fibonacci sphere, and projected back; both lights are used at
-    their own scale (both are in the photo's exposure).
+
+def plate_seen(dirs: torch.Tensor, view: PlateView, fade_deg: float = SEEN_FADE_DEG) -> torch.Tensor:
+    """How much of each direction the plate shows: 1 inside its frame, falling linearly to 0 at
+    ``fade_deg`` outside it (per image axis), 0 behind the camera.
+
+    Args:
+        dirs: (N, 3) unit directions in the light frame.
+        view: the plate's :class:`PlateView`.
+        fade_deg: width of the soft edge, degrees (> 0).
+
+    Returns:
+        (N,) weights in [0, 1], dtype of ``dirs``.
+    """
+    from .frames import light_to_world
+
+    check_shape(dirs, ["N", 3], name="dirs")
+    x, y, z = light_to_world(dirs).unbind(-1)
+    depth = (-z).clamp_min(1e-12)
+    ax, ay = torch.atan2(x, depth), torch.atan2(y, depth)  # angles right of and above the axis
+    left, right = -math.atan(view.cx / view.fx), math.atan((view.width - view.cx) / view.fx)
+    top, bottom = math.atan(view.cy / view.fy), -math.atan((view.height - view.cy) / view.fy)
+    fade = math.radians(fade_deg)
+    out_x = torch.maximum(left - ax, ax - right).clamp_min(0)
+    out_y = torch.maximum(ay - top, bottom - ay).clamp_min(0)
+    w = (1 - out_x / fade).clamp(0, 1) * (1 - out_y / fade).clamp(0, 1)
+    return w * (z < 0).to(w.dtype)
+
+
+def combine_person_plate(person: torch.Tensor, plate: torch.Tensor, view: PlateView,
+                         fade_deg: float = SEEN_FADE_DEG) -> torch.Tensor:
+    """One light from the person-based estimate and the plate's: the plate where it was seen.
+
+    Inside the plate's frame (:func:`plate_seen`) the plate shows the light itself, the light
+    behind the person that their visible pixels barely respond to; everywhere else the plate's
+    light is only its fill rule's guess (:func:`plate_envmap`) and the person's estimate is
+    kept. Radiance is blended by that weight on a Fibonacci sphere and projected back (a linear
+    map of the two lights); both lights are used at their own scale (both are in the photo's
+    exposure).
 
     Args:
         person: (K, 3) or (T, K, 3) light estimated from the person.
         plate: (K, 3) light of the plate.
-        width: half-width of the blend around the image plane, in x_light (0, 1].
+        view: the view the plate was seen through (:class:`Plate`'s ``view``).
+        fade_deg: the soft edge of the plate's frame, degrees.
 
     Returns:
         Like ``person``: float32.
@@ -182,8 +251,8 @@ def combine_person_plate(person: torch.Tensor, plate: torch.Tensor, width: float
     lmax = sh_order_from_count(plate.shape[0])
     d, wq = fibonacci_sphere(4096, dtype=torch.float64)
     Y = sh_basis(d, lmax, check=False)  # (D, K)
-    w = (0.5 + d[:, 0] / (2 * width)).clamp(0, 1)
-    # SH → radiance → blend → SH is linear: L = Yᵀ diag(wq w) Y L_person + Yᵀ diag(wq (1 − w)) Y L_plate.
-    Mp = (Y * (wq * w)[:, None]).T @ Y
-    Mb = (Y * (wq * (1 - w))[:, None]).T @ Y
+    w = plate_seen(d, view, fade_deg)  # the plate's weight
+    # SH → radiance → blend → SH is linear: L = Yᵀ diag(wq (1 − w)) Y L_person + Yᵀ diag(wq w) Y L_plate.
+    Mp = (Y * (wq * (1 - w))[:, None]).T @ Y
+    Mb = (Y * (wq * w)[:, None]).T @ Y
     return (Mp @ person.double() + Mb @ plate.double()).float()

@@ -113,19 +113,21 @@ def test_render_settings_of_a_blend_are_bounded(monkeypatch):
     check_render_settings("a.blend", 64, 64, 100, MAX_SAMPLES, MAX_FRAMES)
 
 
-def test_raw_frames_are_staged_so_a_killed_render_leaves_nothing(tmp_path):
-    """The staging folder in OUT is removed at the end, and one left by a killed render is removed
-    by the next render into the same folder."""
+def test_what_a_killed_render_left_is_removed_by_the_next_render(tmp_path):
+    """A frame Blender saved under its temporary name but that was never renamed, and the staging folder of
+    an older version, both of a writer that is gone, are removed by the next render into the same folder.
+    (A render killed mid-frame leaves nothing at all: ``test_cycles_hostile.py``.)"""
     import os
 
-    from relightnet.blender.cycles import _staging
+    from relightnet.io.atomic import temp_path
+    from tests.blender.hostile_blends import write_blend
 
-    with _staging(tmp_path) as tmp:
-        (tmp_path / "x").write_text("")
-        assert os.path.isdir(tmp) and os.path.basename(tmp).startswith(".frames.stage.")
-        dead = tmp_path / os.path.basename(tmp).replace(f".{os.getpid()}-", ".999999999-")
-        dead.mkdir()
-    assert sorted(p.name for p in tmp_path.iterdir()) == [dead.name, "x"]
-    with _staging(tmp_path):
-        pass
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["x"]
+    blend = write_blend(tmp_path / "s.blend", side=16, samples=1)
+    out = tmp_path / "out"
+    out.mkdir()
+    frame, stage = temp_path(out / "frame_00000.exr", "render"), temp_path(out / "frames", "stage")
+    gone = [p.with_name(p.name.replace(f".{os.getpid()}-", ".999999999-")) for p in (frame, stage)]
+    gone[0].write_bytes(b"half an EXR")
+    gone[1].mkdir()
+    assert len(list(render_blend(blend, out))) == 1
+    assert sorted(p.name for p in out.iterdir()) == ["frame_00000.exr", "frame_00000.png"]

@@ -100,6 +100,11 @@ def test_clothed_mesh_tables(assets):
     assert m.field.shape == (m.verts.shape[1], 5) and np.allclose(m.field.sum(1), 1, atol=1e-5)
     assert not m.covered[F:].any() and m.covered[:F].any() and not m.hidden[V:].any() and m.hidden[:V].any()
     assert set(m.types) == {"open_coat", "skirt", "hat", "long_hair"}
+    # The garments' outer sides are subdivided once: the last M vertices are their edges' midpoints.
+    mid, nv = m.midpoints, m.verts.shape[1]
+    assert mid.shape[1] == 3 and torch.equal(mid[:, 0], torch.arange(nv - len(mid), nv)) and len(mid) > 1000
+    assert (mid[:, 1:] >= V).all() and (mid[:, 1:] < nv - len(mid)).all()
+    torch.testing.assert_close(m.verts[:, mid[:, 0]], 0.5 * (m.verts[:, mid[:, 1]] + m.verts[:, mid[:, 2]]))
     # Body vertices keep their painted albedo; the texture lookup is what the renderer samples.
     c = vertex_colors(m)
     assert c.shape == (m.verts.shape[1], 3) and float(c.min()) >= 0.02 - 1e-6

@@ -1,8 +1,10 @@
 """The fit recovers a known body from evidence made from it (projected landmarks, exact world
 landmarks, the rasterized mask)."""
 
+import pytest
 import torch
 
+from relightnet.checks import InputError
 from relightnet.fit import fit_observations
 from relightnet.fit.metrics import mpjpe
 from tests.fit.conftest import known_clip
@@ -22,3 +24,29 @@ def test_fit_recovers_a_known_pose(fit_body):
     assert bool((err < 0.5 * err_rest).all()), (err, err_rest)
     assert bool((res.residual_2d < 0.03).all()), res.residual_2d
     assert res.pose.shape == (2, len(fit_body.bone_index), 3) and not bool(res.interpolated.any())
+
+
+def test_a_window_beyond_the_pixel_budget_is_refused_before_any_work(fit_body):
+    """At the 12.5 MP limit 8 frames' distance maps (400 MB) are fitted together, not 9."""
+    from relightnet.fit import MAX_WINDOW_PIXELS, Observations, default_intrinsics, fit_observations
+    from relightnet.fit.masks import PackedMasks
+
+    T, size = 9, (3120, 4000)
+    masks = PackedMasks(size)
+    for _ in range(T):
+        masks.append_empty()
+    obs = Observations(torch.zeros(T, 33, 5), torch.zeros(T, 33, 3), masks, torch.ones(T, dtype=torch.bool), size)
+    assert 8 * 3120 * 4000 <= MAX_WINDOW_PIXELS < 9 * 3120 * 4000
+    with pytest.raises(InputError, match=r"a window of 9 frames of 4000x3120 .* at most 8 frames"):
+        fit_observations(obs, default_intrinsics(size, 60.0), fit_body, window=9)
+
+
+def test_fit_restores_the_thread_setting(fit_body):
+    obs, intr, _ = known_clip(fit_body, T=1)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        fit_observations(obs, intr, fit_body, iters=4, warm_iters=2, window=1)
+        assert torch.get_num_threads() == 2  # the fit ran on one thread and gave the setting back
+    finally:
+        torch.set_num_threads(before)

@@ -19,6 +19,7 @@ import zlib
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import resource_fit  # noqa: E402
 import resource_media  # noqa: E402
 from resource_media import _png_chunk, png, video  # noqa: E402
 from resource_runner import AS_CAP, RSS_BUDGET, THIRD_PARTY_TMP, WALL_CAP, Case, Result, run_capped  # noqa: E402
@@ -322,9 +323,10 @@ CASES = {
     "checkpoint-stride0": checkpoint_stride0,
     "checkpoint-wide": checkpoint_wide,
     **resource_media.CASES,
+    **resource_fit.CASES,
 }
 #: Cases that take more than a few seconds (marked ``slow`` in the test).
-SLOW = {*resource_media.SLOW, "exr-12.5MP-projected", "mp4-stts-20M-frames"}
+SLOW = {*resource_media.SLOW, *resource_fit.SLOW, "exr-12.5MP-projected", "mp4-stts-20M-frames"}
 
 
 def describe(name: str) -> str:

@@ -177,3 +177,22 @@ def test_frames_above_1080p_are_encoded_without_b_frames(tmp_path):
         with av.open(str(tmp_path / f"v{w}.mp4")) as c:
             kinds = {int(f.pict_type) for f in c.decode(video=0)}  # FFmpeg's AVPictureType: 3 is B
         assert (3 in kinds) != big, kinds
+
+
+def test_gray_mkv_keeps_every_grey_level_in_one_plane(tmp_path):
+    """Masks written with ``gray=True``: one 8-bit plane in the .mkv (ffv1 ``gray``), read back as (H, W, 3)
+    frames equal to what was written, every level 0-255; an .mp4 is written as usual."""
+    import av
+
+    g = np.repeat(np.arange(256, dtype=np.uint8)[None, :, None], 3, -1).repeat(4, 0)  # (4, 256, 3)
+    with VideoWriter(tmp_path / "m.mkv", fps=5, gray=True) as w:
+        w.write(g)
+        w.write(255 - g)
+    with av.open(str(tmp_path / "m.mkv")) as c:
+        assert c.streams.video[0].codec_context.pix_fmt == "gray"
+    frames = list(read_video(tmp_path / "m.mkv"))
+    assert len(frames) == 2 and np.array_equal(frames[0], g) and np.array_equal(frames[1], 255 - g)
+    with VideoWriter(tmp_path / "m.mp4", fps=5, gray=True) as w:
+        w.write(g)
+    with av.open(str(tmp_path / "m.mp4")) as c:
+        assert c.streams.video[0].codec_context.pix_fmt == "yuv420p"

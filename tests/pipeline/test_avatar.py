@@ -271,17 +271,17 @@ def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
 def test_avatar_light_from_the_plate_and_both(target, tmp_path, capsys):
     """--light-from plate: the target's first frame read as a plate (no CNN); both: the person's
     smoothed light combined with it."""
-    from relightnet.sh import combine_person_plate, load_light, load_plate_light
+    from relightnet.sh import combine_person_plate, load_light, load_plate
 
     video, masks, _ = target
     base = ["-q", "avatar", "--target", str(video), "--target-masks", str(masks), "--n-dirs", "8", "--motion", "idle"]
-    plate = load_plate_light(video, hfov_deg=45.0)
+    plate = load_plate(video, hfov_deg=45.0)
     assert main([*base, "--light-from", "plate", "--fov", "45", "--out", str(tmp_path / "p.mkv")]) == 0
     sh = load_light(tmp_path / "p.lights.npz")
-    torch.testing.assert_close(sh, plate[None].expand(N, -1, -1))
+    torch.testing.assert_close(sh, plate.light[None].expand(N, -1, -1))
     assert main([*base, "--out", str(tmp_path / "a.mkv")]) == 0
     assert main([*base, "--light-from", "both", "--fov", "45", "--out", str(tmp_path / "b.mkv")]) == 0
     person, both = load_light(tmp_path / "a.lights.npz"), load_light(tmp_path / "b.lights.npz")
-    torch.testing.assert_close(both, combine_person_plate(person, plate), rtol=1e-5, atol=1e-6)
+    torch.testing.assert_close(both, combine_person_plate(person, *plate), rtol=1e-5, atol=1e-6)
     assert main([*base, "--light-from", "plate", "--light", "studio", "--out", str(tmp_path / "c.mkv")]) == 1
     assert "give --light or --light-from, not both" in capsys.readouterr().err

@@ -28,5 +28,11 @@ def test_demo_runs_on_embedded_defaults(tmp_path, capsys):
     replaced = summary["replaced_person"]
     assert replaced["plate_psnr_db"] > 25 and 0 <= replaced["never_uncovered_share"] < 1
     assert video_info(out / "replace" / "avatar.mp4").n_frames == 5 and (out / "replace" / "avatar.plate.png").is_file()
+    # motion transfer: the source (rendered at the pose model's 256 px) beside the avatar in the 64² target
+    assert video_info(out / "motion" / "source.mp4").size == (256, 256)
+    assert video_info(out / "motion" / "avatar.mp4").n_frames == 5
+    moved = list(read_video(out / "motion" / "side_by_side.mp4"))
+    assert len(moved) == 5 and moved[0].shape == (256, 512, 3)
+    assert 0 < summary["motion_transfer"]["fit_pa_mpjpe_mm"] < 150  # a fit, not noise: a person's scale is ~1 m
     report = (out / "compare" / "report.md").read_text()
     assert "| 3D | true L_t |" in report and video_info(out / "compare" / "side_by_side.mp4").n_frames == 4

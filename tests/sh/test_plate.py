@@ -12,16 +12,24 @@ from relightnet.checks import InputError
 from relightnet.data.backgrounds import envmap_background
 from relightnet.io import write_image
 from relightnet.sh import (
+    SEEN_FADE_DEG,
+    PlateView,
     ambient_light,
     combine_person_plate,
     dominant_direction,
+    fibonacci_sphere,
     latlong_directions,
     light_from_words,
     load_plate_light,
     plate_envmap,
     plate_light,
+    plate_seen,
+    plate_view,
     preset_envmap,
+    project,
     radiance,
+    sh_basis,
+    world_to_light,
 )
 
 
@@ -96,15 +104,47 @@ def test_load_plate_light_linearises_the_photo(tmp_path):
     torch.testing.assert_close(sh, want, rtol=1e-4, atol=1e-3 * float(want[0, 0]))
 
 
-def test_combination_takes_each_light_where_it_sees():
+def test_plate_seen_is_its_frame_with_a_soft_edge():
+    view = plate_view(90, 160, 60.0)  # a centred 60° × ~36° pinhole
+    assert view == PlateView(view.fx, view.fx, 80.0, 45.0, 160, 90)
+    half_w, half_h = math.radians(30.0), math.atan(45.0 / view.fy)
+    fade = math.radians(SEEN_FADE_DEG)
+
+    def toward(az, el):  # world: right of the view axis by az, above it by el (tangent angles)
+        v = torch.tensor([[math.tan(az), math.tan(el), -1.0]], dtype=torch.float64)
+        return world_to_light(v / v.norm())
+
+    assert float(plate_seen(toward(0, 0), view)) == 1.0
+    assert float(plate_seen(toward(half_w - 1e-3, half_h - 1e-3), view)) == 1.0  # the frame's corner
+    torch.testing.assert_close(plate_seen(toward(half_w + fade / 2, 0), view).item(), 0.5, rtol=0, atol=1e-9)
+    torch.testing.assert_close(plate_seen(toward(0, -half_h - fade / 4), view).item(), 0.75, rtol=0, atol=1e-9)
+    assert float(plate_seen(toward(half_w + fade, 0), view)) == 0.0
+    assert float(plate_seen(-toward(0, 0), view)) == 0.0  # behind the camera
+    with pytest.raises(InputError, match="field of view"):
+        plate_view(90, 160, 170.0)
+
+
+def test_combination_takes_the_plate_where_it_was_seen():
+    view = plate_view(128, 128, 60.0)
     person = light_from_words("key:az=0,el=0,size=60,power=2")  # from the camera
     plate = light_from_words("key:az=180,el=0,size=60,power=2")  # from behind the person
-    both = combine_person_plate(person, plate)
-    front = torch.tensor([[1.0, 0.0, 0.0]])
-    back = -front
-    torch.testing.assert_close(radiance(both, front), radiance(person, front), rtol=0.15, atol=0.02)
-    torch.testing.assert_close(radiance(both, back), radiance(plate, back), rtol=0.15, atol=0.02)
-    seq = combine_person_plate(torch.stack([person, person]), plate)  # a sequence of person lights
-    torch.testing.assert_close(seq[1], both)
-    same = combine_person_plate(person, person)  # agreeing lights are kept
-    torch.testing.assert_close(same, person, rtol=1e-4, atol=1e-5)
+    seen = plate_seen(fibonacci_sphere(4096, dtype=torch.float64)[0], view)
+    expect = combine_person_plate(person, plate, view)
+    # the blend is a linear map: two lights that agree are kept whatever the weights
+    torch.testing.assert_close(combine_person_plate(person, person, view), person, rtol=1e-4, atol=1e-5)
+    # the same blend integrated on another quadrature (a 256 × 512 lat-long grid, no clamping): the
+    # weight's kinks at the frame's soft edge limit both quadratures to ~1e-4 of the light's scale
+    dw, sa = latlong_directions(256, 512, dtype=torch.float64)
+    dl = world_to_light(dw.reshape(-1, 3))
+    w = plate_seen(dl, view)[:, None]
+    vals = (1 - w) * radiance(person.double(), dl) + w * radiance(plate.double(), dl)
+    ref = project(vals, sh_basis(dl, 2), sa.reshape(-1))
+    torch.testing.assert_close(expect.double(), ref, rtol=0, atol=1e-3 * float(ref.abs().max()))
+    back = torch.tensor([[-1.0, 0.0, 0.0]])  # where the plate looks: its light counts there
+    assert float(radiance(expect, back).mean()) > float(radiance(person, back).mean())
+    # the plate's share of the sphere: what its frame covers (about 1/15 of it at 60° × 60°)
+    assert 0.04 < float(seen.mean()) < 0.12
+    seq = combine_person_plate(torch.stack([person, person]), plate, view)  # a sequence of person lights
+    torch.testing.assert_close(seq[1], expect)
+    wide = combine_person_plate(person, plate, plate_view(128, 128, 150.0))
+    assert float(radiance(wide, back).mean()) > float(radiance(expect, back).mean())  # a wider plate counts more

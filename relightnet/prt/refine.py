@@ -1,0 +1,195 @@
+"""Per-vertex transport of a once-subdivided mesh, ray casting the midpoints only at shadow edges.
+
+A mesh subdivided once (:func:`relightnet.body.subdivide_faces`) has a vertex at the midpoint
+m of every split edge a–b. Casting all of their rays would cost as much as the rest of
+the mesh again; instead :func:`refined_transport` casts the rays of the original vertices,
+then, per midpoint, compares the visibility of its two endpoints over the directions both
+see above their horizon, weighted by the midpoint's own cosine:
+
+    d(m) = Σ_ω |V_a(ω) − V_b(ω)| · max(n_m·ω, 0) / Σ_ω max(n_m·ω, 0)
+
+Where ``d > threshold`` a shadow boundary crosses the edge (a *shadow edge*) and the
+midpoint is ray cast like any vertex: its row equals :func:`~relightnet.prt.vertex_transport`'s.
+Elsewhere its visibility is the mean of its endpoints' (the one endpoint above its horizon
+where only one is; visible where neither is) and its transport is that visibility times
+its own cosine lobe, projected like every row: ``T_m = (V̂_m ⊙ max(n_m·ω, 0)) @ (Y ⊙ w)``.
+Both are exact where the endpoints agree (no shadow in between); only the interpolated
+visibility of edges with a small disagreement is an estimate.
+
+Interreflection (``bounces ≥ 1``): the bounce operator gathers the rays of every cast vertex;
+a midpoint that was not cast takes the mean of its endpoints' bounced transport.
+
+Shapes: V vertices (midpoints included), F faces, M midpoints, K = (lmax + 1)² coefficients.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+
+from ..checks import InputError, check_shape
+from ..sh import light_to_world, sh_basis, sh_count
+from .interreflection import bounce_operator, check_albedo
+from .mesh_checks import check_mesh, check_normals, mesh_scale
+from .transport import transport_directions
+from .visibility import RayEngine, VertexRays, make_engine, vertex_rays
+
+__all__ = ["SHADOW_EDGE", "refined_transport"]
+
+#: Default ``threshold`` of :func:`refined_transport`: the cosine-weighted share of directions
+#: in which the endpoints' visibility differs above which a midpoint is ray cast.
+SHADOW_EDGE = 0.08
+
+
+def _check_midpoints(midpoints, n: int) -> torch.Tensor:
+    mid = torch.as_tensor(midpoints, dtype=torch.int64)
+    check_shape(mid, ["M", 3], name="midpoints")
+    if mid.numel() == 0:
+        return mid
+    if int(mid.min()) < 0 or int(mid.max()) >= n:
+        raise InputError(f"midpoints: expected vertex indices in [0, {n}), got [{int(mid.min())}, {int(mid.max())}]")
+    is_mid = torch.zeros(n, dtype=torch.bool)
+    is_mid[mid[:, 0]] = True
+    if int(is_mid.sum()) != mid.shape[0] or bool(is_mid[mid[:, 1:]].any()):
+        raise InputError("midpoints: expected distinct midpoint vertices whose endpoints are not midpoints")
+    return mid
+
+
+def _cast(eng: RayEngine, idx: torch.Tensor, verts, normals, dirs, offset: float, scale: float, hits: bool):
+    """Rays of the vertices ``idx``: (lit (N, D) float32 cosine where visible, rays with global vertex ids,
+    their hits or None)."""
+    rays = vertex_rays(verts[idx], normals[idx], dirs, offset, scale=scale)
+    if hits:
+        h = eng.intersect(rays.origins, rays.dirs)
+        blocked = h.prim >= 0
+    else:
+        h, blocked = None, eng.occluded(rays.origins, rays.dirs)
+    lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
+    lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
+    rays = dataclasses.replace(rays, vertex=idx.numpy()[rays.vertex], n_verts=verts.shape[0])
+    return lit, rays, h
+
+
+def _estimate(lit_a, lit_b, cos_a, cos_b, cos_m, threshold: float):
+    """Endpoint visibilities (N, D) → (midpoint lit (N, D) estimate, shadow edge (N,) bool).
+
+    ``lit`` is 0 below an endpoint's horizon, so with k = [cos > 0] the estimate (both above: the
+    mean; one: its own; neither: visible) is (V_a + V_b) / max(k_a + k_b, 1) + [k_a + k_b = 0]."""
+    va, vb = (lit_a > 0).float(), (lit_b > 0).float()
+    ka, kb = (cos_a > 0).float(), (cos_b > 0).float()
+    k = ka + kb
+    d = ((va - vb).abs() * ka * kb * cos_m).sum(1) / cos_m.sum(1).clamp_min(1e-12)
+    vis = (va + vb) / k.clamp_min(1.0) + (k == 0).float()
+    return vis * cos_m, d > threshold
+
+
+def _midpoint_rows(T, lit, cast_v, wm, normals, dirs, Yw, threshold: float, chunk: int = 4096) -> torch.Tensor:
+    """Fill the estimated rows of the midpoints ``wm`` (E, 3) into T (V, K) from the cast vertices' lit
+    (N, D) (rows ``cast_v``); returns (E,) bool, the shadow edges (whose rows are to be cast)."""
+    pos = torch.full((T.shape[0],), -1, dtype=torch.int64)
+    pos[cast_v] = torch.arange(len(cast_v))
+    shadow = torch.zeros(len(wm), dtype=torch.bool)
+    for s in range(0, len(wm), chunk):
+        w = wm[s:s + chunk]
+        cos = (normals[w.flatten()] @ dirs.T).reshape(len(w), 3, -1)
+        est, shadow[s:s + chunk] = _estimate(lit[pos[w[:, 1]]], lit[pos[w[:, 2]]], cos[:, 1], cos[:, 2],
+                                             cos[:, 0].clamp_min(0), threshold)
+        T[w[:, 0]] = est @ Yw
+    return shadow
+
+
+def _rows(want: torch.Tensor, is_mid: torch.Tensor, mid: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(original vertices to cast, midpoint rows wanted) for the wanted vertices (V,) bool."""
+    need = want & ~is_mid
+    wm = mid[want[mid[:, 0]]]
+    need[wm[:, 1:].flatten()] = True
+    return torch.nonzero(need).flatten(), wm
+
+
+def _bounce(T0, rays: list[VertexRays], hits: list, faces, weights, verts, rho, bounces: int, est_mid):
+    """T0 (V, K) plus ``bounces`` bounces; midpoint rows ``est_mid`` (E, 3) take their endpoints' mean."""
+    rays_all = VertexRays(*(np.concatenate([getattr(r, f) for r in rays]) for f in
+                            ("vertex", "direction", "origins", "dirs", "cosine")), verts.shape[0], rays[0].n_dirs)
+    hits_all = type(hits[0])(*(np.concatenate([getattr(h, f) for h in hits]) for f in ("prim", "u", "v", "t")))
+    op = bounce_operator(rays_all, hits_all, faces, weights, verts)
+    n, k = T0.shape
+    c = rho.shape[1]
+    prev = T0[:, :, None].expand(n, k, c).contiguous()
+    total = prev.clone()
+    for _ in range(int(bounces)):
+        prev = (op.matrix @ (prev * rho[:, None, :]).reshape(n, k * c)).reshape(n, k, c)
+        prev[est_mid[:, 0]] = 0.5 * (prev[est_mid[:, 1]] + prev[est_mid[:, 2]])
+        total += prev
+    return total[:, :, 0] if c == 1 else total
+
+
+def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: int = 256, bounces: int = 0,
+                      albedo=None, seed: int | None = 0, engine: str | RayEngine = "auto", offset: float = 1e-4,
+                      threads: int | None = None, vertices=None, manifold: str = "warn",
+                      threshold: float = SHADOW_EDGE, return_cast: bool = False):
+    """Per-vertex SH transport (occluded) of a subdivided mesh, midpoints ray cast only at shadow edges.
+
+    Args:
+        verts: (V, 3), faces: (F, 3), normals: (V, 3) as for :func:`~relightnet.prt.vertex_transport`.
+        midpoints: (M, 3) int64 rows (midpoint vertex m, endpoint a, endpoint b): m lies on edge a–b
+            (:attr:`relightnet.body.SubdividedFaces.midpoints`); endpoints are not midpoints.
+        lmax, n_dirs, bounces, albedo, seed, engine, offset, threads, manifold: as for ``vertex_transport``.
+        vertices: (N,) indices of the only rows wanted (others 0); not with ``bounces``.
+        threshold: the endpoints' visibility difference ``d`` above which a midpoint is ray cast
+            (module docstring); 0 casts every midpoint whose endpoints differ at all.
+        return_cast: also return which midpoints were ray cast.
+
+    Returns:
+        (V, K) float32 (or (V, K, 3) with bounces and RGB albedo); with ``return_cast`` also
+        (M,) bool, True for the midpoints that were ray cast (False for those not wanted).
+    """
+    sh_count(lmax)
+    if int(bounces) != bounces or bounces < 0:
+        raise InputError(f"bounces: expected an integer >= 0, got {bounces!r}")
+    if not 0 <= threshold <= 1:
+        raise InputError(f"threshold: expected a value in [0, 1], got {threshold!r}")
+    verts, faces = check_mesh(verts, faces, manifold=manifold)
+    nv = verts.shape[0]
+    normals = check_normals(normals, nv)
+    mid = _check_midpoints(midpoints, nv)
+    rho = check_albedo(0.5 if albedo is None else albedo, nv) if bounces else None
+    want = torch.ones(nv, dtype=torch.bool)
+    if vertices is not None:
+        if bounces:
+            raise InputError("vertices: a vertex subset cannot be used with bounces (they need every vertex)")
+        idx = torch.as_tensor(vertices, dtype=torch.int64).flatten()
+        if idx.numel() and (int(idx.min()) < 0 or int(idx.max()) >= nv):
+            raise InputError(f"vertices: expected indices in [0, {nv}), got [{int(idx.min())}, {int(idx.max())}]")
+        want = torch.zeros(nv, dtype=torch.bool)
+        want[idx] = True
+    is_mid = torch.zeros(nv, dtype=torch.bool)
+    is_mid[mid[:, 0]] = True
+    dirs_light, weights = transport_directions(n_dirs, seed)
+    dirs = light_to_world(dirs_light)
+    Yw = sh_basis(dirs_light, lmax, check=False) * weights[:, None]
+    eng = make_engine(verts, faces, engine, threads)
+    scale = mesh_scale(verts)
+    cast_v, wm = _rows(want, is_mid, mid)
+    lit, rays, hits = _cast(eng, cast_v, verts, normals, dirs, offset, scale, bool(bounces))
+    T = torch.zeros(nv, Yw.shape[1])
+    T[cast_v] = torch.from_numpy(lit) @ Yw
+    shadow = _midpoint_rows(T, torch.from_numpy(lit), cast_v, wm, normals, dirs, Yw, float(threshold))
+    all_rays, all_hits = [rays], [hits]
+    if bool(shadow.any()):
+        lit_m, rays_m, hits_m = _cast(eng, wm[shadow, 0], verts, normals, dirs, offset, scale, bool(bounces))
+        T[wm[shadow, 0]] = torch.from_numpy(lit_m) @ Yw
+        all_rays.append(rays_m)
+        all_hits.append(hits_m)
+    if vertices is not None:
+        T[~want] = 0.0  # endpoints cast only for their midpoints
+    if bounces:
+        T = _bounce(T, all_rays, all_hits, faces, weights, verts, rho, int(bounces), wm[~shadow])
+    if not return_cast:
+        return T
+    cast = torch.zeros(mid.shape[0], dtype=torch.bool)
+    row = torch.full((nv,), -1, dtype=torch.int64)
+    row[mid[:, 0]] = torch.arange(mid.shape[0])
+    cast[row[wm[shadow, 0]]] = True
+    return T, cast
