@@ -1,11 +1,18 @@
-"""Draw the README's picture of the dressed avatar and the replaced person: ``docs/avatar_look.png``.
+"""Draw the README's pictures of the dressed avatar and the replaced person: ``docs/avatar_look.png``, and of
+the hems and shoes: ``docs/avatar_hems.png``.
 
-Run: ``.venv/bin/python tools/avatar_look_picture.py [--out docs/avatar_look.png]`` (ANNY_CACHE_DIR set by make).
+Run: ``.venv/bin/python tools/avatar_look_picture.py [--out docs/avatar_look.png] [--hems docs/avatar_hems.png]``
+(ANNY_CACHE_DIR set by make).
 
 Top row: the named outfits (``--outfit NAME``) and ``random:3`` on the walking avatar, PRT-lit by
 the ``studio`` preset. Bottom row: the neckline and sleeves of the default albedo, face-wise
 (before) and through the smooth field (now), then a generated target (a person walking across a
-known background), its clean plate, and ``avatar --replace-person --outfit casual`` on it.
+known background), its clean plate, and ``avatar --replace-person --outfit casual`` on it at three
+times (the avatar follows the person across the frame).
+
+The hems picture: close-ups of the jacket's neckline and sleeve end and the casual outfit's trouser
+hem, each with the generator's face-wise border (left) and the hem cut along a smooth line (right),
+then the feet in the four shoe kinds.
 """
 
 from __future__ import annotations
@@ -69,7 +76,37 @@ def _replaced(body, tmp: Path) -> list[np.ndarray]:
            n_dirs=32, progress=False)
     target = list(read_video(wt.video))[8]
     plate = (read_image(tmp / "av.plate.png") * 255).round().byte().numpy()
-    return [target, plate, list(read_video(tmp / "av.mp4"))[8]]
+    frames = list(read_video(tmp / "av.mp4"))
+    return [target, plate, *(frames[t] for t in (4, 8, 12))]
+
+
+def _hems(body, light) -> np.ndarray:
+    from relightnet.pipeline.outfits import DressedBody, draw_outfit
+    from relightnet.prt import vertex_transport
+    from relightnet.raster import look_at, perspective_camera
+    from relightnet.render import render_mesh
+
+    views = {"jacket": (((0.0, 1.38, 0.55), (0.0, 1.36, 0.0)), ((0.75, 1.05, 0.45), (0.3, 1.0, 0.0))),
+             "casual": (((0.25, 0.2, 0.45), (0.1, 0.16, 0.0)),)}
+    panels = []
+    for name, vs in views.items():
+        pair = [DressedBody(body, draw_outfit(name), hems=h) for h in (False, True)]
+        for eye, target in vs:
+            cam = perspective_camera(look_at(torch.tensor(eye), torch.tensor(target)), (240, 240), fov_deg=35)
+            for d in pair:
+                out = d()
+                T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+                r = render_mesh(out.verts[0], out.faces, T, d.albedo, light, cam)
+                panels.append(_u8(r.image[0] + 0.93 * (1 - r.alpha[0][..., None])))
+    cam = perspective_camera(look_at(torch.tensor([0.55, 0.3, 0.65]), torch.tensor([0.0, 0.1, 0.05])), (240, 240),
+                             fov_deg=35)
+    for spec in ("casual", "coat", "jacket", "dress"):  # sneaker, boot, dress shoe, flat
+        d = DressedBody(body, draw_outfit(spec))
+        out = d()
+        T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+        r = render_mesh(out.verts[0], out.faces, T, d.albedo, light, cam)
+        panels.append(_u8(r.image[0] + 0.93 * (1 - r.alpha[0][..., None])))
+    return np.concatenate(panels, 1)
 
 
 def main() -> None:
@@ -79,9 +116,11 @@ def main() -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="docs/avatar_look.png")
+    ap.add_argument("--hems", default="docs/avatar_hems.png")
     args = ap.parse_args()
     body = AnnyBody()
     light = preset_light("studio")
+    write_image(args.hems, torch.from_numpy(_hems(body, light)).float() / 255, srgb=False)
     top = _outfits(body, light)
     with tempfile.TemporaryDirectory() as d:
         bottom = np.concatenate([*_closeups(body, light), *_replaced(body, Path(d))], 1)

@@ -26,9 +26,10 @@ from .base import (
     rotvec_to_matrix,
     vertex_normals,
 )
-from .garments import GarmentPiece, radial_directions, ring_surface, shell_surface
+from .garments import GarmentPiece, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from .motion import MOTION_KINDS, make_motion
 from .motion_io import Z_UP_TO_Y_UP, Motion, load_motion, reorient_motion, save_motion
+from .shoes import SHOE_KINDS, shoe_surface
 from .smpl_model import SMPL_JOINT_NAMES, SMPL_KEYS, SMPLBody, load_smpl_file, smpl_to_world, spherical_uv
 from .subdivide import SubdividedFaces, midpoint_values, subdivide_faces
 
@@ -42,6 +43,7 @@ __all__ = [
     "AnnyMotion", "is_anny_motion", "load_anny_motion", "save_anny_motion",
     "REGIONS", "ANNY_PARTS", "Albedo", "anny_part_labels", "region_labels", "skin_color", "default_albedo",
     "vertex_to_texture",
-    "GarmentPiece", "shell_surface", "ring_surface", "radial_directions",
+    "GarmentPiece", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip",
+    "SHOE_KINDS", "shoe_surface",
     "SubdividedFaces", "subdivide_faces", "midpoint_values",
 ]

@@ -19,6 +19,11 @@ move with the body:
   height (a face opening). Skirts and dresses (not following the legs), hoods, hats and
   long hair falling over the shoulders. It carries its own (u, v) grid coordinates.
 
+Two more cut a piece's open border along a smooth line instead of its face edges (the avatar's
+hems, :mod:`relightnet.pipeline.outfit_parts`): :func:`hem_field`, 0 on the border and rising
+with the distance from it, and :func:`iso_clip`, which keeps the part of a mesh on one side of
+an iso-line of a field, cutting the triangles it crosses.
+
 Shapes: V body vertices, F body faces, N points; a piece has Vg vertices and Fg faces.
 World frame: y up (docs/design.md, "Frames").
 """
@@ -33,7 +38,7 @@ import torch
 from ..checks import InputError, check_shape
 from .base import vertex_normals
 
-__all__ = ["GarmentPiece", "shell_surface", "ring_surface", "radial_directions"]
+__all__ = ["GarmentPiece", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,3 +228,82 @@ def _outward(verts: torch.Tensor, faces: torch.Tensor, centre: torch.Tensor) -> 
     out = (v0 + v1 + v2) / 3 - centre
     out[:, 1] = 0.0
     return faces if float((fn * out).sum()) >= 0 else faces[:, [0, 2, 1]]
+
+
+def hem_field(faces: torch.Tensor, verts: torch.Tensor, reach: float = 5.0) -> torch.Tensor:
+    """(Vg,) a field on a piece that is 0 on its open border and rises inward to 1: the distance of every
+    vertex to the border (its vertices and edge midpoints) in units of ``reach`` times the border's median
+    edge length, clipped at 1 (coincident vertices, such as a ring's seam, are one). Its iso-lines inside the
+    border are offset curves of the border, on which the stair-steps of a border that follows face edges are
+    rounded off (an offset of a zig-zag by more than its depth is a row of wide arcs); a piece without a
+    border is 1 everywhere.
+
+    Args:
+        faces: (Fg, 3) the piece's faces. verts: (Vg, 3) its positions (e.g. at rest).
+        reach: the distance at which the field reaches 1, in border edge lengths.
+    """
+    check_shape(faces, ["F", 3], name="faces")
+    n_verts = check_shape(verts, ["V", 3], name="verts")["V"]
+    _, weld = torch.unique((verts.double() * 1e6).round(), dim=0, return_inverse=True)  # a ring's seam is no border
+    e = weld[torch.cat([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])]
+    key = torch.minimum(e[:, 0], e[:, 1]) * n_verts + torch.maximum(e[:, 0], e[:, 1])
+    uniq, count = torch.unique(key, return_counts=True)
+    b = uniq[count == 1]
+    if len(b) == 0:
+        return torch.ones(n_verts)
+    p = verts.double()
+    first = torch.zeros(n_verts, dtype=torch.int64).scatter_(0, weld, torch.arange(n_verts))
+    ba, bb = p[first[b // n_verts]], p[first[b % n_verts]]
+    scale = reach * float((ba - bb).norm(dim=1).median())
+    dist = torch.cdist(p, torch.cat([ba, bb, (ba + bb) / 2]), compute_mode="donot_use_mm_for_euclid_dist").amin(1)
+    return (dist / max(scale, 1e-9)).clamp_max(1.0).float()
+
+
+def iso_clip(faces: torch.Tensor, corner_field: torch.Tensor, level: float, n_verts: int) -> tuple:
+    """Cut triangles along the iso-line ``field = level``, keeping the side where ``field >= level``.
+
+    Faces wholly inside are kept as they are (in their order, first); faces wholly outside are dropped;
+    a face the line crosses keeps its inside part, as one or two triangles (same winding) whose new
+    corners lie on its crossed edges. New vertices are numbered from ``n_verts`` on, one per crossed
+    edge (shared by the faces on both sides of it). Call it again with another index array of the same
+    faces (e.g. UV faces) and the same ``corner_field`` for a matching cut of that array.
+
+    Args:
+        faces: (F, 3) int64 indices. corner_field: (F, 3) the field at each face corner.
+        level: the iso-value. n_verts: the number of vertices ``faces`` indexes.
+
+    Returns:
+        (faces (F', 3) int64, edges (E, 2) int64 the end vertices of each new vertex,
+        t (E,) float32 its position along the edge: vertex = (1 − t) · v[edges[:, 0]] + t · v[edges[:, 1]]).
+    """
+    check_shape(faces, ["F", 3], name="faces")
+    check_shape(corner_field, [faces.shape[0], 3], name="corner_field")
+    inside = corner_field >= level
+    k = inside.sum(1)
+    cut = (k == 1) | (k == 2)
+    f, fld, ins = faces[cut], corner_field[cut].double(), inside[cut]
+    # Rotate each cut face so that its odd corner (the one alone on its side) comes first.
+    odd = torch.where(k[cut] == 1, ins.long().argmax(1), (~ins).long().argmax(1))
+    rot = (odd[:, None] + torch.arange(3)) % 3
+    f, fld = f.gather(1, rot), fld.gather(1, rot)
+
+    def crossing(a: int, b: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        t = (level - fld[:, a]) / (fld[:, b] - fld[:, a])
+        lo = f[:, a] <= f[:, b]
+        return (torch.where(lo, f[:, a], f[:, b]), torch.where(lo, f[:, b], f[:, a]),
+                torch.where(lo, t, 1 - t))
+
+    (a0, a1, ta), (b0, b1, tb) = crossing(0, 1), crossing(0, 2)
+    key = torch.cat([a0, b0]) * n_verts + torch.cat([a1, b1])
+    uniq, inv = torch.unique(key, return_inverse=True)
+    t_all = torch.cat([ta, tb])
+    t = torch.zeros(len(uniq), dtype=torch.float64).scatter_(0, inv, t_all)
+    edges = torch.stack([uniq // n_verts, uniq % n_verts], 1)
+    n = len(f)
+    x01, x02 = inv[:n] + n_verts, inv[n:] + n_verts
+    one = k[cut] == 1  # the odd corner is the inside one: the triangle (c0, x01, x02)
+    tri1 = torch.stack([f[:, 0], x01, x02], 1)[one]
+    two = ~one  # the odd corner is outside: the quad x01, c1, c2, x02
+    q = torch.stack([x01, f[:, 1], f[:, 2], x02], 1)[two]
+    out = torch.cat([faces[k == 3], tri1, q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    return out, edges, t.float().clamp(0.0, 1.0)

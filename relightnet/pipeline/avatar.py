@@ -297,8 +297,8 @@ def avatar(
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
-    if replace_person:  # over the clean plate, standing where the person stood
-        backgrounds, camera = stand_in_frames(target, out, n, body_model, target_masks, mask_source)
+    if replace_person:  # over the clean plate, standing where the person stands in each frame
+        backgrounds, camera, params = stand_in_frames(target, out, n, body_model, target_masks, mask_source, params)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,

@@ -19,10 +19,13 @@
    warns in one line.
 
 :func:`person_placement` reads the same masks for where the person stood: the median over
-the samples of the feet (the mask's lowest rows) and of the height (box height) in pixels.
+the samples of the feet (the figure's centre column, the mask's lowest row) and of the height
+(box height) in pixels, each over the masks the frame's edges do not cut (:func:`person_box`).
 :func:`placed_camera` turns that into the avatar's camera: the default camera's orientation
 (so the camera-relative light is unchanged) moved so that the avatar's feet at the world
-origin land on the person's feet and its standing height on the person's height.
+origin land on the person's feet and its standing height on the person's height. :func:`stand_in`
+also tracks the person's box in every frame and moves the avatar along that path
+(:mod:`.person_path`).
 """
 
 from __future__ import annotations
@@ -42,8 +45,8 @@ from ..raster import Camera, look_at, perspective_camera
 logger = logging.getLogger(__name__)
 
 __all__ = ["WARN_SHARE", "CleanPlate", "sample_indices", "dilate_masks", "masked_median", "push_pull_fill",
-           "clean_plate", "Placement", "person_placement", "placed_camera", "plate_psnr", "check_stand_in", "stand_in",
-           "stand_in_frames"]
+           "clean_plate", "Placement", "person_box", "person_placement", "placed_camera", "plate_psnr",
+           "check_stand_in", "stand_in", "stand_in_frames"]
 
 #: The avatar job warns when more than this share of the person's area had to be inpainted.
 WARN_SHARE = 0.02
@@ -189,24 +192,38 @@ class Placement:
     height: float
 
 
-def _box(m: np.ndarray) -> tuple[float, float, float] | None:
-    """(feet u, feet v, height) of one mask, or None when it is (nearly) empty."""
+def person_box(m: np.ndarray, framed: bool = True) -> tuple[float, float, float] | None:
+    """(feet u, feet v, height) of one (H, W) bool mask, or None when it is (nearly) empty. With ``framed``,
+    a value the frame's edges cut is NaN: all three when the mask touches the left or right edge (part of
+    the person is outside: what shows may be an arm or a leg), the height when it touches the top or
+    bottom edge, v when it touches the bottom."""
     rows = np.nonzero(m.any(1))[0]
     if len(rows) < 4:
         return None
     top, bottom = rows[0], rows[-1]
-    low = m[max(top, bottom - max(2, (bottom - top) // 20)):bottom + 1]
-    cols = np.nonzero(low)[1]
-    return float(cols.mean()) + 0.5, float(bottom) + 1.0, float(bottom - top + 1)
+    cols = np.nonzero(m)[1]  # the whole figure's centre column: the lowest rows show one foot mid-stride
+    u, v, h = float(cols.mean()) + 0.5, float(bottom) + 1.0, float(bottom - top + 1)
+    if not framed:
+        return u, v, h
+    if m[:, 0].any() or m[:, -1].any():
+        return math.nan, math.nan, math.nan
+    floor = bottom == m.shape[0] - 1
+    return u, math.nan if floor else v, math.nan if top == 0 or floor else h
 
 
 def person_placement(masks: Iterable) -> Placement | None:
-    """The median feet position and height of a person over (H, W) masks (None when every mask is empty)."""
-    boxes = [b for b in (_box(np.asarray(m) > 0.5) for m in masks) if b is not None]
-    if not boxes:
+    """The median feet position and height of a person over (H, W) masks (None when every mask is empty),
+    each over the masks the frame's edges do not cut (:func:`person_box`), or over all when every one is cut."""
+    ms = [np.asarray(m) > 0.5 for m in masks]
+    framed = [b for b in (person_box(m) for m in ms) if b is not None]
+    if not framed:
         return None
-    a = np.median(np.asarray(boxes), axis=0)
-    return Placement((float(a[0]), float(a[1])), float(a[2]))
+    a = np.asarray(framed)
+    cut = np.isnan(a).all(0)
+    if cut.any():  # cut in every frame (a close-up): the cut values
+        a[:, cut] = np.asarray([person_box(m, framed=False) for m in ms if person_box(m) is not None])[:, cut]
+    med = np.nanmedian(a, axis=0)
+    return Placement((float(med[0]), float(med[1])), float(med[2]))
 
 
 def placed_camera(size, placement: Placement, body_height: float, fov_deg: float = 35.0) -> Camera:
@@ -236,9 +253,10 @@ def plate_psnr(plate: np.ndarray, truth: np.ndarray, region: np.ndarray) -> floa
 
 
 def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment",
-             max_samples: int = 48, fov_deg: float = 35.0) -> tuple[CleanPlate, Camera]:
-    """``avatar --replace-person``: the target's clean plate and the camera that puts the avatar where the
-    person stood (module docstring). Writes ``OUT.plate.png`` (the plate) beside ``out``.
+             max_samples: int = 48, fov_deg: float = 35.0) -> tuple[CleanPlate, Camera, torch.Tensor]:
+    """``avatar --replace-person``: the target's clean plate, the camera that puts the avatar where the
+    person stood in the median frame (module docstring) and the avatar's path that follows the person
+    frame by frame (:mod:`.person_path`). Writes ``OUT.plate.png`` (the plate) beside ``out``.
 
     Args:
         target: the target video. out: the avatar's output path. n_frames: frames the avatar job writes.
@@ -246,25 +264,28 @@ def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: s
             masks (:func:`relightnet.segment.sources.video_masks`; ``head`` gives none and is refused).
 
     Returns:
-        (:class:`CleanPlate`, :class:`~relightnet.raster.Camera`).
+        (:class:`CleanPlate`, :class:`~relightnet.raster.Camera`, (T, 3) root offsets in metres,
+        :func:`.person_path.path_offsets`).
     """
     from pathlib import Path
 
     from ..io import write_image
     from ..segment.sources import video_masks
+    from .person_path import path_offsets, smooth_track
 
     if target_masks is None and mask_source == "head":
         raise InputError("--replace-person: needs the person's masks: give --target-masks or use --mask-source "
                          "segment")
     info, _, frames = video_masks(target, target_masks, mask_source, allow_empty=True)
     want = set(sample_indices(n_frames, max_samples))
-    kept = []
+    kept, boxes = [], []
 
     def pairs():  # one decode: the frames come back from the masks' iterator
         for t, img, m in frames:
             if t >= n_frames:
                 return
             m = torch.as_tensor(m) > 0.5
+            boxes.append(person_box(m.numpy()))
             if t in want:
                 kept.append(m.numpy())
             yield (img.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy(), m
@@ -281,8 +302,10 @@ def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: s
     write_image(out.with_name(out.stem + ".plate.png"), torch.from_numpy(plate.plate).float() / 255, srgb=False)
     with torch.no_grad():
         rest = body().verts[0]
-    camera = placed_camera(info.size, where, float(rest[:, 1].max() - rest[:, 1].min()), fov_deg)
-    return plate, camera
+    height = float(rest[:, 1].max() - rest[:, 1].min())
+    camera = placed_camera(info.size, where, height, fov_deg)
+    track = smooth_track(boxes, (*where.feet, where.height))
+    return plate, camera, path_offsets(info.size, where, track, height, fov_deg)
 
 
 def check_stand_in(replace_person: bool, plate, camera) -> None:
@@ -291,9 +314,14 @@ def check_stand_in(replace_person: bool, plate, camera) -> None:
         raise InputError("--replace-person builds the plate and places the camera itself: drop --plate / --camera")
 
 
-def stand_in_frames(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment"):
-    """:func:`stand_in` for the avatar job: (the plate repeated as the frames to composite over, the camera)."""
+def stand_in_frames(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment",
+                    params: dict | None = None):
+    """:func:`stand_in` for the avatar job: (the plate repeated as the frames to composite over, the camera,
+    the motion's parameters ``params`` with the root moved along the person's path every frame)."""
     import itertools
 
-    plate, camera = stand_in(target, out, n_frames, body, target_masks, mask_source)
-    return itertools.repeat(plate.plate), camera
+    plate, camera, offsets = stand_in(target, out, n_frames, body, target_masks, mask_source)
+    params = {} if params is None else params
+    trans = params.get("trans")
+    trans = torch.zeros(n_frames, 3) if trans is None else torch.as_tensor(trans)
+    return itertools.repeat(plate.plate), camera, {**params, "trans": trans + offsets[:len(trans)].to(trans)}

@@ -16,21 +16,29 @@ frame in every frame. Its :attr:`DressedBody.albedo` is the generator's texture 
 is that of the whole mesh, so cloth shadows the body and the body the cloth. Anything that
 renders a body model (:func:`relightnet.render.jobs.render_body_frames`, the avatar job,
 ``render-body``) takes a DressedBody in its place.
+
+Two things the generator's clothes lack are added (:mod:`.outfit_parts`): the shells' hems are cut
+along smooth lines through triangles instead of following the body's face edges, and every outfit
+wears shoes (:data:`OUTFIT_SHOES`; ``random:SEED`` draws a kind) — closed shells around the feet that
+pose with the foot, toe and lower-leg bones, with their own panel in the texture and the same PRT.
+The dressed mesh's vertices are the clothed mesh's, then the hems' new ones, then the shoes'.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
 
 from ..body.base import BodyOutput
+from ..body.shoes import SHOE_KINDS
 from ..checks import InputError
 from ..names import OUTFITS
+from .outfit_parts import hem_cut, shoe_panel, shoe_rig
 
-__all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody", "dressed_body",
-           "avatar_look"]
+__all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_SHOES", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody",
+           "dressed_body", "outfit_field", "avatar_look"]
 
 #: What each named outfit wears (upper, lower, head, hair) and the seed of its look.
 OUTFIT_SLOTS = {
@@ -41,6 +49,9 @@ OUTFIT_SLOTS = {
     "skirt": (("loose_top", "skirt", "none", "long"), 15),
     "hood": (("jacket", "trousers", "hood", "painted"), 16),
 }
+#: The shoes each named outfit wears (:data:`relightnet.body.shoes.SHOE_KINDS`; ``random:SEED`` draws one).
+OUTFIT_SHOES = {"casual": "sneaker", "dress": "flat", "jacket": "dress_shoe", "coat": "boot", "skirt": "boot",
+                "hood": "sneaker"}
 
 #: sRGB colours of the named outfits' pieces (plain fabric; the rest of the look is drawn from the seed).
 OUTFIT_COLORS = {
@@ -67,12 +78,14 @@ def _paint_named(name: str, look: dict, g: dict) -> None:
 
 @dataclass(frozen=True)
 class OutfitDraw:
-    """An outfit: ``look`` (the painted look, :func:`~relightnet.data.textures.sample_outfit`) and
-    ``garments`` (:func:`~relightnet.data.garments.sample_garments`), both JSON-serialisable; ``spec`` as given."""
+    """An outfit: ``look`` (the painted look, :func:`~relightnet.data.textures.sample_outfit`),
+    ``garments`` (:func:`~relightnet.data.garments.sample_garments`), both JSON-serialisable, and the
+    ``shoes`` kind (:data:`~relightnet.body.shoes.SHOE_KINDS`); ``spec`` as given."""
 
     spec: str
     look: dict
     garments: dict
+    shoes: str = field(default="sneaker")
 
 
 def draw_outfit(spec: str) -> OutfitDraw:
@@ -101,24 +114,30 @@ def draw_outfit(spec: str) -> OutfitDraw:
     g = sample_garments(rng, probs, look)
     if spec in OUTFIT_SLOTS:
         _paint_named(spec, look, g)
-    return OutfitDraw(spec, look, g)
+        shoes = OUTFIT_SHOES[spec]
+    else:  # a stream of its own, so the look and garments are those the seed always drew
+        shoes = str(np.random.default_rng([seed, 28, 5]).choice(sorted(SHOE_KINDS)))
+    return OutfitDraw(spec, look, g, shoes)
 
 
 class DressedBody:
-    """An Anny body wearing an outfit (module docstring); call it like the body model.
+    """An Anny body wearing an outfit (module docstring); call it like the body model. ``hems=False`` keeps the
+    generator's face-wise garment borders (for comparison) instead of cutting them smooth.
 
     Attributes:
         body: the wrapped :class:`~relightnet.body.AnnyBody`. outfit: the :class:`OutfitDraw`.
         faces: (F', 3) the dressed mesh's faces (body faces first). albedo: the outfit's
-            :class:`~relightnet.render.TexturedAlbedo`. types: the garment types worn.
+            :class:`~relightnet.render.TexturedAlbedo`. types: the garment types worn, then ``"shoes"``.
+        face_piece: (F',) int64 the index into ``types`` of each face's piece, −1 for the body.
+        cut: the :class:`~.outfit_parts.HemCut` of the garments' hems. shoes: the :class:`~.outfit_parts.ShoeRig`.
         n_body_verts: V, the body's vertex count (its vertices come first).
     """
 
-    def __init__(self, body, outfit: OutfitDraw) -> None:
+    def __init__(self, body, outfit: OutfitDraw, hems: bool = True) -> None:
         from ..body import AnnyBody
         from ..data.clothed import clothed_mesh
         from ..data.sample import prepare_assets
-        from ..data.textures import paint_albedo
+        from ..data.textures import paint_albedo, uv_atlas
         from ..render.frame import TexturedAlbedo
 
         if not isinstance(body, AnnyBody):
@@ -126,21 +145,67 @@ class DressedBody:
         self.body, self.outfit = body, outfit
         assets = prepare_assets(body)
         look = outfit.look
-        self._field = assets.region_field(look["sleeves"], look["legs"], "none" if look["hair"] is None else "short")
+        self._field = outfit_field(body, look, assets)
         self._tab = assets.garment_tables()
-        tex = paint_albedo(assets.atlas, self._field, look)
+        atlas = uv_atlas(body, 1024)
+        tex = paint_albedo(atlas, self._field, look)
         with torch.no_grad():
             rest = body()
         self._topo = None
         pieces = self._pieces(rest.verts[0], rest.normals[0], rest.joints[0])
         m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
-                         body, self._tab, tex, self._field, assets.atlas)
+                         body, self._tab, tex, self._field, atlas)
         n_pieces = sum(len(p[1].verts) for p in pieces)
         self._edges = m.midpoints[:, 1:]  # the subdivided outer sides' midpoints follow every frame's pieces
+        self._mid = m.midpoints
         self._inner = self._thickness(m, pieces, n_pieces)
-        self.faces, self.types, self.n_body_verts = m.faces, m.types, body.num_verts
-        self.uv, self.uv_faces = m.uv, m.uv_faces
-        self.albedo = TexturedAlbedo(m.tex, m.uv, m.uv_faces)
+        self._rest = rest.verts[0].detach()
+        self.cut = hem_cut(m.faces, m.verts[0], m.uv, m.uv_faces, self._shell_ranges(pieces) if hems else [],
+                           m.midpoints)
+        self.shoes = shoe_rig(body, self._rest, rest.joints[0].detach(), outfit.shoes)
+        n_cut = m.verts.shape[1] + len(self.cut.edges)
+        self.faces = torch.cat([self.cut.faces, self.shoes.faces + n_cut])
+        self.types, self.n_body_verts = [*m.types, "shoes"], body.num_verts
+        tex, uv = self._with_shoe_panel(m.tex, self.cut.uv, outfit)
+        self.uv = uv
+        self.uv_faces = torch.cat([self.cut.uv_faces, self.shoes.faces + len(self.cut.uv)])
+        self.albedo = TexturedAlbedo(tex, self.uv, self.uv_faces)
+        self.face_piece = self._face_pieces(pieces, m.verts.shape[1])
+
+    def _face_pieces(self, pieces: list, n_clothed: int) -> torch.Tensor:
+        """(F',) the piece of every face: −1 the body, k the k-th of :attr:`types` (the shoes last)."""
+        vp = torch.full((n_clothed,), -1, dtype=torch.int64)
+        start = self.body.num_verts
+        for k, p in enumerate(pieces):
+            n = len(p[1].verts) * (1 if self._inner is None else 2)
+            vp[start:start + n] = k
+            start += n
+        vp[self._mid[:, 0]] = vp[self._mid[:, 1]]
+        vp = torch.cat([vp, vp[self.cut.edges[:, 0]], torch.full((len(self.shoes.rest),), len(pieces))])
+        return vp[self.faces[:, 0]]
+
+    def _shell_ranges(self, pieces: list) -> list:
+        """(first vertex, count, reach) in the clothed mesh of every piece whose hems are cut (with its inner
+        side): the shells, whose borders follow the body's face edges (reach 5: the hem about 2.5 edges in),
+        and the face openings of hoods and long hair, whose corners are rounded (reach 1.2)."""
+        out, start = [], self.body.num_verts
+        for p in pieces:
+            n = len(p[1].verts) * (1 if self._inner is None else 2)
+            if p[1].source is not None:
+                out.append((start, n, 5.0))
+            elif p[0] in ("hood", "long_hair"):
+                out.append((start, n, 1.2))
+            start += n
+        return out
+
+    def _with_shoe_panel(self, tex: torch.Tensor, uv: torch.Tensor, outfit: OutfitDraw) -> tuple:
+        """The texture with the shoe panel appended on the right, (the UVs moved into it, then the shoes')."""
+        S, P = tex.shape[0], tex.shape[1] // tex.shape[0]
+        panel = shoe_panel(S, outfit.shoes, outfit.look["shoes"]["color"])
+        moved = torch.stack([uv[:, 0] * P / (P + 1), uv[:, 1]], 1)
+        su = self.shoes.uv
+        shoe_uv = torch.stack([(P + 0.002 + 0.996 * su[:, 0]) / (P + 1), su[:, 1]], 1)
+        return torch.cat([tex, panel], 1).contiguous(), torch.cat([moved, shoe_uv]).float()
 
     def _thickness(self, m, pieces: list, n_pieces: int) -> float | None:
         """How the clothed mesh lays out each piece: its vertices alone (None), or followed by an inner side
@@ -180,13 +245,33 @@ class DressedBody:
 
         with torch.no_grad():
             out = self.body(params, **kwargs)
+        shoe_v, shoe_n = self.shoes.pose(self._rest, out.verts.detach())
         vs, ns = [], []
         for b in range(out.batch_size):
             arrays = [self._piece_arrays(p[1]) for p in self._pieces(out.verts[b], out.normals[b], out.joints[b])]
-            vs.append(midpoint_values(torch.cat([out.verts[b], *[a[0] for a in arrays]]), self._edges))
-            ns.append(midpoint_values(torch.cat([out.normals[b], *[a[1] for a in arrays]]), self._edges, unit=True))
+            v = midpoint_values(torch.cat([out.verts[b], *[a[0] for a in arrays]]), self._edges)
+            n = midpoint_values(torch.cat([out.normals[b], *[a[1] for a in arrays]]), self._edges, unit=True)
+            v, n = self.cut.apply(v, n)
+            vs.append(torch.cat([v, shoe_v[b]]))
+            ns.append(torch.cat([n, shoe_n[b]]))
         return BodyOutput(torch.stack(vs).float(), self.faces, self.uv, self.uv_faces, torch.stack(ns).float(),
                           out.joints, out.joint_names)
+
+
+def outfit_field(body, look: dict, assets=None) -> np.ndarray:
+    """(V, R) the region field an outfit's body is painted through: the look's region labels with the feet
+    (under the shoes) given to the legs' region — the trousers' colour under long legs, else skin — so no
+    painted shoe edge shows above a shoe, blurred over 16 steps (about four vertex rings, as the default
+    albedo, :mod:`.smooth_albedo`) and painted on a 1024² atlas, so painted edges (a dress's neckline,
+    bare arms) are as smooth as the hems. ``assets``: the body's :class:`~relightnet.data.sample.SynthAssets`."""
+    from ..body import REGIONS
+    from ..data.sample import prepare_assets
+    from ..data.textures import region_field
+
+    assets = prepare_assets(body) if assets is None else assets
+    ids = assets.region_labels(look["sleeves"], look["legs"], "none" if look["hair"] is None else "short").clone()
+    ids[ids == REGIONS.index("shoes")] = REGIONS.index("bottom" if look["legs"] == "long" else "skin")
+    return region_field(body.faces.cpu().numpy(), ids.numpy(), iters=16)
 
 
 def avatar_look(body, albedo="default", outfit: str | None = None) -> tuple:

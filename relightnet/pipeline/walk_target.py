@@ -29,6 +29,7 @@ class WalkingTarget:
         video: the target video. masks: a mask video (white = person) of the same frames.
         background: (H, W, 3) uint8 the true background (sRGB). n_frames, fps.
         ever: (H, W) bool pixels the person covers in some frame. always: (H, W) bool in every frame.
+        path: (T, 3) float32 the person's root translation in every frame (world, metres): the true path.
     """
 
     video: Path
@@ -38,6 +39,7 @@ class WalkingTarget:
     fps: float
     ever: np.ndarray
     always: np.ndarray
+    path: np.ndarray
 
 
 def _background(size, seed: int) -> torch.Tensor:
@@ -105,7 +107,8 @@ def walking_target(out_dir, size=(256, 256), n_frames: int = 48, fps: float = 30
             ever |= m
             always &= m
             vm.write(np.repeat(m[..., None].astype(np.uint8) * 255, 3, -1))
-    return WalkingTarget(paths[0], paths[1], truth, n_frames, fps, ever, always)
+    path = np.asarray(motion["trans"], dtype=np.float32)[:n_frames]
+    return WalkingTarget(paths[0], paths[1], truth, n_frames, fps, ever, always, path)
 
 
 def replaced_person_demo(out_dir, size: int, n_frames: int, body, n_dirs: int = 64, outfit: str = "casual",

@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from relightnet.body import REGIONS, region_labels
-from relightnet.body.garments import radial_directions, ring_surface, shell_surface
+from relightnet.body.garments import hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from relightnet.checks import InputError
 
 
@@ -105,3 +105,57 @@ def test_ring_surface_opening_and_cap(anny_body, posed):
     assert float(closed.normals[-1, 1]) > 0.99
     with pytest.raises(InputError, match="ring_surface"):
         ring_surface(verts, head, front, 1.0, 1.2, 12, 40, 0.02)
+
+
+def _grid(n: int = 9) -> tuple[torch.Tensor, torch.Tensor]:
+    """An n × n vertex grid on [0, 1]² (z = 0) in counter-clockwise triangles."""
+    y, x = torch.meshgrid(torch.linspace(0, 1, n), torch.linspace(0, 1, n), indexing="ij")
+    verts = torch.stack([x.flatten(), y.flatten(), torch.zeros(n * n)], 1)
+    i, j = torch.meshgrid(torch.arange(n - 1), torch.arange(n - 1), indexing="ij")
+    a = (i * n + j).flatten()
+    faces = torch.cat([torch.stack([a, a + 1, a + n + 1], 1), torch.stack([a, a + n + 1, a + n], 1)])
+    return verts, faces
+
+
+def _area(v: torch.Tensor, f: torch.Tensor) -> torch.Tensor:
+    """(F,) signed area of planar triangles (z = 0), positive counter-clockwise."""
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+
+def test_iso_clip_cuts_along_the_iso_line_through_triangles():
+    verts, faces = _grid()
+    # A line oblique to every edge: field = x + 0.37 y, kept where >= 0.61.
+    field = verts[:, 0] + 0.37 * verts[:, 1]
+    out, edges, t = iso_clip(faces, field[faces], 0.61, len(verts))
+    v = torch.cat([verts, (1 - t[:, None]) * verts[edges[:, 0]] + t[:, None] * verts[edges[:, 1]]])
+    new = v[len(verts):]
+    assert len(new) > 8 and torch.allclose(new[:, 0] + 0.37 * new[:, 1], torch.full((len(new),), 0.61), atol=1e-6)
+    # The kept part: the faces wholly inside first and unchanged, same winding, exactly the area on the kept side.
+    whole = (field[faces] >= 0.61).all(1)
+    assert torch.equal(out[: int(whole.sum())], faces[whole])
+    area = _area(v, out)
+    assert float(area.min()) > 0
+    # The region x + 0.37 y >= 0.61 of the unit square: 1 minus the triangle-trapezoid left of the line.
+    kept = 1 - (0.61 - 0.37 / 2)  # the line crosses every row at x = 0.61 − 0.37 y, 0 <= x <= 1 for y in [0, 1]
+    assert abs(float(area.sum()) - kept) < 1e-6
+    # A new vertex inside the square is shared by the faces on both sides of its edge: the cut mesh stays connected.
+    uses = torch.bincount(out.flatten(), minlength=len(v))[len(verts):]
+    inner = (new[:, :2] > 1e-6).all(1) & (new[:, :2] < 1 - 1e-6).all(1)
+    assert int(uses[inner].min()) >= 2 and int(uses[~inner].min()) >= 1
+
+
+def test_hem_field_is_zero_on_the_border_and_one_inside():
+    verts, faces = _grid(11)
+    g = hem_field(faces, verts, reach=2.0)
+    on_border = (verts[:, 0] % 1 == 0) | (verts[:, 1] % 1 == 0)
+    assert float(g[on_border].abs().max()) == 0.0
+    # The distance to the border in units of 2 border edges (0.1 each), clipped at 1.
+    d = torch.stack([verts[:, 0], 1 - verts[:, 0], verts[:, 1], 1 - verts[:, 1]]).amin(0)
+    assert torch.allclose(g, (d / 0.2).clamp_max(1.0), atol=1e-6)
+    # A closed surface has no border (a seam of coincident vertices is none either): 1 everywhere.
+    ring = ring_surface(torch.randn(200, 3) * 0.1, torch.zeros(3), torch.tensor([0.0, 0.0, 1.0]), 0.3, -0.3, 6, 16,
+                        0.01, cap=True)
+    g = hem_field(ring.faces, ring.verts)
+    bottom = ring.verts[:, 1] < -0.29
+    assert float(g[bottom].max()) < 1e-6 and float(g[~bottom].min()) > 0.1  # the seam column is no border

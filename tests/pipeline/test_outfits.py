@@ -42,7 +42,8 @@ def test_dressed_mesh_is_the_body_then_its_garments_every_frame(coat, anny_body)
     V = anny_body.num_verts
     assert torch.equal(out.verts[:, :V], body.verts.float()) and out.verts.shape[1] == coat.num_verts
     assert torch.equal(out.faces[: anny_body.faces.shape[0]], anny_body.faces)
-    assert coat.types == garment_types(coat.outfit.garments) == ["open_coat", "trousers", "hat", "volume_hair"]
+    assert coat.types == [*garment_types(coat.outfit.garments), "shoes"] == ["open_coat", "trousers", "hat",
+                                                                             "volume_hair", "shoes"]
     assert coat.albedo.uv_faces.shape == out.faces.shape and int(coat.albedo.uv_faces.max()) < len(coat.albedo.uv)
     # Skinned: garment vertices move with the body (the coat's sleeves swing with the arms).
     move_body = (body.verts[2] - body.verts[0]).norm(dim=1).max()
@@ -56,17 +57,28 @@ def test_dressed_mesh_is_the_body_then_its_garments_every_frame(coat, anny_body)
 def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
     from relightnet.data.clothed import clothed_mesh
     from relightnet.data.sample import prepare_assets
-    from relightnet.data.textures import paint_albedo
+    from relightnet.data.textures import paint_albedo, uv_atlas
+    from relightnet.pipeline.outfits import outfit_field
 
     a = prepare_assets(anny_body)
     look, g = coat.outfit.look, coat.outfit.garments
-    field = a.region_field(look["sleeves"], look["legs"], "short")
+    field = outfit_field(anny_body, look, a)  # painted as the avatar paints: its field, a 1024² atlas
+    atlas = uv_atlas(anny_body, 1024)
     r = anny_body()
     m = clothed_mesh(g, look, r.verts, r.normals, r.joints, anny_body, a.garment_tables(),
-                     paint_albedo(a.atlas, field, look), field, a.atlas)
+                     paint_albedo(atlas, field, look), field, atlas)
     out = coat()
-    assert torch.equal(out.faces, m.faces) and torch.allclose(out.verts[0], m.verts[0], atol=1e-6)
-    assert torch.allclose(out.normals[0], m.normals[0], atol=1e-5) and torch.equal(coat.albedo.tex, m.tex)
+    n = m.verts.shape[1]  # the clothed mesh's vertices come first, then the hems' new ones, then the shoes'
+    assert torch.allclose(out.verts[0, :n], m.verts[0], atol=1e-6)
+    assert torch.allclose(out.normals[0, :n], m.normals[0], atol=1e-5)
+    assert out.verts.shape[1] == n + len(coat.cut.edges) + len(coat.shoes.rest)
+    # Every face the hems do not cut is the clothed mesh's, in its order; the body's are all kept.
+    whole = coat.cut.faces[: int((coat.cut.faces < n).all(1).sum())]
+    assert torch.equal(out.faces[: m.n_body_faces], m.faces[: m.n_body_faces])
+    assert len(whole) < len(m.faces) and bool(torch.isin(whole.flatten(), m.faces.flatten()).all())
+    # The texture: the clothed mesh's panels, then the shoe panel.
+    S = m.tex.shape[0]
+    assert torch.equal(coat.albedo.tex[:, : m.tex.shape[1]], m.tex) and coat.albedo.tex.shape[1] == m.tex.shape[1] + S
 
 
 def test_cloth_shadows_the_body_in_the_one_prt(coat, anny_body):
