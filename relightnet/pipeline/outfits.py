@@ -122,7 +122,9 @@ def draw_outfit(spec: str) -> OutfitDraw:
 
 class DressedBody:
     """An Anny body wearing an outfit (module docstring); call it like the body model. ``hems=False`` keeps the
-    generator's face-wise garment borders (for comparison) instead of cutting them smooth.
+    generator's face-wise garment borders (for comparison) instead of cutting them smooth; ``subdivide=True``
+    splits the cloth's outer sides once as the generator does for its ground truth (4× the cloth's faces; the
+    avatar job keeps them as built: it ray casts every vertex of every frame).
 
     Attributes:
         body: the wrapped :class:`~relightnet.body.AnnyBody`. outfit: the :class:`OutfitDraw`.
@@ -133,7 +135,7 @@ class DressedBody:
         n_body_verts: V, the body's vertex count (its vertices come first).
     """
 
-    def __init__(self, body, outfit: OutfitDraw, hems: bool = True) -> None:
+    def __init__(self, body, outfit: OutfitDraw, hems: bool = True, subdivide: bool = False) -> None:
         from ..body import AnnyBody
         from ..data.clothed import clothed_mesh
         from ..data.sample import prepare_assets
@@ -154,7 +156,7 @@ class DressedBody:
         self._topo = None
         pieces = self._pieces(rest.verts[0], rest.normals[0], rest.joints[0])
         m = clothed_mesh(outfit.garments, look, rest.verts.detach(), rest.normals.detach(), rest.joints.detach(),
-                         body, self._tab, tex, self._field, atlas)
+                         body, self._tab, tex, self._field, atlas, subdivide)
         n_pieces = sum(len(p[1].verts) for p in pieces)
         self._edges = m.midpoints[:, 1:]  # the subdivided outer sides' midpoints follow every frame's pieces
         self._mid = m.midpoints

@@ -66,7 +66,7 @@ def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
     atlas = uv_atlas(anny_body, 1024)
     r = anny_body()
     m = clothed_mesh(g, look, r.verts, r.normals, r.joints, anny_body, a.garment_tables(),
-                     paint_albedo(atlas, field, look), field, atlas)
+                     paint_albedo(atlas, field, look), field, atlas, subdivide=False)
     out = coat()
     n = m.verts.shape[1]  # the clothed mesh's vertices come first, then the hems' new ones, then the shoes'
     assert torch.allclose(out.verts[0, :n], m.verts[0], atol=1e-6)
@@ -79,6 +79,12 @@ def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
     # The texture: the clothed mesh's panels, then the shoe panel.
     S = m.tex.shape[0]
     assert torch.equal(coat.albedo.tex[:, : m.tex.shape[1]], m.tex) and coat.albedo.tex.shape[1] == m.tex.shape[1] + S
+    # subdivide=True: the generator's own ground-truth mesh (its cloth's outer sides split once)
+    fine = clothed_mesh(g, look, r.verts, r.normals, r.joints, anny_body, a.garment_tables(),
+                        paint_albedo(atlas, field, look), field, atlas)
+    out = DressedBody(anny_body, coat.outfit, subdivide=True)()
+    nf = fine.verts.shape[1]
+    assert len(fine.midpoints) > 0 and nf > n and torch.allclose(out.verts[0, :nf], fine.verts[0], atol=1e-6)
 
 
 def test_cloth_shadows_the_body_in_the_one_prt(coat, anny_body):
