@@ -36,12 +36,16 @@ from .geometry import check_blend_geometry
 logger = logging.getLogger(__name__)
 
 __all__ = ["CYCLES_TO_RELIGHTNET", "CyclesFrame", "configure_cycles", "open_blend", "read_image_pixels",
-           "render_current", "render_blend", "check_render_settings", "MAX_SAMPLES", "MAX_FRAMES"]
+           "render_current", "render_blend", "check_render_settings", "MAX_SAMPLES", "MAX_FRAMES",
+           "MAX_DENOISE_PIXELS"]
 
 #: Most Cycles samples per pixel a .blend may ask for (relightnet's references use 64-1024).
 MAX_SAMPLES = 4096
 #: Most frames rendered from one .blend (an hour at 30 fps is 108,000).
 MAX_FRAMES = 200_000
+#: The largest render OpenImageDenoise may denoise within the 2 GB command budget: denoising held
+#: ~700 bytes a pixel on top of the render (a 2000² render: 3.6 GB peak denoised, 0.87 GB not).
+MAX_DENOISE_PIXELS = 1_500_000
 
 #: relightnet's pixel values are π times Cycles' for the same scene (module docstring).
 CYCLES_TO_RELIGHTNET = float(np.pi)
@@ -112,10 +116,12 @@ def read_image_pixels(image) -> np.ndarray:
     return np.ascontiguousarray(buf.reshape(h, w, c)[::-1])
 
 
-def check_render_settings(path, width: int, height: int, percent: int, samples: int, n_frames: int) -> None:
+def check_render_settings(path, width: int, height: int, percent: int, samples: int, n_frames: int,
+                          denoise: bool = False) -> None:
     """Refuse a .blend's render settings above the limits before Blender renders anything:
     the output size (resolution × percentage) above :func:`~relightnet.io.limits.max_pixels`
-    (``--max-pixels``), more than :data:`MAX_SAMPLES` samples or :data:`MAX_FRAMES` frames.
+    (``--max-pixels``), more than :data:`MAX_SAMPLES` samples or :data:`MAX_FRAMES` frames, a
+    denoised output (``denoise``) above :data:`MAX_DENOISE_PIXELS`.
 
     Raises:
         InputError: naming the file and the setting.
@@ -129,6 +135,10 @@ def check_render_settings(path, width: int, height: int, percent: int, samples: 
                          "(--spp overrides the file)")
     if not 1 <= int(n_frames) <= MAX_FRAMES:
         raise InputError(f"{path}: asks for {n_frames} frames; 1 to {MAX_FRAMES} are rendered (--frames)")
+    if denoise and w * h > MAX_DENOISE_PIXELS:
+        raise InputError(f"{path}: denoising a {w}x{h} render ({w * h / 1e6:.1f} MP) takes about "
+                         f"{(0.5e9 + 800 * w * h) / 2**30:.1f} GiB; at most {MAX_DENOISE_PIXELS / 1e6:.1f} MP are "
+                         "denoised (--no-denoise, or a smaller render)")
 
 
 def open_blend(path) -> object:
@@ -281,7 +291,7 @@ def render_blend(
     todo = _frame_range(scene, frames)
     r = scene.render
     check_render_settings(path, r.resolution_x, r.resolution_y, r.resolution_percentage, scene.cycles.samples,
-                          len(todo))
+                          len(todo), bool(scene.cycles.use_denoising))
     if out is not None:
         from ..io.atomic import remove_stale
 

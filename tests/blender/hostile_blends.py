@@ -133,9 +133,15 @@ def geometry_nodes(folder: Path) -> Case:
 
 
 def slow_render(folder: Path) -> Case:
-    """2000² pixels (4 MP) × 4096 samples on one thread: hours, so the wall cap kills it mid-frame."""
+    """2000² pixels (4 MP) × 4096 samples on one thread, not denoised: hours, so the wall cap kills it mid-frame."""
     write_blend(folder / "slow.blend", side=2000, samples=4096)
-    return _render("slow.blend", expect="killed")
+    return _render("slow.blend", "--no-denoise", expect="killed")
+
+
+def denoised_4mp(folder: Path) -> Case:
+    """2000² pixels denoised (Blender's default for a new file): OpenImageDenoise would hold ~3.6 GB; refused."""
+    write_blend(folder / "denoised.blend", side=2000, samples=16)
+    return _render("denoised.blend")
 
 
 CASES = {
@@ -149,6 +155,7 @@ CASES = {
     "blend-subdivision-level-11": subdivided_cube,
     "blend-array-of-5e6": arrayed_cube,
     "blend-geometry-nodes": geometry_nodes,
+    "blend-4MP-denoised": denoised_4mp,
 }
 #: Wall-clock cap of the killed case (seconds): long enough for Blender to start rendering.
 KILL_AFTER = 20.0

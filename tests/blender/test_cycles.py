@@ -111,6 +111,10 @@ def test_render_settings_of_a_blend_are_bounded(monkeypatch):
     with pytest.raises(InputError, match="1000000 frames"):
         check_render_settings("a.blend", 64, 64, 100, MAX_SAMPLES, 1_000_000)
     check_render_settings("a.blend", 64, 64, 100, MAX_SAMPLES, MAX_FRAMES)
+    check_render_settings("a.blend", 1200, 1200, 100, 64, 1, denoise=True)  # 1.44 MP: denoised
+    with pytest.raises(InputError, match=r"a\.blend: denoising a 2000x2000 render \(4\.0 MP\) takes about 3\.4 GiB"):
+        check_render_settings("a.blend", 2000, 2000, 100, 64, 1, denoise=True)
+    check_render_settings("a.blend", 2000, 2000, 100, 64, 1)  # not denoised: within the pixel limit
 
 
 def test_what_a_killed_render_left_is_removed_by_the_next_render(tmp_path):

@@ -30,6 +30,7 @@ REFUSED = {
     "blend-subdivision-level-11": "ask for 25,165,824 faces",
     "blend-array-of-5e6": "ask for 30,000,000 faces",
     "blend-geometry-nodes": "a geometry-nodes modifier",
+    "blend-4MP-denoised": "denoising a 2000x2000 render (4.0 MP) takes about 3.4 GiB",
 }
 
 
