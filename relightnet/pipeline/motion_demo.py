@@ -2,11 +2,12 @@
 
 The source is made here, so that its true motion is known: Anny in the ``dress`` outfit (a
 different-looking person from the avatar) walks in place, turned 30° from the camera, over the
-generator's procedural background, lit by a key light plus ambient. The job then runs as a user
-would: ``avatar --motion-from source.mp4`` (the shipped segmentation finds the landmarks,
+generator's procedural background, lit by a key light plus ambient. The job then runs as
+``avatar --motion-from source.mp4`` does (the shipped segmentation finds the landmarks,
 :mod:`relightnet.fit` fits Anny to them, the motion is retargeted to the avatar's body with its
 feet held) into the demo's target, lit by the light estimated there; ``side_by_side.mp4`` shows
-source | result. The fit is compared with the source's true joints (MPJPE, hips aligned).
+source | result. The fit is compared with the source's true landmarks (PA-MPJPE: after the best
+rotation, scale and translation per frame).
 """
 
 from __future__ import annotations
