@@ -210,6 +210,8 @@ def plate_seen(dirs: torch.Tensor, view: PlateView, fade_deg: float = SEEN_FADE_
     from .frames import light_to_world
 
     check_shape(dirs, ["N", 3], name="dirs")
+    if not fade_deg > 0:
+        raise InputError(f"plate_seen: fade_deg must be > 0 degrees, got {fade_deg}")
     x, y, z = light_to_world(dirs).unbind(-1)
     depth = (-z).clamp_min(1e-12)
     ax, ay = torch.atan2(x, depth), torch.atan2(y, depth)  # angles right of and above the axis

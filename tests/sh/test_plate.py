@@ -122,6 +122,8 @@ def test_plate_seen_is_its_frame_with_a_soft_edge():
     assert float(plate_seen(-toward(0, 0), view)) == 0.0  # behind the camera
     with pytest.raises(InputError, match="field of view"):
         plate_view(90, 160, 170.0)
+    with pytest.raises(InputError, match="fade_deg"):
+        plate_seen(toward(0, 0), view, 0.0)
 
 
 def test_combination_takes_the_plate_where_it_was_seen():
