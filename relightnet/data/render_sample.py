@@ -174,6 +174,8 @@ class ClipGeometry:
         regions: (V, R) the smoothed clothing-region field of the outfit (garment vertices one-hot).
         covered: (F,) bool body faces hidden under garments; n_body_faces: the body's face count
             (the body's faces come first, then the garments').
+        midpoints: (M, 3) int64 (vertex, endpoint a, endpoint b) of the garments' subdivided outer
+            sides' midpoints (their PRT: :func:`relightnet.prt.refined_transport`).
     """
 
     verts: torch.Tensor
@@ -194,6 +196,7 @@ class ClipGeometry:
     garments: dict
     covered: torch.Tensor
     n_body_faces: int
+    midpoints: torch.Tensor
 
 
 def _geometry(cfg: SynthConfig, person: PersonStage, rv: np.random.Generator) -> ClipGeometry:
@@ -207,7 +210,7 @@ def _geometry(cfg: SynthConfig, person: PersonStage, rv: np.random.Generator) ->
                         albedo=TexturedAlbedo(m.tex, m.uv, m.uv_faces), box=box, pitch=pitch, R=R,
                         world_to_camera=w2c, phenotype=person.phenotype, pose=person.pose, yaw=yaw, view=view,
                         outfit=person.outfit, regions=m.field, garments=person.garments, covered=m.covered,
-                        n_body_faces=m.n_body_faces)
+                        n_body_faces=m.n_body_faces, midpoints=m.midpoints)
 
 
 def _person_streams(cfg: SynthConfig, split: str, index: int, ss, n_frames: int | None) -> dict:

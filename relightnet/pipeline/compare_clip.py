@@ -115,17 +115,18 @@ def _render_3d(maps: dict, light: torch.Tensor) -> torch.Tensor:
 
 def _clip_transport(geometry, t: int, lmax: int, n_dirs: int, bounces: int, prt_seed) -> torch.Tensor:
     """Frame ``t``'s PRT (V, K) in the camera's light frame, cast in the frame the generator casts it in
-    (the person's world frame, before the view's yaw: the same directions there) and turned into the
-    camera's (:func:`relightnet.data.person.transport_to_camera`)."""
+    (the person's world frame, before the view's yaw: the same directions there), its garments'
+    midpoints ray cast only at shadow edges as there (:func:`relightnet.prt.refined_transport`), and
+    turned into the camera's (:func:`relightnet.data.person.transport_to_camera`)."""
     from ..data.person import transport_to_camera
-    from ..prt import vertex_transport
+    from ..prt import refined_transport
 
     w2c = geometry.world_to_camera.double()
     R, tr = w2c[:3, :3], w2c[:3, 3]
     v_world = ((geometry.verts[t].double() - tr) @ R).float()  # v_cam = R v_world + tr
     n_world = (geometry.normals[t].double() @ R).float()
-    Tw = vertex_transport(v_world, geometry.faces, n_world, lmax=lmax, n_dirs=n_dirs, occlusion=True,
-                          bounces=bounces, seed=prt_seed, threads=torch.get_num_threads())
+    Tw = refined_transport(v_world, geometry.faces, n_world, geometry.midpoints, lmax=lmax, n_dirs=n_dirs,
+                           bounces=bounces, seed=prt_seed, threads=torch.get_num_threads(), manifold="ignore")
     return transport_to_camera(Tw, R, lmax)
 
 
