@@ -92,4 +92,6 @@ def reset():
     bpy = import_bpy()
     with quiet((1,)):
         bpy.ops.wm.read_factory_settings(use_empty=True)
+    _drop_session_tempdir(bpy)  # factory settings make Blender's TMPDIR folder again
+    bpy.context.preferences.filepaths.use_scripts_auto_execute = False
     return bpy
