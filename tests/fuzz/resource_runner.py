@@ -67,6 +67,15 @@ runpy.run_module("relightnet.cli", run_name="__main__", alter_sys=True)
 """
 
 
+def _vm_hwm(pid: int) -> int | None:
+    """A live process's peak RSS in bytes (``VmHWM``), or None if it cannot be read."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return int(next(line.split()[1] for line in f if line.startswith("VmHWM:"))) * 1024
+    except (OSError, StopIteration, ValueError):
+        return None
+
+
 def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
     """Run ``relightnet *case.argv`` in ``folder`` capped; what it left in ``folder`` and its TMPDIR."""
     tmp = folder / "_tmp"
@@ -79,13 +88,14 @@ def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
         t = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(AS_CAP), str(peak_file), *case.argv], cwd=folder,
                                 env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err)
-        timed_out = False
+        timed_out, hwm = False, None
         while True:
             pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
             if pid:
                 break
             if time.perf_counter() - t > wall:
                 timed_out = True
+                hwm = _vm_hwm(proc.pid)  # read while it lives: a killed child writes no peak file
                 proc.kill()
                 _, status, usage = os.wait4(proc.pid, 0)
                 break
@@ -97,8 +107,8 @@ def run_capped(case: Case, folder: Path, wall: float = WALL_CAP) -> Result:
     try:
         rss = int(peak_file.read_text()) * 1024
         peak_file.unlink()
-    except (OSError, ValueError):  # killed before its exit handler ran
-        rss = usage.ru_maxrss * 1024
+    except (OSError, ValueError):  # killed before its exit handler ran: its high-water mark read before the kill
+        rss = hwm if timed_out and hwm is not None else usage.ru_maxrss * 1024
     left = sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
                   if p not in before and p.name != "_stderr" and p != tmp
                   and str(p.relative_to(folder)) not in case.outputs + THIRD_PARTY_TMP and p.is_file())
