@@ -33,7 +33,7 @@ from ..checks import InputError, check_shape
 from ..sh import light_to_world, sh_basis, sh_count
 from .interreflection import bounce_operator, check_albedo
 from .mesh_checks import check_mesh, check_normals, mesh_scale
-from .transport import transport_directions
+from .transport import cast_lit, transport_directions
 from .visibility import RayEngine, VertexRays, make_engine, vertex_rays
 
 __all__ = ["SHADOW_EDGE", "refined_transport"]
@@ -61,13 +61,7 @@ def _cast(eng: RayEngine, idx: torch.Tensor, verts, normals, dirs, offset: float
     """Rays of the vertices ``idx``: (lit (N, D) float32 cosine where visible, rays with global vertex ids,
     their hits or None)."""
     rays = vertex_rays(verts[idx], normals[idx], dirs, offset, scale=scale)
-    if hits:
-        h = eng.intersect(rays.origins, rays.dirs)
-        blocked = h.prim >= 0
-    else:
-        h, blocked = None, eng.occluded(rays.origins, rays.dirs)
-    lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
-    lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
+    lit, h = cast_lit(eng, rays, hits)
     rays = dataclasses.replace(rays, vertex=idx.numpy()[rays.vertex], n_verts=verts.shape[0])
     return lit, rays, h
 

@@ -52,6 +52,19 @@ def _vertex_subset(vertices, n: int, bounces: int) -> torch.Tensor | None:
     return idx
 
 
+def cast_lit(eng, rays, with_hits: bool):
+    """Cast ``rays`` (:class:`~relightnet.prt.VertexRays`) with ``eng``: (lit (N, D) float32, the ray's
+    cosine where it escapes and 0 where it is blocked; the hits, when ``with_hits``, else None)."""
+    if with_hits:
+        hits = eng.intersect(rays.origins, rays.dirs)
+        blocked = hits.prim >= 0
+    else:
+        hits, blocked = None, eng.occluded(rays.origins, rays.dirs)
+    lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
+    lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
+    return lit, hits
+
+
 def vertex_transport(
     verts,
     faces,
@@ -116,13 +129,7 @@ def vertex_transport(
     sub_v, sub_n = (verts, normals) if idx is None else (verts[idx], normals[idx])
     rays = vertex_rays(sub_v, sub_n, dirs_world, offset, scale=mesh_scale(verts))
     eng = make_engine(verts, faces, engine, threads)
-    if bounces:
-        hits = eng.intersect(rays.origins, rays.dirs)
-        blocked = hits.prim >= 0
-    else:
-        hits, blocked = None, eng.occluded(rays.origins, rays.dirs)
-    lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
-    lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
+    lit, hits = cast_lit(eng, rays, bool(bounces))
     T = torch.from_numpy(lit) @ Yw
     if idx is not None:
         return torch.zeros(verts.shape[0], T.shape[1]).index_copy_(0, idx, T)

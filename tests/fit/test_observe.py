@@ -1,12 +1,11 @@
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.fit import Observations, fill_missing, observe_frames, world_to_view_axes
+from relightnet.fit import Observations, fill_missing, observe_frames, silhouette_targets, world_to_view_axes
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fuzz"))
 from resource_fit import person_clip  # noqa: E402  (the fit's resource cases render the same person)
@@ -50,27 +49,6 @@ def test_float_masks_given_are_packed_and_checked():
         Observations(torch.zeros(2, 33, 5), torch.zeros(2, 33, 3), obs.masks, torch.ones(2, dtype=torch.bool), (8, 8))
 
 
-def _old_silhouette_targets(masks: torch.Tensor, n_outline: int = 256):
-    """What the fit computed before its masks were packed (issue 27): the same steps on (B, H, W) float masks,
-    one float32 map per frame, stacked. Kept here as the reference the packed path must equal."""
-    from scipy import ndimage
-
-    outs, lines, valid = [], [], []
-    for m in masks.numpy() > 0.5:
-        if not m.any():
-            outs.append(np.zeros(m.shape, np.float32))
-            lines.append(np.zeros((n_outline, 2), np.float32))
-            valid.append(False)
-            continue
-        outs.append(ndimage.distance_transform_edt(~m).astype(np.float32))
-        edge = m & ~ndimage.binary_erosion(m)
-        ys, xs = np.nonzero(edge)
-        pick = np.linspace(0, len(xs) - 1, n_outline).round().astype(int)
-        lines.append(np.stack([xs[pick] + 0.5, ys[pick] + 0.5], 1).astype(np.float32))
-        valid.append(True)
-    return torch.from_numpy(np.stack(outs))[:, None], torch.from_numpy(np.stack(lines)), torch.tensor(valid)
-
-
 @pytest.mark.slow  # a clip rendered and segmented
 def test_a_clips_packed_evidence_is_the_old_full_size_evidence_bit_for_bit(tmp_path, fit_body):
     """The fit keeps a video's masks packed now, not as one float (H, W) mask per frame. On a generated clip
@@ -91,6 +69,6 @@ def test_a_clips_packed_evidence_is_the_old_full_size_evidence_bit_for_bit(tmp_p
     assert torch.equal(obs.masks.unpack(), old > 0.5)
     for a in range(0, 5, 2):  # windows of 2 frames, the last one short
         new = _evidence(fit_body, obs, a, a + 2)["sil"]
-        ref = _old_silhouette_targets(old[a:a + 2])
-        assert torch.equal(new.outside, ref[0]) and torch.equal(new.outline, ref[1])
-        assert torch.equal(new.valid, ref[2])
+        ref = silhouette_targets(old[a:a + 2], size=obs.size)  # the same steps on the old float masks
+        assert torch.equal(new.outside, ref.outside) and torch.equal(new.outline, ref.outline)
+        assert torch.equal(new.valid, ref.valid)
