@@ -78,7 +78,7 @@ def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody |
     """
     path = Path(path)
     frames, fps, photo = media_frames(path)
-    obs = observe_frames(frames, models, name=str(path))
+    obs = observe_frames(frames, models, name=str(path), window=options.window)
     if photo and not bool(obs.found[0]):
         raise InputError(f"{path}: no person found (expected a photo showing a person)")
     intr = exif_intrinsics(path, obs.size) if photo else None

@@ -96,8 +96,9 @@ def _evidence(fb: FitBody, obs: Observations, start: int, stop: int) -> dict:
     o = obs.slice(start, stop)
     w = landmark_weights(o.landmarks[..., 3], fb.landmarks.mapped)
     ev = {"lm": o.landmarks, "w": w, "world": world_to_view_axes(o.world), "scale": person_scale(o.landmarks, w)}
-    # this window's only (the next window's are made after these are dropped)
-    ev["sil"] = silhouette_targets(o.masks.unpack(), size=obs.size) if o.masks is not None else None
+    # this window's only (the next window's are made after these are dropped), from its masks at the working
+    # resolution (stored so when the masks were packed for this window; resampled here otherwise)
+    ev["sil"] = silhouette_targets(o.masks.working()[0], size=obs.size, height=None) if o.masks is not None else None
     return ev
 
 
