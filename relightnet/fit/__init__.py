@@ -43,7 +43,7 @@ from .observe import Observations, fill_missing, observe_frames, world_to_view_a
 from .preview import CHUNK_PIXELS, chunk_frames, fit_camera, fit_meshes, fit_silhouettes, overlay_frames
 from .prior import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
 from .retarget import leg_length, retarget_motion, to_default_avatar
-from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
+from .smooth import FOOT_SLOTS, SMOOTH_BLOCK, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
 from .solve import MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
@@ -74,7 +74,7 @@ __all__ = [
     "CHUNK_PIXELS", "chunk_frames", "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames",
     "FIT_BONES", "JOINT_LIMITS", "limit_bounds", "limit_penalty", "rest_penalty",
     "leg_length", "retarget_motion", "to_default_avatar",
-    "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
+    "FOOT_SLOTS", "SMOOTH_BLOCK", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
     "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
     "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORK_ASPECT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term",
     "outline_matches", "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "working_size",
