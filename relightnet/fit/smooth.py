@@ -1,4 +1,4 @@
-"""The final smoothing pass of a video fit, and the fit's placement in a world frame.
+"""The final smoothing pass of a video fit, and the fit's placement in a world frame (both a block of frames at a time).
 
 :func:`smooth_motion` smooths rotations as matrices (a Gaussian-weighted mean over
 neighbouring frames, projected back onto rotations: no wrap-around at 180° as rotation
@@ -111,10 +111,14 @@ def place_in_world(result: FitResult, fb: FitBody, fps: float = 30.0) -> AnnyMot
         new_sub = sub.clone()
         new_sub[:, 0] = matrix_to_rotvec(R @ G)
         new_trans = (q + trans) @ R.T - q
-        pts, _ = fb.points(new_sub.float(), new_trans.float(), rest)
+        feet = []  # the lowest foot point of each block of frames (a long video's points are never all held)
+        for a in range(0, sub.shape[0], SMOOTH_BLOCK):
+            pts, _ = fb.points(new_sub[a:a + SMOOTH_BLOCK].float(), new_trans[a:a + SMOOTH_BLOCK].float(), rest)
+            feet.append(float(pts[:, list(FOOT_SLOTS), 1].min()))
+            if a == 0:
+                hips = 0.5 * (pts[0, 23] + pts[0, 24]).double()
     shift = torch.zeros(3, dtype=torch.float64)
-    shift[1] = -float(pts[:, list(FOOT_SLOTS), 1].min())
-    hips = 0.5 * (pts[0, 23] + pts[0, 24]).double()
+    shift[1] = -min(feet)
     shift[0], shift[2] = -hips[0], -hips[2]
     new_trans = new_trans + shift
     view = torch.eye(4, dtype=torch.float64)

@@ -73,3 +73,16 @@ def test_a_long_fit_is_smoothed_in_blocks_as_by_the_whole_matrix():
     short = _result(T=SMOOTH_BLOCK, seed=3)
     w = gaussian_weights(SMOOTH_BLOCK, 1.5)
     assert torch.equal(smooth_motion(short, 1.5).trans, (w @ short.trans.double()).to(short.trans.dtype))
+
+
+def test_a_long_fit_is_placed_in_the_world_a_block_of_frames_at_a_time(fit_body, monkeypatch):
+    """place_in_world poses the body's points a block of frames at a time (their lowest foot point and the first
+    frame's hips are all it keeps): the same motion as from all frames at once."""
+    import relightnet.fit.smooth as smooth
+
+    res = _result(T=7, seed=4)
+    whole = place_in_world(res, fit_body)
+    monkeypatch.setattr(smooth, "SMOOTH_BLOCK", 3)
+    blocks = place_in_world(res, fit_body)
+    torch.testing.assert_close(blocks.trans, whole.trans, atol=1e-6, rtol=0)
+    assert torch.equal(blocks.pose, whole.pose)
