@@ -44,7 +44,7 @@ from .preview import CHUNK_PIXELS, chunk_frames, fit_camera, fit_meshes, fit_sil
 from .prior import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
 from .retarget import leg_length, retarget_motion, to_default_avatar
 from .smooth import FOOT_SLOTS, SMOOTH_BLOCK, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
-from .solve import MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
+from .solve import MAX_FIT_FRAMES, MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
                   SILHOUETTE_HEIGHT,
@@ -75,7 +75,7 @@ __all__ = [
     "FIT_BONES", "JOINT_LIMITS", "limit_bounds", "limit_penalty", "rest_penalty",
     "leg_length", "retarget_motion", "to_default_avatar",
     "FOOT_SLOTS", "SMOOTH_BLOCK", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
-    "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
+    "MAX_FIT_FRAMES", "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
     "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORK_ASPECT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term",
     "outline_matches", "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "working_size",
     "world_term",

@@ -45,7 +45,7 @@ from .terms import (
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["FitWeights", "FitResult", "fit_observations", "MAX_WINDOW_PIXELS"]
+__all__ = ["FitWeights", "FitResult", "fit_observations", "MAX_WINDOW_PIXELS", "MAX_FIT_FRAMES"]
 
 
 @dataclass(frozen=True)
@@ -125,6 +125,15 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
 #: while they are resampled to the working resolution): 8 frames at the 12.5 MP pixel limit, 400 MB. A longer
 #: window of such frames is refused, not allowed to pass the budget.
 MAX_WINDOW_PIXELS = 100_000_000
+
+#: Frames of one video fit (5.5 minutes at 30 fps). What a fit holds per frame for the whole video is
+#: its packed mask at the working resolution (at most :data:`relightnet.fit.MAX_FRAME_BYTES`, 28.5 KiB,
+#: for a mask that does not compress; ~1 KB for a person's), its landmarks and its fitted pose (~4 KB),
+#: and the motion made of it (~9 KB a frame, measured at 10,000 frames): at most ~0.4 GiB at this limit,
+#: on top of the ~1.4 GiB a 12.5 MP frame's segmentation and window take, so a fit within the limits
+#: stays within the 2 GiB budget (SECURITY.md, "Memory budget"). Longer videos are refused before any
+#: work (fit them in parts).
+MAX_FIT_FRAMES = 10_000
 
 #: A shape fit steps the shape every this many iterations, on a first-order model of the rest
 #: body (:func:`relightnet.fit.rest_near`) re-linearised every :data:`RELINEARISE_EVERY`
@@ -228,11 +237,15 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         :class:`FitResult` (unsmoothed; see :func:`relightnet.fit.smooth_motion`).
 
     Raises:
-        InputError: iterations or window below 1; a window of more pixels than :data:`MAX_WINDOW_PIXELS`.
+        InputError: iterations or window below 1; a window of more pixels than :data:`MAX_WINDOW_PIXELS`;
+            more frames than :data:`MAX_FIT_FRAMES`.
     """
     if iters < 1 or warm_iters < 1 or window < 1 or not 0 <= tol < 1:
         raise InputError(f"fit: iters, warm_iters and window must be >= 1 and tol in [0, 1), got {iters}, "
                          f"{warm_iters}, {window}, {tol}")
+    if obs.n_frames > MAX_FIT_FRAMES:
+        raise InputError(f"fit: {obs.n_frames} frames; at most {MAX_FIT_FRAMES} frames are fitted at once "
+                         "(fit the video in parts)")
     H, W = (int(x) for x in obs.size)
     n = min(window, obs.n_frames)
     if obs.masks is not None and n > 1 and n * H * W > MAX_WINDOW_PIXELS:
