@@ -82,7 +82,7 @@ def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody |
 
     path = Path(path)
     if path.suffix.lower() not in PHOTO_SUFFIXES and (n := count_frames(path)) > MAX_FIT_FRAMES:
-        raise InputError(f"{path}: {n} frames; at most {MAX_FIT_FRAMES} frames are fitted (fit the video in parts)")
+        raise InputError(f"{path}: {n} frames; at most {MAX_FIT_FRAMES} frames are fitted (cut the video into parts)")
     frames, fps, photo = media_frames(path)
     obs = observe_frames(frames, models, name=str(path), window=options.window)
     if photo and not bool(obs.found[0]):

@@ -121,18 +121,18 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
     return total, e2d, pts
 
 
-#: Pixels of silhouette evidence one window holds at the frames' size (frames × H × W: its masks, float32
-#: while they are resampled to the working resolution): 8 frames at the 12.5 MP pixel limit, 400 MB. A longer
-#: window of such frames is refused, not allowed to pass the budget.
+#: Pixels of silhouette evidence one window holds at the frames' size (frames × H × W: its float32 distance
+#: maps at the working resolution, which is the frames' size for a person under 240 px tall): 8 frames at the
+#: 12.5 MP pixel limit, 400 MB. A longer window of such frames is refused, not allowed to pass the budget.
 MAX_WINDOW_PIXELS = 100_000_000
 
 #: Frames of one video fit (5.5 minutes at 30 fps). What a fit holds per frame for the whole video is
 #: its packed mask at the working resolution (at most :data:`relightnet.fit.MAX_FRAME_BYTES`, 28.5 KiB,
 #: for a mask that does not compress; ~1 KB for a person's), its landmarks and its fitted pose (~4 KB),
-#: and the motion made of it (~9 KB a frame, measured at 10,000 frames): at most ~0.4 GiB at this limit,
+#: and the motion made of it (~10 KB a frame, measured at 10,000 frames): at most ~0.45 GiB at this limit,
 #: on top of the ~1.4 GiB a 12.5 MP frame's segmentation and window take, so a fit within the limits
 #: stays within the 2 GiB budget (SECURITY.md, "Memory budget"). Longer videos are refused before any
-#: work (fit them in parts).
+#: work (cut them into parts).
 MAX_FIT_FRAMES = 10_000
 
 #: A shape fit steps the shape every this many iterations, on a first-order model of the rest
@@ -245,7 +245,7 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
                          f"{warm_iters}, {window}, {tol}")
     if obs.n_frames > MAX_FIT_FRAMES:
         raise InputError(f"fit: {obs.n_frames} frames; at most {MAX_FIT_FRAMES} frames are fitted at once "
-                         "(fit the video in parts)")
+                         "(cut the video into parts)")
     H, W = (int(x) for x in obs.size)
     n = min(window, obs.n_frames)
     if obs.masks is not None and n > 1 and n * H * W > MAX_WINDOW_PIXELS:
