@@ -64,8 +64,10 @@ class PackedMasks:
         size: (H, W) of the frames.
         window: the fit's window (frames fitted together, counted from the first): each complete
             window of appended masks is resampled to its working resolution
-            (:func:`relightnet.fit.working_size`), at most :data:`MAX_FRAME_BYTES` a frame. None:
-            masks are kept at (H, W).
+            (:func:`relightnet.fit.working_size`), at most :data:`MAX_FRAME_BYTES` a frame; the frames of
+            the window being appended (the video's last window, short) stay at (H, W) until it is complete
+            (at most ``window`` − 1 frames: ≤ 12.5 MB within :data:`~relightnet.fit.MAX_WINDOW_PIXELS`).
+            None: masks are kept at (H, W).
         height: the working height of the person (:data:`~relightnet.fit.SILHOUETTE_HEIGHT`).
 
     Append (H, W) masks (bool, or values in {0, 1}: above 0.5 is the person) with :meth:`append`
