@@ -37,17 +37,18 @@ from .job import (
                   write_preview,
 )
 from .landmarks import LANDMARK_SOURCES, AnnyLandmarks, landmark_weights
-from .masks import PackedMasks
+from .masks import MAX_FRAME_BYTES, PackedMasks
 from .metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
 from .observe import Observations, fill_missing, observe_frames, world_to_view_axes
 from .preview import CHUNK_PIXELS, chunk_frames, fit_camera, fit_meshes, fit_silhouettes, overlay_frames
 from .prior import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
 from .retarget import leg_length, retarget_motion, to_default_avatar
-from .smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
-from .solve import MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
+from .smooth import FOOT_SLOTS, SMOOTH_BLOCK, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
+from .solve import MAX_FIT_FRAMES, MAX_WINDOW_PIXELS, FitResult, FitWeights, fit_observations
 from .terms import (
                   HIP_SLOTS,
                   SILHOUETTE_HEIGHT,
+                  WORK_ASPECT,
                   WORLD_UNIT,
                   SilhouetteTargets,
                   acceleration_term,
@@ -56,6 +57,7 @@ from .terms import (
                   reprojection_term,
                   silhouette_targets,
                   silhouette_term,
+                  working_size,
                   world_term,
 )
 
@@ -68,12 +70,13 @@ __all__ = [
     "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",
     "acceleration_error", "foot_skating", "landmark_error", "mask_iou", "mpjpe", "pa_mpjpe",
-    "PackedMasks", "Observations", "fill_missing", "observe_frames", "world_to_view_axes",
+    "MAX_FRAME_BYTES", "PackedMasks", "Observations", "fill_missing", "observe_frames", "world_to_view_axes",
     "CHUNK_PIXELS", "chunk_frames", "fit_camera", "fit_meshes", "fit_silhouettes", "overlay_frames",
     "FIT_BONES", "JOINT_LIMITS", "limit_bounds", "limit_penalty", "rest_penalty",
     "leg_length", "retarget_motion", "to_default_avatar",
-    "FOOT_SLOTS", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
-    "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
-    "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term", "outline_matches",
-    "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "world_term",
+    "FOOT_SLOTS", "SMOOTH_BLOCK", "gaussian_weights", "place_in_world", "smooth_motion", "smooth_rotations",
+    "MAX_FIT_FRAMES", "MAX_WINDOW_PIXELS", "FitResult", "FitWeights", "fit_observations",
+    "HIP_SLOTS", "SILHOUETTE_HEIGHT", "WORK_ASPECT", "WORLD_UNIT", "SilhouetteTargets", "acceleration_term",
+    "outline_matches", "person_scale", "reprojection_term", "silhouette_targets", "silhouette_term", "working_size",
+    "world_term",
 ]

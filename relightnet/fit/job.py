@@ -18,7 +18,7 @@ from .body_model import FitBody
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics
 from .observe import observe_frames
 from .smooth import place_in_world, smooth_motion
-from .solve import FitResult, FitWeights, fit_observations
+from .solve import MAX_FIT_FRAMES, FitResult, FitWeights, fit_observations
 
 logger = logging.getLogger(__name__)
 
@@ -74,11 +74,17 @@ def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody |
     """Fit Anny to the largest person of a photo or video.
 
     Raises:
-        InputError: no person in the photo / in any frame of the video (one line naming the file).
+        InputError: no person in the photo / in any frame of the video; a video of more than
+            :data:`~relightnet.fit.MAX_FIT_FRAMES` frames (counted from its packets, before any work).
+            One line naming the file.
     """
+    from ..io import count_frames
+
     path = Path(path)
+    if path.suffix.lower() not in PHOTO_SUFFIXES and (n := count_frames(path)) > MAX_FIT_FRAMES:
+        raise InputError(f"{path}: {n} frames; at most {MAX_FIT_FRAMES} frames are fitted (cut the video into parts)")
     frames, fps, photo = media_frames(path)
-    obs = observe_frames(frames, models, name=str(path))
+    obs = observe_frames(frames, models, name=str(path), window=options.window)
     if photo and not bool(obs.found[0]):
         raise InputError(f"{path}: no person found (expected a photo showing a person)")
     intr = exif_intrinsics(path, obs.size) if photo else None

@@ -5,7 +5,9 @@
 the video tracker of :mod:`relightnet.segment.video`), and :func:`fill_missing` interpolates
 the landmarks of frames where no person was found (they are flagged, and their mask is empty).
 The masks are kept packed (:class:`~relightnet.fit.masks.PackedMasks`: the person's box, one bit a
-pixel, deflated), so a video's evidence grows by about its outline a frame, not by a frame.
+pixel, deflated), each window of frames resampled to the fit's working resolution as soon as it is
+segmented, so a video's evidence grows by at most :data:`~relightnet.fit.MAX_FRAME_BYTES` a
+frame (~1 KB for a person's mask), not by a frame.
 """
 
 from __future__ import annotations
@@ -94,8 +96,13 @@ def fill_missing(obs: Observations, name: str = "video") -> Observations:
     return replace(obs, landmarks=lm, world=wd)
 
 
-def observe_frames(frames: Iterable[torch.Tensor], models=None, name: str = "video") -> Observations:
+def observe_frames(frames: Iterable[torch.Tensor], models=None, name: str = "video",
+                   window: int | None = 8) -> Observations:
     """Segment the largest person in each (3, H, W) sRGB frame and collect the evidence.
+
+    ``window`` is the fit's (:func:`relightnet.fit.fit_observations`): each complete window's masks are
+    kept at its working resolution (:class:`PackedMasks`), exactly the masks the fit's silhouette term
+    resamples them to; None keeps them at the frames' size. A fit with another window resamples them again.
 
     Raises:
         InputError: ``"{name}: no person found ..."`` when no frame shows a person.
@@ -105,7 +112,7 @@ def observe_frames(frames: Iterable[torch.Tensor], models=None, name: str = "vid
     lms, wds, masks, found = [], [], None, []
     for frame, res in track_person(frames, models, name=name):
         if masks is None:
-            masks = PackedMasks(tuple(frame.shape[1:]))
+            masks = PackedMasks(tuple(frame.shape[1:]), window)
         if res is None:
             lms.append(torch.zeros(_N, 5))
             wds.append(torch.zeros(_N, 3))

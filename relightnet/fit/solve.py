@@ -45,7 +45,7 @@ from .terms import (
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["FitWeights", "FitResult", "fit_observations", "MAX_WINDOW_PIXELS"]
+__all__ = ["FitWeights", "FitResult", "fit_observations", "MAX_WINDOW_PIXELS", "MAX_FIT_FRAMES"]
 
 
 @dataclass(frozen=True)
@@ -96,8 +96,9 @@ def _evidence(fb: FitBody, obs: Observations, start: int, stop: int) -> dict:
     o = obs.slice(start, stop)
     w = landmark_weights(o.landmarks[..., 3], fb.landmarks.mapped)
     ev = {"lm": o.landmarks, "w": w, "world": world_to_view_axes(o.world), "scale": person_scale(o.landmarks, w)}
-    # this window's only (the next window's are made after these are dropped)
-    ev["sil"] = silhouette_targets(o.masks.unpack(), size=obs.size) if o.masks is not None else None
+    # this window's only (the next window's are made after these are dropped), from its masks at the working
+    # resolution (stored so when the masks were packed for this window; resampled here otherwise)
+    ev["sil"] = silhouette_targets(o.masks.working()[0], size=obs.size, height=None) if o.masks is not None else None
     return ev
 
 
@@ -120,10 +121,19 @@ def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_
     return total, e2d, pts
 
 
-#: Pixels of silhouette evidence one window holds at the frames' size (frames × H × W: its masks, float32
-#: while they are resampled to the working resolution): 8 frames at the 12.5 MP pixel limit, 400 MB. A longer
-#: window of such frames is refused, not allowed to pass the budget.
+#: Pixels of silhouette evidence one window holds at the frames' size (frames × H × W: its float32 distance
+#: maps at the working resolution, which is the frames' size for a person under 240 px tall): 8 frames at the
+#: 12.5 MP pixel limit, 400 MB. A longer window of such frames is refused, not allowed to pass the budget.
 MAX_WINDOW_PIXELS = 100_000_000
+
+#: Frames of one video fit (5.5 minutes at 30 fps). What a fit holds per frame for the whole video is
+#: its packed mask at the working resolution (at most :data:`relightnet.fit.MAX_FRAME_BYTES`, 28.5 KiB,
+#: for a mask that does not compress; ~1 KB for a person's), its landmarks and its fitted pose (~4 KB),
+#: and the motion made of it (~10 KB a frame, measured at 10,000 frames): at most ~0.45 GiB at this limit,
+#: on top of the ~1.4 GiB a 12.5 MP frame's segmentation and window take, so a fit within the limits
+#: stays within the 2 GiB budget (SECURITY.md, "Memory budget"). Longer videos are refused before any
+#: work (cut them into parts).
+MAX_FIT_FRAMES = 10_000
 
 #: A shape fit steps the shape every this many iterations, on a first-order model of the rest
 #: body (:func:`relightnet.fit.rest_near`) re-linearised every :data:`RELINEARISE_EVERY`
@@ -227,11 +237,15 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         :class:`FitResult` (unsmoothed; see :func:`relightnet.fit.smooth_motion`).
 
     Raises:
-        InputError: iterations or window below 1; a window of more pixels than :data:`MAX_WINDOW_PIXELS`.
+        InputError: iterations or window below 1; a window of more pixels than :data:`MAX_WINDOW_PIXELS`;
+            more frames than :data:`MAX_FIT_FRAMES`.
     """
     if iters < 1 or warm_iters < 1 or window < 1 or not 0 <= tol < 1:
         raise InputError(f"fit: iters, warm_iters and window must be >= 1 and tol in [0, 1), got {iters}, "
                          f"{warm_iters}, {window}, {tol}")
+    if obs.n_frames > MAX_FIT_FRAMES:
+        raise InputError(f"fit: {obs.n_frames} frames; at most {MAX_FIT_FRAMES} frames are fitted at once "
+                         "(cut the video into parts)")
     H, W = (int(x) for x in obs.size)
     n = min(window, obs.n_frames)
     if obs.masks is not None and n > 1 and n * H * W > MAX_WINDOW_PIXELS:

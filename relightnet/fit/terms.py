@@ -18,7 +18,8 @@ from ..checks import check_shape
 from .camera import project_points
 
 __all__ = ["WORLD_UNIT", "HIP_SLOTS", "person_scale", "reprojection_term", "world_term", "SilhouetteTargets",
-           "SILHOUETTE_HEIGHT", "silhouette_targets", "outline_matches", "silhouette_term", "acceleration_term"]
+           "SILHOUETTE_HEIGHT", "WORK_ASPECT", "working_size", "silhouette_targets", "outline_matches",
+           "silhouette_term", "acceleration_term"]
 
 #: Metric residuals are measured in this unit (metres): BlazePose's world points are ~5 cm accurate.
 WORLD_UNIT = 0.05
@@ -94,19 +95,40 @@ class SilhouetteTargets:
     factor: tuple[float, float] = (1.0, 1.0)
 
 
-def _working_masks(masks: torch.Tensor, size, height: int) -> tuple[np.ndarray, tuple[float, float]]:
-    """(B, h, w) bool masks resampled (area average, then > 0.5) so the tallest person is about
-    ``height`` pixels (never finer than the masks or the images), and the factors (x, y) image
-    pixels → working pixels. Frames are resampled one at a time (a window of full-size frames is
-    never copied to float as a whole)."""
+#: The working box is at most this many times :data:`SILHOUETTE_HEIGHT` wide: masks wider than that
+#: (a person lying across the frame, noise) are resampled further, so that a frame's mask at the
+#: working resolution is bounded (:data:`relightnet.fit.MAX_FRAME_BYTES`). A standing or
+#: walking person (box at most 4 × as wide as tall) is never affected.
+WORK_ASPECT = 4
+
+
+def working_size(size, rows: float, cols: float, height: int = SILHOUETTE_HEIGHT,
+                 finest: float = 1.0) -> tuple[int, int]:
+    """(h, w): the working resolution of (H, W) images whose masks' box (over all frames fitted together)
+    spans ``rows`` × ``cols`` image pixels (0: no mask): the person about ``height`` pixels tall, the
+    box at most :data:`WORK_ASPECT` × ``height`` wide, never finer than the images (or ``finest`` × their size)."""
+    H, W = int(size[0]), int(size[1])
+    person = float(rows) if rows else float(H)
+    r = min(1.0, height / person, finest)
+    if cols:
+        r = min(r, WORK_ASPECT * height / float(cols))
+    return max(1, round(H * r)), max(1, round(W * r))
+
+
+def _working_masks(masks: torch.Tensor, size, height: int | None) -> tuple[np.ndarray, tuple[float, float]]:
+    """(B, h, w) bool masks resampled (area average, then > 0.5) to :func:`working_size` (``height``
+    None: the masks are at it already), and the factors (x, y) image pixels → working pixels.
+    Frames are resampled one at a time (a window of full-size frames is never copied to float as a whole)."""
     m = masks.detach().cpu()
     mh, mw = m.shape[-2:]
     H, W = (int(size[0]), int(size[1])) if size is not None else (mh, mw)
     on = m if m.dtype == torch.bool else m > 0.5
-    rows = torch.nonzero(on.any(2).any(0)).flatten()
-    person = float(rows.max() - rows.min() + 1) * H / mh if len(rows) else float(H)
-    r = min(1.0, height / person, mh / H)
-    h, w = max(1, round(H * r)), max(1, round(W * r))
+    if height is None:
+        return on.numpy(), (mw / W, mh / H)
+    rows, cols = torch.nonzero(on.any(2).any(0)).flatten(), torch.nonzero(on.any(1).any(0)).flatten()
+    person = float(rows.max() - rows.min() + 1) * H / mh if len(rows) else 0
+    across = float(cols.max() - cols.min() + 1) * W / mw if len(cols) else 0
+    h, w = working_size((H, W), person, across, height, mh / H)
     if (h, w) == (mh, mw):
         return on.numpy(), (w / W, h / H)
     out = np.empty((m.shape[0], h, w), np.bool_)
@@ -116,14 +138,15 @@ def _working_masks(masks: torch.Tensor, size, height: int) -> tuple[np.ndarray, 
 
 
 def silhouette_targets(masks: torch.Tensor, n_outline: int = 256, size=None,
-                       height: int = SILHOUETTE_HEIGHT) -> SilhouetteTargets:
+                       height: int | None = SILHOUETTE_HEIGHT) -> SilhouetteTargets:
     """Distance transforms and outline samples of (B, h, w) masks (computed once per frame).
 
     Args:
         masks: (B, h, w) person masks in [0, 1] of (H, W) images (any resolution with their aspect).
         n_outline: outline points per frame.
         size: (H, W) of the images the landmarks are in (default: the masks' size).
-        height: working height of the person in pixels (:data:`SILHOUETTE_HEIGHT`).
+        height: working height of the person in pixels (:data:`SILHOUETTE_HEIGHT`); None: the masks are
+            at their working resolution already (:meth:`relightnet.fit.PackedMasks.working`).
     """
     from scipy import ndimage
 

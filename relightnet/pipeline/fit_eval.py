@@ -93,7 +93,7 @@ def evaluate_fit_clip(cfg, index: int, fb, models, options=None) -> dict:
     frames = torch.from_numpy(sample.arrays["image_composite"]).permute(0, 3, 1, 2).float() / 255
     true_mask = torch.from_numpy(sample.arrays["mask"]).float().reshape(T, cfg.res, cfg.res)
     t0 = time.perf_counter()
-    obs = observe_frames(iter(frames), models, name=f"clip {index}")
+    obs = observe_frames(iter(frames), models, name=f"clip {index}", window=o.window)
     t_seg = time.perf_counter() - t0
     intr = camera_intrinsics(geo.camera)
     c0 = time.process_time()

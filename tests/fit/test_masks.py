@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import torch
+import torch.nn.functional as F
 
 from relightnet.checks import ShapeError
 from relightnet.fit.masks import PackedMasks
@@ -56,3 +57,64 @@ def test_a_person_at_the_pixel_limit_costs_its_outline_not_its_area():
     packed.append(person)
     assert packed.nbytes < 64 << 10
     assert torch.equal(packed.unpack()[0], torch.from_numpy(person))
+
+
+def _old_working(masks: np.ndarray, height: int) -> tuple[np.ndarray, tuple[float, float]]:
+    """What the fit did before with a window's full-size masks (``terms._working_masks`` until the masks were
+    kept at the working resolution): the person's rows over the window set the scale, each frame area-averaged."""
+    T, H, W = masks.shape
+    rows = np.flatnonzero(masks.any(2).any(0))
+    person = float(rows.max() - rows.min() + 1) if len(rows) else float(H)
+    r = min(1.0, height / person, 1.0)
+    h, w = max(1, round(H * r)), max(1, round(W * r))
+    if (h, w) == (H, W):
+        return masks, (w / W, h / H)
+    out = np.stack([(F.interpolate(torch.from_numpy(m).float()[None, None], size=(h, w), mode="area")[0, 0]
+                     > 0.5).numpy() for m in masks])
+    return out, (w / W, h / H)
+
+
+@pytest.mark.parametrize("window", [1, 3, 4])
+def test_masks_kept_at_the_working_resolution_are_what_the_fit_resampled_before(window):
+    """Packed for the fit's window, each complete window is resampled when its last frame arrives, the last
+    (short) one when the fit asks: every window's working masks, and the silhouette evidence made from them,
+    equal the old path's on the full-size masks bit for bit."""
+    from relightnet.fit import silhouette_targets
+
+    m = _blobs(10, (96, 72), seed=3)
+    m[5] = False  # a frame where nobody was found
+    height = 20  # the person's working height: every window is resampled (persons are taller)
+    packed = PackedMasks((96, 72), window=window, height=height)
+    for t in range(10):
+        packed.append_empty() if t == 5 else packed.append(torch.from_numpy(m[t]))
+    for a in range(0, 10, window):
+        b = min(a + window, 10)
+        work, factor = packed[a:b].working()
+        ref, ref_factor = _old_working(m[a:b], height)
+        assert work.shape[1] < 96  # resampled
+        assert torch.equal(work, torch.from_numpy(ref)) and factor == ref_factor
+        new = silhouette_targets(work, size=(96, 72), height=None)
+        old = silhouette_targets(torch.from_numpy(m[a:b]).float(), size=(96, 72), height=height)
+        assert torch.equal(new.outside, old.outside) and torch.equal(new.outline, old.outline)
+        assert torch.equal(new.valid, old.valid) and new.factor == old.factor
+    assert packed.nbytes < PackedMasks.from_masks(m).nbytes  # smaller than the full-size masks
+
+
+def test_a_noise_mask_at_the_pixel_limit_costs_at_most_the_working_box():
+    """Masks that do not compress (random bits) in 4000 × 3120 frames (12.5 MP): 1.5 MB a frame at the frame's
+    size, at most MAX_FRAME_BYTES (~28.5 KiB) at the working resolution; the band as wide as 4 persons are tall
+    reaches the largest working box (240 × 960 bits), so the bound is the worst case, not a loose one."""
+    from relightnet.fit import MAX_FRAME_BYTES
+
+    H, W = 3120, 4000
+    rng = np.random.default_rng(0)
+    packed = PackedMasks((H, W), window=1)
+    for y0, y1 in ((0, H), (1000, 2000), (1500, 1700)):  # the whole frame, a 1000-row band, a 200-row band
+        m = np.zeros((H, W), bool)
+        m[y0:y1] = rng.random((y1 - y0, W), dtype=np.float32) < 0.5
+        packed.append(m)
+        del m
+    sizes = [len(it[1]) for it in packed._items]
+    assert max(sizes) <= MAX_FRAME_BYTES < 30_000, sizes
+    assert sizes[1] > 0.8 * MAX_FRAME_BYTES, sizes  # 240 × 960 random bits
+    assert packed.nbytes <= 3 * MAX_FRAME_BYTES

@@ -51,24 +51,28 @@ def test_float_masks_given_are_packed_and_checked():
 
 @pytest.mark.slow  # a clip rendered and segmented
 def test_a_clips_packed_evidence_is_the_old_full_size_evidence_bit_for_bit(tmp_path, fit_body):
-    """The fit keeps a video's masks packed now, not as one float (H, W) mask per frame. On a generated clip
-    of a walking person (real segmentation), every window's silhouette evidence, the only thing the optimiser
-    reads from the masks, equals what the old full-size float masks gave, bit for bit: the fit is unchanged."""
+    """The fit keeps a video's masks packed at its working resolution now (each window of frames resampled as
+    soon as it is segmented), not as one float (H, W) mask per frame. On a generated clip of a walking person
+    (real segmentation) of 480 × 384, where the person is taller than the working 240 px, every window's
+    silhouette evidence, the only thing the optimiser reads from the masks, equals what the old full-size float
+    masks gave, bit for bit: the fit is unchanged."""
     from relightnet.fit.job import media_frames
+    from relightnet.fit.masks import PackedMasks
     from relightnet.fit.solve import _evidence
     from relightnet.segment import PersonModels
     from relightnet.segment.video import track_person
 
     clip = tmp_path / "clip.mp4"
-    person_clip(clip, 5, small=(240, 192), up=1)
+    person_clip(clip, 5, small=(240, 192), up=2)
     models = PersonModels(threads=1)
-    old = torch.stack([res.mask.float() if res is not None else torch.zeros(240, 192)  # the old observe_frames
+    old = torch.stack([res.mask.float() if res is not None else torch.zeros(480, 384)  # the old observe_frames
                        for _, res in track_person(media_frames(clip)[0], models)])
-    obs = observe_frames(media_frames(clip)[0], models, name="clip.mp4")
-    assert bool(obs.found.all()) and old.shape == (5, 240, 192) and 0.03 < float(old.mean()) < 0.5
-    assert torch.equal(obs.masks.unpack(), old > 0.5)
+    obs = observe_frames(media_frames(clip)[0], models, name="clip.mp4", window=2)
+    assert bool(obs.found.all()) and old.shape == (5, 480, 384) and 0.03 < float(old.mean()) < 0.5
+    assert obs.masks.nbytes < PackedMasks.from_masks(old).nbytes  # windows of 2 kept at the working resolution
     for a in range(0, 5, 2):  # windows of 2 frames, the last one short
         new = _evidence(fit_body, obs, a, a + 2)["sil"]
         ref = silhouette_targets(old[a:a + 2], size=obs.size)  # the same steps on the old float masks
+        assert new.outside.shape[-2] < 480  # resampled
         assert torch.equal(new.outside, ref.outside) and torch.equal(new.outline, ref.outline)
-        assert torch.equal(new.valid, ref.valid)
+        assert torch.equal(new.valid, ref.valid) and new.factor == ref.factor

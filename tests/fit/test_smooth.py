@@ -55,3 +55,34 @@ def test_world_placement_keeps_the_image_and_grounds_the_feet(fit_body):
                                project_points(view_pts[:, mapped], res.intrinsics), atol=0.05, rtol=0)  # pixels
     assert abs(float(w_pts[:, list(FOOT_SLOTS), 1].min())) < 1e-4
     assert m.pose.shape == (3, fit_body.num_joints, 3) and m.bone_names == fit_body.body.joint_names
+
+
+def test_a_long_fit_is_smoothed_in_blocks_as_by_the_whole_matrix():
+    """Beyond SMOOTH_BLOCK frames the band of weights is applied a block of frames at a time (no (T, T) matrix):
+    the same smoothing as the whole matrix up to rounding; a clip of at most one block is smoothed bit for bit
+    as before (one (T, T) matrix)."""
+    from relightnet.fit.smooth import SMOOTH_BLOCK
+
+    T = 2 * SMOOTH_BLOCK + 37
+    res = _result(T=T, seed=2)
+    sm = smooth_motion(res, 2.0)
+    w = gaussian_weights(T, 2.0)
+    pose = matrix_to_rotvec(smooth_rotations(rotvec_to_matrix(res.pose.double()), w)).float()
+    torch.testing.assert_close(sm.pose, pose, atol=1e-6, rtol=0)
+    torch.testing.assert_close(sm.trans, (w @ res.trans.double()).float(), atol=1e-6, rtol=0)
+    short = _result(T=SMOOTH_BLOCK, seed=3)
+    w = gaussian_weights(SMOOTH_BLOCK, 1.5)
+    assert torch.equal(smooth_motion(short, 1.5).trans, (w @ short.trans.double()).to(short.trans.dtype))
+
+
+def test_a_long_fit_is_placed_in_the_world_a_block_of_frames_at_a_time(fit_body, monkeypatch):
+    """place_in_world poses the body's points a block of frames at a time (their lowest foot point and the first
+    frame's hips are all it keeps): the same motion as from all frames at once."""
+    import relightnet.fit.smooth as smooth
+
+    res = _result(T=7, seed=4)
+    whole = place_in_world(res, fit_body)
+    monkeypatch.setattr(smooth, "SMOOTH_BLOCK", 3)
+    blocks = place_in_world(res, fit_body)
+    torch.testing.assert_close(blocks.trans, whole.trans, atol=1e-6, rtol=0)
+    assert torch.equal(blocks.pose, whole.pose)

@@ -50,3 +50,25 @@ def test_fit_restores_the_thread_setting(fit_body):
         assert torch.get_num_threads() == 2  # the fit ran on one thread and gave the setting back
     finally:
         torch.set_num_threads(before)
+
+
+def test_more_frames_than_the_fit_holds_are_refused_before_any_work(fit_body, tmp_path, monkeypatch):
+    """What a fit keeps per frame for the whole video is bounded (fit.MAX_FRAME_BYTES of mask and a few KB), so
+    the 2 GiB budget holds MAX_FIT_FRAMES frames; a longer video is refused from its packets' count."""
+    import numpy as np
+
+    import relightnet.fit.job as job
+    from relightnet.fit import MAX_FIT_FRAMES, FitOptions, Observations, default_intrinsics, fit_file
+    from relightnet.io import VideoWriter
+
+    T = MAX_FIT_FRAMES + 1
+    obs = Observations(torch.zeros(T, 33, 5), torch.zeros(T, 33, 3), None, torch.ones(T, dtype=torch.bool), (8, 8))
+    with pytest.raises(InputError, match=rf"fit: {T} frames; at most {MAX_FIT_FRAMES} frames"):
+        fit_observations(obs, default_intrinsics((8, 8), 60.0), fit_body)
+    clip = tmp_path / "clip.mp4"
+    with VideoWriter(clip, fps=10.0) as w:
+        for _ in range(4):
+            w.write(np.zeros((32, 32, 3), np.uint8))
+    monkeypatch.setattr(job, "MAX_FIT_FRAMES", 3)
+    with pytest.raises(InputError, match=r"clip.mp4: 4 frames; at most 3 frames are fitted"):
+        fit_file(clip, FitOptions(), fit_body, models=object())  # no model is run: refused first
