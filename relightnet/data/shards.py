@@ -117,10 +117,23 @@ def stack_samples(samples: list) -> dict[str, np.ndarray]:
     return out
 
 
-def _npy_bytes(arr: np.ndarray) -> bytes:
-    buf = io.BytesIO()
-    np.lib.format.write_array(buf, np.ascontiguousarray(arr), allow_pickle=False)
-    return buf.getvalue()
+def _write_entry(zf: zipfile.ZipFile, info: zipfile.ZipInfo, arr: np.ndarray, level) -> None:
+    """Write ``arr`` as the ``.npy`` entry ``info``: the same bytes as ``writestr(info, npy bytes)``, but the
+    array's buffer goes to the compressor as it is (no copies of a whole shard field)."""
+    arr = np.ascontiguousarray(arr)
+    buf, d = io.BytesIO(), np.lib.format.header_data_from_array_1_0(arr)
+    try:  # the header version np.save picks: 1.0 unless it is too long
+        np.lib.format.write_array_header_1_0(buf, d)
+    except ValueError:
+        buf = io.BytesIO()
+        np.lib.format.write_array_header_2_0(buf, d)
+    head = buf.getvalue()
+    body = memoryview(arr.reshape(-1).view(np.uint8))
+    info.file_size = len(head) + len(body)  # as writestr sets it (it decides the zip64 extra field)
+    info._compresslevel = level  # what writestr(..., compresslevel=level) sets
+    with zf.open(info, mode="w") as dest:
+        dest.write(head)
+        dest.write(body)
 
 
 def write_shard(path, arrays: dict[str, np.ndarray], compression: str = "deflate") -> dict:
@@ -147,7 +160,7 @@ def write_shard(path, arrays: dict[str, np.ndarray], compression: str = "deflate
                 info = zipfile.ZipInfo(f"{name}.npy", date_time=_DATE)
                 info.compress_type, info.create_system = method, 3
                 info.external_attr = 0o644 << 16
-                zf.writestr(info, _npy_bytes(arr), compresslevel=level)
+                _write_entry(zf, info, arr, level)
     return {"sha256": file_sha256(path), "bytes": path.stat().st_size}
 
 
