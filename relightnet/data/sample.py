@@ -80,7 +80,7 @@ class SynthAssets:
         labels = self.tables.setdefault("labels", {})
         key = (sleeves, legs, hair)
         if key not in labels:
-            labels[key] = region_labels(self.body, sleeves, legs, hair)
+            labels[key] = region_labels(self.body, sleeves, legs, hair, parts=self.atlas.parts)
         return labels[key]
 
     def envmap(self, name: str) -> torch.Tensor:
