@@ -126,7 +126,7 @@ def _project(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (p - a) @ d / float(d @ d)
 
 
-def region_labels(body, sleeves: str = "short", legs: str = "long", hair: str = "short") -> torch.Tensor:
+def region_labels(body, sleeves: str = "short", legs: str = "long", hair: str = "short", parts=None) -> torch.Tensor:
     """(V,) int64 region ids into :data:`REGIONS` for an :class:`~relightnet.body.AnnyBody`.
 
     Args:
@@ -134,6 +134,7 @@ def region_labels(body, sleeves: str = "short", legs: str = "long", hair: str = 
         sleeves: ``"none"``, ``"short"``, ``"elbow"`` or ``"long"``.
         legs: ``"shorts"``, ``"knee"`` or ``"long"``.
         hair: ``"short"`` (scalp) or ``"none"`` (bald).
+        parts: (V,) ``anny_part_labels(body)`` when the caller keeps them (they read an image); None reads them.
     """
     if sleeves not in _SLEEVES or legs not in _LEGS or hair not in ("short", "none"):
         raise InputError(
@@ -144,7 +145,7 @@ def region_labels(body, sleeves: str = "short", legs: str = "long", hair: str = 
         out = body()
     v = out.verts[0].detach().cpu().double().numpy()
     J = {n: j for n, j in zip(out.joint_names, out.joints[0].detach().cpu().double().numpy(), strict=True)}
-    part = anny_part_labels(body).numpy()
+    part = np.asarray(anny_part_labels(body) if parts is None else parts)
     pid = {p: i for i, p in enumerate(ANNY_PARTS)}
     w = body.anny.vertex_bone_weights.detach().cpu().numpy()
     bi = body.anny.vertex_bone_indices.detach().cpu().numpy()

@@ -172,7 +172,8 @@ def clothed_mesh(g: dict, outfit: dict, verts: torch.Tensor, normals: torch.Tens
     panels = [body_tex]
     if outer:
         pos = torch.from_numpy(atlas.texel_pos)
-        panels.append(garment_texels(g["outer"], pos).clamp(ALBEDO_MIN, ALBEDO_MAX).reshape(S, S, 3))
+        col = garment_texels(g["outer"], pos, torch.from_numpy(atlas.texel_source))
+        panels.append(col.clamp(ALBEDO_MIN, ALBEDO_MAX).reshape(S, S, 3))
     if slots:
         panels.append(_ring_panel(S, slots, outfit, g).clamp(ALBEDO_MIN, ALBEDO_MAX))
     tex = torch.cat(panels, 1).contiguous()

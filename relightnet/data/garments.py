@@ -144,6 +144,7 @@ class GarmentTables:
         head: (V,) bool head vertices (Anny's head part). torso_low: (V,) bool torso below the waist.
         leg_side: (V,) int64 0 left leg, 1 right leg, −1 neither. leg_t: (V,) float32 fraction hip → ankle.
         labels: memo of :func:`relightnet.body.region_labels` per (sleeves, legs, hair).
+        parts: (V,) int64 the body's :func:`~relightnet.body.anny_part_labels` (region_labels reads them).
     """
 
     rest: torch.Tensor
@@ -153,11 +154,12 @@ class GarmentTables:
     leg_side: torch.Tensor
     leg_t: torch.Tensor
     labels: dict
+    parts: np.ndarray
 
     def region(self, body, sleeves: str, legs: str, hair: str = "short") -> torch.Tensor:
         key = (sleeves, legs, hair)
         if key not in self.labels:
-            self.labels[key] = region_labels(body, sleeves, legs, hair)
+            self.labels[key] = region_labels(body, sleeves, legs, hair, parts=self.parts)
         return self.labels[key]
 
 
@@ -186,7 +188,7 @@ def garment_tables(body, parts: np.ndarray, labels: dict | None = None) -> Garme
         tt = ((rest - a) @ (b - a) / ((b - a) @ (b - a))).clamp(0, 1)
         side[leg] = k
         t[leg] = tt[leg]
-    return GarmentTables(rest, arm, head, torso_low, side, t, {} if labels is None else labels)
+    return GarmentTables(rest, arm, head, torso_low, side, t, {} if labels is None else labels, np.asarray(parts))
 
 
 def _fold_noise(pos: torch.Tensor, seed: int) -> torch.Tensor:

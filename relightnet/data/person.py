@@ -85,7 +85,7 @@ def person_stage(cfg: SynthConfig, r: dict, assets: SynthAssets, T: int) -> Pers
         out = body(pose=params["pose"], trans=params["trans"], phenotype=phen)
     hair = "none" if outfit["hair"] is None else "short"
     field = assets.region_field(outfit["sleeves"], outfit["legs"], hair)
-    tex = paint_albedo(assets.atlas, field, outfit)
+    tex = paint_albedo(assets.atlas, field, outfit, assets.texel_regions(outfit["sleeves"], outfit["legs"], hair))
     mesh = clothed_mesh(g, outfit, out.verts.detach(), out.normals.detach(), out.joints.detach(), body,
                         assets.garment_tables(), tex, field, assets.atlas)
     return PersonStage(mesh, out.joints.detach(), phen, pose_desc, outfit, {**g, "types": mesh.types}, dir_seed,

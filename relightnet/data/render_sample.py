@@ -260,8 +260,7 @@ def _render_frames(cfg: SynthConfig, geo: ClipGeometry, person: PersonStage, dra
         i, angle, level = frames[t]
         light = light_at(draws[i], angle, level, tilt)
         v, n = geo.verts[t], geo.normals[t]
-        Tv = transport_to_camera(person.transport[t], Q, cfg.lmax)
-        Tu = transport_to_camera(person.transport_unoccluded[t], Q, cfg.lmax)
+        Tv, Tu = transport_to_camera(torch.stack([person.transport[t], person.transport_unoccluded[t]]), Q, cfg.lmax)
         rend = render_mesh(v, faces, Tv, talb, light, cam, normals=n, maps=True)
         fr = rend.frags
         through.append(hidden_body_share(fr.pix_face, geo.covered, geo.n_body_faces))

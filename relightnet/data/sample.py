@@ -11,7 +11,7 @@ import torch
 from ..body import AnnyBody, region_labels
 from ..checks import InputError
 from ..sh import preset_envmap
-from .textures import UVAtlas, region_field, uv_atlas
+from .textures import UVAtlas, region_field, texel_regions, uv_atlas
 
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets", "assets_for"]
 
@@ -38,6 +38,7 @@ class SynthAssets:
         body: the :class:`~relightnet.body.AnnyBody`.
         atlas: its :class:`~relightnet.data.textures.UVAtlas`.
         regions: memo of region fields per (sleeves, legs, hair) variant, filled on use.
+        texels: memo of their texel regions (:func:`~relightnet.data.textures.texel_regions`), filled on use.
         envmaps: memo of the shipped env maps, filled on use.
         tables: memo of the garment tables, filled on use.
     """
@@ -45,6 +46,7 @@ class SynthAssets:
     body: AnnyBody
     atlas: UVAtlas
     regions: dict = field(default_factory=dict)
+    texels: dict = field(default_factory=dict)
     envmaps: dict = field(default_factory=dict)
     tables: dict = field(default_factory=dict)
 
@@ -65,12 +67,20 @@ class SynthAssets:
             self.regions[key] = region_field(self.body.faces.cpu().numpy(), ids)
         return self.regions[key]
 
+    def texel_regions(self, sleeves: str, legs: str, hair: str) -> np.ndarray:
+        """(S·S,) the region id of every texel for one clothing variant (the arg-max of its
+        :meth:`region_field` at the texel, :func:`~relightnet.data.textures.texel_regions`)."""
+        key = (sleeves, legs, hair)
+        if key not in self.texels:
+            self.texels[key] = texel_regions(self.atlas, self.region_field(sleeves, legs, hair))
+        return self.texels[key]
+
     def region_labels(self, sleeves: str, legs: str, hair: str) -> torch.Tensor:
         """(V,) :func:`relightnet.body.region_labels` of one clothing variant (memo shared with the garments)."""
         labels = self.tables.setdefault("labels", {})
         key = (sleeves, legs, hair)
         if key not in labels:
-            labels[key] = region_labels(self.body, sleeves, legs, hair)
+            labels[key] = region_labels(self.body, sleeves, legs, hair, parts=self.atlas.parts)
         return labels[key]
 
     def envmap(self, name: str) -> torch.Tensor:

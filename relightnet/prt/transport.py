@@ -61,7 +61,7 @@ def cast_lit(eng, rays, with_hits: bool):
     else:
         hits, blocked = None, eng.occluded(rays.origins, rays.dirs)
     lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
-    lit[rays.vertex, rays.direction] = np.where(blocked, 0.0, rays.cosine)
+    lit.reshape(-1)[rays.vertex * rays.n_dirs + rays.direction] = np.where(blocked, np.float32(0.0), rays.cosine)
     return lit, hits
 
 

@@ -67,6 +67,15 @@ def test_write_is_byte_reproducible_and_loadable(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.npz", "s.npz", "sub"]  # no temporary files left
 
 
+def test_deflate_stores_the_background(tmp_path):
+    arrays = {**stack_samples(_samples()), "background": np.random.default_rng(0).random((3, 8, 8, 3), np.float32)}
+    write_shard(tmp_path / "a.npz", arrays)
+    with zipfile.ZipFile(tmp_path / "a.npz") as z:
+        kinds = {i.filename: i.compress_type for i in z.infolist()}
+    assert kinds.pop("background.npy") == zipfile.ZIP_STORED and set(kinds.values()) == {zipfile.ZIP_DEFLATED}
+    np.testing.assert_array_equal(read_shard(tmp_path / "a.npz")["background"], arrays["background"])
+
+
 def test_bad_shards(tmp_path):
     arrays = stack_samples(_samples())
     write_shard(tmp_path / "a.npz", arrays)
