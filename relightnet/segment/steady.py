@@ -1,0 +1,134 @@
+"""Steady person masks over time: the previous frame's mask, carried along the person's motion,
+decides the pixels that the current frame leaves uncertain.
+
+A tracked mask's outline shimmers: from one frame to the next the pose model reads a slightly
+different crop, and the outline's pixels, whose probability is near one half, flip. A running
+average of the masks would hold them, but it lags whatever moves. Here, for frame t:
+
+1. **Motion** (:func:`landmark_motion`): the scale (per axis: a person turning gets narrower, not
+   shorter) and shift that carry frame t − 1's landmarks onto frame t's, by least squares over
+   the landmarks seen in both.
+2. **Carry** (:func:`carry_mask`): frame t − 1's steady mask moved by that motion onto frame t's
+   pixels (bilinear: a value in [0, 1]).
+3. **Hysteresis** (:func:`hysteresis`): within ``REACH`` pixels of the carried outline, a pixel
+   the carried mask calls person stays person unless its probability falls below 0.5 − margin,
+   and a background pixel becomes person only above 0.5 + margin. A confident pixel (a moving
+   arm: the probability near 0 or 1) follows the current frame at once, and so does an outline
+   that moved farther than ``REACH`` beyond what the landmarks' motion explains (a limb moving
+   on its own): only the band of uncertain probabilities near the carried outline keeps its
+   previous state, so a moving part is held back by at most that band. The largest region is kept.
+
+The first frame, and a person found again after being lost, has no history: its mask is the
+probability above one half, as in a photo.
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+
+from ..checks import InputError, check_shape
+
+__all__ = ["STEADY_MARGIN", "landmark_motion", "carry_mask", "near_outline", "hysteresis"]
+
+#: The default hysteresis margin on the probability (0: no temporal filtering).
+STEADY_MARGIN = 0.15
+#: A landmark takes part in the motion when its visibility and presence both exceed this.
+MIN_VISIBILITY = 0.5
+#: The motion's scale is kept within [1 / MAX_SCALE, MAX_SCALE] (a frame-to-frame zoom).
+MAX_SCALE = 1.25
+#: The previous state is kept only this many pixels (at most) from the carried outline (:func:`hysteresis`).
+REACH = 6
+
+
+def landmark_motion(prev: torch.Tensor, cur: torch.Tensor, min_visibility: float = MIN_VISIBILITY,
+                    ) -> tuple[float, float, float, float] | None:
+    """The scale per axis and shift (sx, sy, tx, ty) taking ``prev``'s landmarks onto ``cur``'s.
+
+    Least squares of ``x_cur ≈ sx · x_prev + tx`` and ``y_cur ≈ sy · y_prev + ty`` over the
+    landmarks whose visibility and presence exceed ``min_visibility`` in both; each scale is
+    clamped to [1 / MAX_SCALE, MAX_SCALE].
+
+    Args:
+        prev, cur: (33, 5) landmarks (x, y in pixels, z, visibility, presence), or (N, ≥ 5).
+
+    Returns:
+        (sx, sy, tx, ty), or None when fewer than 3 landmarks are seen in both frames.
+    """
+    check_shape(prev, ["N", "C"], name="prev landmarks")
+    check_shape(cur, [prev.shape[0], prev.shape[1]], name="cur landmarks")
+    if prev.shape[1] < 5:
+        raise InputError(f"landmarks: expected (N, 5) x, y, z, visibility, presence, got {tuple(prev.shape)}")
+    seen = (prev[:, 3:5].min(1).values > min_visibility) & (cur[:, 3:5].min(1).values > min_visibility)
+    if int(seen.sum()) < 3:
+        return None
+    p, c = prev[seen, :2].double(), cur[seen, :2].double()
+    pm, cm = p.mean(0), c.mean(0)
+    var = ((p - pm) ** 2).sum(0)
+    s = torch.where(var > 1e-9, ((p - pm) * (c - cm)).sum(0) / var.clamp_min(1e-9), torch.ones(2, dtype=p.dtype))
+    s = s.clamp(1.0 / MAX_SCALE, MAX_SCALE)
+    t = cm - s * pm
+    return float(s[0]), float(s[1]), float(t[0]), float(t[1])
+
+
+def carry_mask(mask: torch.Tensor, motion: tuple[float, float, float, float],
+               window: tuple[int, int, int, int] | None = None) -> torch.Tensor:
+    """Move (..., H, W) maps by ``motion`` (sx, sy, tx, ty): out(x, y) = mask((x − tx) / sx, (y − ty) / sy),
+    bilinear, 0 outside.
+
+    Args:
+        mask: (..., H, W) float maps (e.g. the previous frame's mask in {0, 1} and its probability).
+        motion: (sx, sy, tx, ty), shifts in pixels (:func:`landmark_motion`).
+        window: (x0, y0, x1, y1) pixels of the output to compute (the rest is 0); None: all.
+
+    Returns:
+        (..., H, W) float maps in the input's range.
+    """
+    d = check_shape(mask, ["...", "H", "W"], name="mask")
+    H, W = d["H"], d["W"]
+    sx, sy, tx, ty = motion
+    x0, y0, x1, y1 = window if window is not None else (0, 0, W, H)
+    out = mask.new_zeros(mask.shape).float()
+    if x1 <= x0 or y1 <= y0:
+        return out
+    xs = (torch.arange(x0, x1, dtype=torch.float32) + 0.5 - tx) / sx  # continuous coordinates, pixel i = [i, i + 1)
+    ys = (torch.arange(y0, y1, dtype=torch.float32) + 0.5 - ty) / sy
+    grid = torch.stack(torch.broadcast_tensors(2 * xs[None, :] / W - 1, 2 * ys[:, None] / H - 1), -1)
+    flat = mask.reshape(1, -1, H, W).float()
+    out[..., y0:y1, x0:x1] = F.grid_sample(flat, grid[None], mode="bilinear", padding_mode="zeros",
+                                           align_corners=False)[0].reshape(*mask.shape[:-2], y1 - y0, x1 - x0)
+    return out
+
+
+def near_outline(mask: torch.Tensor, reach: int) -> torch.Tensor:
+    """(H, W) bool: the pixels within ``reach`` pixels (a square) of a (H, W) mask's outline (above 0.5)."""
+    check_shape(mask, ["H", "W"], name="mask")
+    fg = (mask > 0.5).float()[None, None]
+    k = 2 * reach + 1
+    grown = F.max_pool2d(fg, k, stride=1, padding=reach)[0, 0] > 0
+    shrunk = -F.max_pool2d(-fg, k, stride=1, padding=reach)[0, 0] > 0
+    return grown & ~shrunk
+
+
+def hysteresis(probability: torch.Tensor, carried: torch.Tensor | None, margin: float,
+               reach: int = REACH) -> torch.Tensor:
+    """Person pixels of a (H, W) probability with the carried previous mask's state (module docstring).
+
+    Args:
+        probability: (H, W) in [0, 1].
+        carried: (H, W) previous mask carried onto this frame (person above 0.5), or None (no history).
+        margin: the band half-width around 0.5 in which the previous state is kept (0: none).
+        reach: the previous state is kept only within this many pixels of the carried outline;
+            farther, the outline has moved more than the carried motion explains (a limb moving on
+            its own), and the current frame decides, so a moving part is not dragged.
+
+    Returns:
+        (H, W) bool.
+    """
+    check_shape(probability, ["H", "W"], name="probability")
+    now = probability > 0.5
+    if carried is None or margin <= 0:
+        return now
+    check_shape(carried, list(probability.shape), name="carried mask")
+    held = torch.where(carried > 0.5, probability > 0.5 - margin, probability > 0.5 + margin)
+    return torch.where(near_outline(carried, reach), held, now)
