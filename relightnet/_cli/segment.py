@@ -6,7 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..checks import InputError
+from ..errors import InputError
 from .argtypes import nonneg_int
 from .options import add_command
 from .paths import in_path, out_dir, out_file
