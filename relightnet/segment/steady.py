@@ -9,7 +9,7 @@ average of the masks would hold them, but it lags whatever moves. Here, for fram
    shorter) and shift that carry frame t − 1's landmarks onto frame t's, by least squares over
    the landmarks seen in both.
 2. **Carry** (:func:`carry_mask`): frame t − 1's steady mask moved by that motion onto frame t's
-   pixels (bilinear: a value in [0, 1]).
+   pixels (nearest pixel).
 3. **Hysteresis** (:func:`hysteresis`): within ``REACH`` pixels of the carried outline, a pixel
    the carried mask calls person stays person unless its probability falls below 0.5 − margin,
    and a background pixel becomes person only above 0.5 + margin. A confident pixel (a moving
@@ -24,8 +24,8 @@ probability above one half, as in a photo.
 
 from __future__ import annotations
 
+import numpy as np
 import torch
-import torch.nn.functional as F
 
 from ..checks import InputError, check_shape
 
@@ -59,55 +59,58 @@ def landmark_motion(prev: torch.Tensor, cur: torch.Tensor, min_visibility: float
     check_shape(cur, [prev.shape[0], prev.shape[1]], name="cur landmarks")
     if prev.shape[1] < 5:
         raise InputError(f"landmarks: expected (N, 5) x, y, z, visibility, presence, got {tuple(prev.shape)}")
-    seen = (prev[:, 3:5].min(1).values > min_visibility) & (cur[:, 3:5].min(1).values > min_visibility)
+    prev, cur = prev.detach().double().numpy(), cur.detach().double().numpy()  # numpy: tiny arrays, no thread pool
+    seen = (prev[:, 3:5].min(1) > min_visibility) & (cur[:, 3:5].min(1) > min_visibility)
     if int(seen.sum()) < 3:
         return None
-    p, c = prev[seen, :2].double(), cur[seen, :2].double()
+    p, c = prev[seen, :2], cur[seen, :2]
     pm, cm = p.mean(0), c.mean(0)
     var = ((p - pm) ** 2).sum(0)
-    s = torch.where(var > 1e-9, ((p - pm) * (c - cm)).sum(0) / var.clamp_min(1e-9), torch.ones(2, dtype=p.dtype))
-    s = s.clamp(1.0 / MAX_SCALE, MAX_SCALE)
+    s = np.where(var > 1e-9, ((p - pm) * (c - cm)).sum(0) / np.maximum(var, 1e-9), 1.0)
+    s = s.clip(1.0 / MAX_SCALE, MAX_SCALE)
     t = cm - s * pm
     return float(s[0]), float(s[1]), float(t[0]), float(t[1])
 
 
 def carry_mask(mask: torch.Tensor, motion: tuple[float, float, float, float],
                window: tuple[int, int, int, int] | None = None) -> torch.Tensor:
-    """Move (..., H, W) maps by ``motion`` (sx, sy, tx, ty): out(x, y) = mask((x − tx) / sx, (y − ty) / sy),
-    bilinear, 0 outside.
+    """Move a (H, W) mask by ``motion`` (sx, sy, tx, ty): out(x, y) = mask((x − tx) / sx, (y − ty) / sy),
+    nearest pixel, background outside.
 
     Args:
-        mask: (..., H, W) float maps (e.g. the previous frame's mask in {0, 1} and its probability).
+        mask: (H, W) mask (person above 0.5; e.g. the previous frame's).
         motion: (sx, sy, tx, ty), shifts in pixels (:func:`landmark_motion`).
-        window: (x0, y0, x1, y1) pixels of the output to compute (the rest is 0); None: all.
+        window: (x0, y0, x1, y1) pixels of the output to compute (the rest is background); None: all.
 
     Returns:
-        (..., H, W) float maps in the input's range.
+        (H, W) bool.
     """
-    d = check_shape(mask, ["...", "H", "W"], name="mask")
-    H, W = d["H"], d["W"]
+    H, W = check_shape(mask, ["H", "W"], name="mask").values()
     sx, sy, tx, ty = motion
     x0, y0, x1, y1 = window if window is not None else (0, 0, W, H)
-    out = mask.new_zeros(mask.shape).float()
-    if x1 <= x0 or y1 <= y0:
-        return out
-    xs = (torch.arange(x0, x1, dtype=torch.float32) + 0.5 - tx) / sx  # continuous coordinates, pixel i = [i, i + 1)
-    ys = (torch.arange(y0, y1, dtype=torch.float32) + 0.5 - ty) / sy
-    grid = torch.stack(torch.broadcast_tensors(2 * xs[None, :] / W - 1, 2 * ys[:, None] / H - 1), -1)
-    flat = mask.reshape(1, -1, H, W).float()
-    out[..., y0:y1, x0:x1] = F.grid_sample(flat, grid[None], mode="bilinear", padding_mode="zeros",
-                                           align_corners=False)[0].reshape(*mask.shape[:-2], y1 - y0, x1 - x0)
-    return out
+    out = np.zeros((H, W), bool)
+    if x1 > x0 and y1 > y0:  # pixel i covers [i, i + 1): its centre i + 0.5 reads the pixel under (i + 0.5 - t) / s
+        xs = np.floor((np.arange(x0, x1) + 0.5 - tx) / sx).astype(np.int64)
+        ys = np.floor((np.arange(y0, y1) + 0.5 - ty) / sy).astype(np.int64)
+        inside = (ys[:, None] >= 0) & (ys[:, None] < H) & (xs[None, :] >= 0) & (xs[None, :] < W)
+        src = mask.numpy() > 0.5
+        out[y0:y1, x0:x1] = src[np.ix_(ys.clip(0, H - 1), xs.clip(0, W - 1))] & inside
+    return torch.from_numpy(out)
 
 
 def near_outline(mask: torch.Tensor, reach: int) -> torch.Tensor:
-    """(H, W) bool: the pixels within ``reach`` pixels (a square) of a (H, W) mask's outline (above 0.5)."""
+    """(H, W) bool: the pixels within ``reach`` pixels (a square) of a (H, W) mask's outline (above 0.5).
+
+    A pixel is near the outline when the square of side 2 · reach + 1 around it holds both person
+    and background (outside the frame counts as background); the squares' counts come from a
+    summed-area table.
+    """
     check_shape(mask, ["H", "W"], name="mask")
-    fg = (mask > 0.5).float()[None, None]
     k = 2 * reach + 1
-    grown = F.max_pool2d(fg, k, stride=1, padding=reach)[0, 0] > 0
-    shrunk = -F.max_pool2d(-fg, k, stride=1, padding=reach)[0, 0] > 0
-    return grown & ~shrunk
+    fg = mask.numpy() > 0.5
+    c = np.pad(fg, ((reach + 1, reach), (reach + 1, reach))).astype(np.int32).cumsum(0).cumsum(1)  # numpy: faster
+    count = c[k:, k:] - c[:-k, k:] - c[k:, :-k] + c[:-k, :-k]
+    return torch.from_numpy((count > 0) & (count < k * k))
 
 
 def hysteresis(probability: torch.Tensor, carried: torch.Tensor | None, margin: float,
@@ -126,9 +129,10 @@ def hysteresis(probability: torch.Tensor, carried: torch.Tensor | None, margin: 
         (H, W) bool.
     """
     check_shape(probability, ["H", "W"], name="probability")
-    now = probability > 0.5
+    p = probability.numpy()  # numpy: whole-map comparisons without torch's thread pool (a busy machine)
     if carried is None or margin <= 0:
-        return now
+        return torch.from_numpy(p > 0.5)
     check_shape(carried, list(probability.shape), name="carried mask")
-    held = torch.where(carried > 0.5, probability > 0.5 - margin, probability > 0.5 + margin)
-    return torch.where(near_outline(carried, reach), held, now)
+    was = carried.numpy() > 0.5
+    held = np.where(was, p > 0.5 - margin, p > 0.5 + margin)
+    return torch.from_numpy(np.where(near_outline(carried, reach).numpy(), held, p > 0.5))

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 
+import numpy as np
 import torch
 
 from ..checks import InputError
@@ -69,9 +70,9 @@ def steady_person(res: PersonMask, prev: PersonMask | None, margin: float) -> Pe
     region = _largest_region(hysteresis(res.probability[y0:y1, x0:x1], carried, margin).numpy())
     if region is None:
         return res
-    mask = torch.zeros(h, w)
-    mask[y0:y1, x0:x1] = torch.from_numpy(region).float()
-    return replace(res, mask=mask)
+    mask = np.zeros((h, w), np.float32)  # numpy: no torch thread pool for a copy (a busy machine)
+    mask[y0:y1, x0:x1] = region
+    return replace(res, mask=torch.from_numpy(mask))
 
 
 class PersonTracker:

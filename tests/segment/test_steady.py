@@ -103,11 +103,13 @@ def test_carry_and_motion_shapes():
     hidden = lm.clone()
     hidden[2:, 3] = 0.1
     assert landmark_motion(hidden, lm) is None  # fewer than 3 seen in both
-    maps = torch.stack([_disc(100, 60), (_disc(100, 60) > 0.5).float()])
-    out = carry_mask(maps, (1.0, 1.0, 10.0, 0.0), (0, 0, 150, H))
-    assert out.shape == (2, H, W)
-    assert torch.allclose(out[:, :, 20:140], maps[:, :, 10:130], atol=1e-5)
-    assert out[:, :, 150:].abs().max() == 0  # outside the window
+    mask = _disc(100, 60) > 0.5
+    out = carry_mask(mask.float(), (1.0, 1.0, 10.0, 0.0), (0, 0, 150, H))
+    assert out.shape == (H, W) and out.dtype == torch.bool
+    assert torch.equal(out[:, 10:150], mask[:, :140])
+    assert not out[:, 150:].any() and not out[:, :10].any()  # outside the window; nothing came from x < 0
+    grown = carry_mask(mask.float(), (2.0, 2.0, -100.0, -60.0))  # twice the size about (100, 60)
+    assert abs(float(grown.float().sum()) / float(mask.float().sum()) - 4) < 0.05
     with pytest.raises(InputError, match="landmarks"):
         landmark_motion(lm[:, :4], lm[:, :4])
 
