@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..errors import InputError
 from .argtypes import nonneg_int
 from .options import add_command
 from .paths import in_path, out_dir, out_file
@@ -21,8 +22,10 @@ def run(args: argparse.Namespace) -> int:
     out = out_file(args.out) if Path(args.out).suffix else out_dir(args.out)
     if args.landmarks:
         out_file(args.landmarks, "--landmarks", (".npz",))
+    if not 0 <= args.steady < 0.5:  # refused before the models load
+        raise InputError(f"--steady: expected a probability margin in [0, 0.5), got {args.steady}")
     segment_files(src, out, PersonModels(threads=args.threads), args.landmarks, args.allow_empty, args.smoothing,
-                  progress=logger.isEnabledFor(logging.INFO))
+                  progress=logger.isEnabledFor(logging.INFO), steady=args.steady)
     logger.info("wrote %s", out)
     return 0
 
@@ -47,5 +50,9 @@ def register(sub) -> None:
                    help="photos/frames without a person get an empty mask (default: an error naming them)")
     p.add_argument("--smoothing", type=float, default=0.5,
                    help="video: weight of the new frame in the tracked crop (1: no smoothing; default: 0.5)")
+    p.add_argument("--steady", type=float, default=0.15,  # relightnet.segment.steady.STEADY_MARGIN (torch-free here)
+                   help="video: hold the mask's outline steady over time: a pixel near the previous mask's outline "
+                   "(carried along the landmarks' motion) keeps its state unless its probability is this far past "
+                   "one half (0: off; default: 0.15)")
     p.add_argument("--threads", type=nonneg_int, default=0, help="ONNX Runtime threads (default: 0, all cores)")
     p.set_defaults(func=run)

@@ -3,7 +3,8 @@
 Two MediaPipe models (Apache-2.0; ``relightnet/weights/NOTICE``) converted to ONNX and run by
 ONNX Runtime: the selfie segmentation model finds the person's box in the whole frame, the
 full-body pose model segments a square crop around it and gives 33 landmarks
-(:mod:`.person`); in a video the crop follows the previous frame's mask (:mod:`.video`).
+(:mod:`.person`); in a video the crop follows the previous frame's mask (:mod:`.video`) and the
+mask is held steady over time along the landmarks' motion (:mod:`.steady`).
 :mod:`.sources` holds the rule by which every command picks a person mask; :mod:`.jobs` the
 ``segment`` job (masks and landmarks of photos and videos, written out).
 
@@ -27,6 +28,7 @@ from .person import (
     segment_person,
 )
 from .sources import MASK_SOURCES, check_mask_source, person_mask, video_masks
+from .steady import STEADY_MARGIN
 from .video import PersonTracker, track_person
 
 __all__ = [
@@ -35,5 +37,5 @@ __all__ = [
     "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
     "segment_crop", "segment_person",
     "MASK_SOURCES", "check_mask_source", "person_mask", "video_masks",
-    "PersonTracker", "track_person",
+    "STEADY_MARGIN", "PersonTracker", "track_person",
 ]

@@ -18,6 +18,7 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
+from .steady import STEADY_MARGIN
 
 __all__ = ["IMAGE_SUFFIXES", "MASK_VIDEO_SUFFIXES", "segment_files", "save_landmarks"]
 
@@ -94,7 +95,8 @@ def _photos(paths: list[Path], out: Path, models, allow_empty: bool) -> list:
     return results
 
 
-def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, progress: bool) -> list:
+def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, progress: bool,
+           steady: float) -> list:
     from tqdm import tqdm
 
     from ..io import VideoWriter, read_video, video_info, write_image
@@ -102,7 +104,7 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, 
 
     info = video_info(video)
     frames = (torch.from_numpy(f).permute(2, 0, 1).float() / 255 for f in read_video(video))
-    tracked = track_person(frames, models, smoothing, allow_empty=allow_empty, name=str(video))
+    tracked = track_person(frames, models, smoothing, allow_empty=allow_empty, name=str(video), steady=steady)
     results, empty = [], []
     as_video = out.suffix.lower() in MASK_VIDEO_SUFFIXES
     with VideoWriter(out, fps=info.fps) if as_video else _folder_out(out) as dest:
@@ -127,7 +129,7 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, 
 
 
 def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, smoothing: float = 0.5,
-                  progress: bool = True) -> list:
+                  progress: bool = True, steady: float = STEADY_MARGIN) -> list:
     """Segment a photo, a folder of photos or a video and write the masks (module docstring).
 
     Args:
@@ -138,6 +140,7 @@ def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, s
         allow_empty: photos/frames without a person get an empty mask instead of an error.
         smoothing: video: weight of the new frame in the tracked crop (1: none).
         progress: show a tqdm bar over a video's frames.
+        steady: video: hysteresis margin of the temporal mask filter (:mod:`relightnet.segment.steady`; 0: off).
 
     Returns:
         The :class:`~relightnet.segment.PersonMask` (or None) of each photo or frame.
@@ -162,7 +165,7 @@ def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, s
     else:
         if out.suffix and out.suffix.lower() not in MASK_VIDEO_SUFFIXES:
             raise InputError(f"--out {out}: expected a mask video (.mkv lossless, .mp4) or a folder for a video")
-        results = _video(src, out, models, allow_empty, smoothing, progress)
+        results = _video(src, out, models, allow_empty, smoothing, progress, steady)
     if landmarks is not None:
         save_landmarks(landmarks, results, names)
     return results

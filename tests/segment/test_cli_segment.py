@@ -54,3 +54,15 @@ def test_segment_errors(tmp_path, capsys):
     assert err.count("\n") == 1 and "cat.png: no person found" in err and not (tmp_path / "m.png").exists()
     assert main(["segment", str(tmp_path / "cat.png"), "--out", str(tmp_path / "m.jpg")]) == 1
     assert "expected a .png path" in capsys.readouterr().err
+
+
+def test_segment_steady_option(tmp_path, capsys):
+    from relightnet.cli import build_parser
+    from relightnet.segment.steady import STEADY_MARGIN
+
+    write_image(tmp_path / "cat.png", background("chelsea", (120, 160)).permute(1, 2, 0), srgb=False)
+    assert main(["segment", str(tmp_path / "cat.png"), "--out", str(tmp_path / "m.png"), "--steady", "0.5"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--steady: expected a probability margin in [0, 0.5), got 0.5" in err
+    args = build_parser().parse_args(["segment", "clip.mp4", "--out", "m.mkv"])
+    assert args.steady == STEADY_MARGIN  # the help's default is the library's
