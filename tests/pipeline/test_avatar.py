@@ -50,7 +50,9 @@ def test_avatar_writes_video_lights_and_plot(target, model, anny_body, tmp_path)
     assert video_info(out).fps == 15
     with np.load(res.lights_file) as z:
         assert z["raw"].shape == (N, 9, 3) and z["smoothed"].shape == (N, 9, 3)
-        assert z["outliers"].shape == (N,) and str(z["smoothing"]) == "hermite"
+        # auto: pooled when the model solves its light from evidence (the shipped hybrid does), else hermite
+        expected = "pooled" if model.config.light_mode in ("solve", "hybrid") else "hermite"
+        assert z["outliers"].shape == (N,) and str(z["smoothing"]) == expected
     assert res.plot.stat().st_size > 1000
     # Outside the avatar the target frame is untouched (lossless container); the avatar changed pixels.
     src = list(read_video(video))

@@ -101,13 +101,16 @@ def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys)
     from relightnet.sh import preset_light
 
     video, masks = masked_clip(tmp_path)
+    from relightnet.model import load_model
+
     outs = {}
-    for name, extra in (("ema", ["--alpha", "0.3"]), ("auto", []), ("one-euro", []), ("none", [])):
+    for name, extra in (("ema", ["--alpha", "0.3"]), ("pooled", []), ("auto", []), ("one-euro", []), ("none", [])):
         outs[name] = tmp_path / f"{name}.mkv"
         assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset",
                      "--smoothing", name, *extra, "--out", str(outs[name])]) == 0
-    # auto is ema for the shipped model (it regresses its light); ema at 0.3 is the default
-    for a, b in zip(read_video(outs["ema"]), read_video(outs["auto"]), strict=True):
+    # auto is pooled for a model that solves its light (the shipped hybrid), else ema at 0.3 (the default)
+    same = "pooled" if load_model().config.light_mode in ("solve", "hybrid") else "ema"
+    for a, b in zip(read_video(outs[same]), read_video(outs["auto"]), strict=True):
         np.testing.assert_array_equal(a, b)
     with pytest.raises(SystemExit) as e:  # an offline method: refused by the parser
         main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--smoothing", "hermite",
