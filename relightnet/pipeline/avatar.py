@@ -128,7 +128,10 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
 
     fg = r.image.reshape(-1, 3).index_select(0, r.frags.pix)
     fg = (linear_to_srgb(fg.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
-    return composite_covered(fg, r.frags.pix, torch.from_numpy(np.array(bg, dtype=np.uint8, copy=True))).numpy()
+    bg = np.ascontiguousarray(bg, dtype=np.uint8)  # read only: composite_covered writes into its own copy
+    if not bg.flags.writeable:  # torch.from_numpy wants a writable array (a plate repeated, a decoded frame)
+        bg = bg.copy()
+    return composite_covered(fg, r.frags.pix, torch.from_numpy(bg)).numpy()
 
 
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,

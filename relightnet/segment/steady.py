@@ -98,19 +98,34 @@ def carry_mask(mask: torch.Tensor, motion: tuple[float, float, float, float],
     return torch.from_numpy(out)
 
 
+def _dilate(a: np.ndarray, reach: int) -> np.ndarray:
+    """(H, W) bool: ``a`` dilated by the square of side 2 · reach + 1 (rows, then columns; bool arrays only)."""
+    rows = a.copy()
+    for s in range(1, reach + 1):
+        rows[:, s:] |= a[:, :-s]
+        rows[:, :-s] |= a[:, s:]
+    out = rows.copy()
+    for s in range(1, reach + 1):
+        out[s:] |= rows[:-s]
+        out[:-s] |= rows[s:]
+    return out
+
+
 def near_outline(mask: torch.Tensor, reach: int) -> torch.Tensor:
     """(H, W) bool: the pixels within ``reach`` pixels (a square) of a (H, W) mask's outline (above 0.5).
 
     A pixel is near the outline when the square of side 2 · reach + 1 around it holds both person
-    and background (outside the frame counts as background); the squares' counts come from a
-    summed-area table.
+    and background (outside the frame counts as background): the person dilated by that square,
+    and the background dilated by it. Only bool maps are made (a few bytes a pixel at any frame size).
     """
     check_shape(mask, ["H", "W"], name="mask")
-    k = 2 * reach + 1
     fg = mask.numpy() > 0.5
-    c = np.pad(fg, ((reach + 1, reach), (reach + 1, reach))).astype(np.int32).cumsum(0).cumsum(1)  # numpy: faster
-    count = c[k:, k:] - c[:-k, k:] - c[k:, :-k] + c[:-k, :-k]
-    return torch.from_numpy((count > 0) & (count < k * k))
+    if reach <= 0:
+        return torch.zeros(fg.shape, dtype=torch.bool)
+    fg = np.pad(fg, reach)  # background outside the frame
+    near = _dilate(fg, reach)
+    near &= _dilate(~fg, reach)
+    return torch.from_numpy(np.ascontiguousarray(near[reach:-reach, reach:-reach]))
 
 
 def hysteresis(probability: torch.Tensor, carried: torch.Tensor | None, margin: float,

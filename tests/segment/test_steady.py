@@ -8,7 +8,7 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.segment import PersonMask, PersonTracker
-from relightnet.segment.steady import carry_mask, hysteresis, landmark_motion
+from relightnet.segment.steady import carry_mask, hysteresis, landmark_motion, near_outline
 from relightnet.segment.video import steady_person
 
 H, W = 120, 200
@@ -118,3 +118,22 @@ def test_tracker_refuses_a_bad_margin(person_models):
     for bad in (-0.1, 0.5):
         with pytest.raises(InputError, match="steady"):
             PersonTracker(person_models, steady=bad)
+
+
+def test_near_outline_is_the_square_holding_person_and_background():
+    """Against the definition, pixel by pixel: the (2 r + 1)² square around a pixel holds a person pixel and a
+    background pixel, outside the frame counting as background (random masks, sizes and reaches)."""
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        h, w = (int(v) for v in rng.integers(1, 40, 2))
+        r = int(rng.integers(0, 7))
+        fg = rng.random((h, w)) < rng.random()
+        padded = np.pad(fg, r)
+        want = np.zeros((h, w), bool)
+        for y in range(h):
+            for x in range(w):
+                square = padded[y:y + 2 * r + 1, x:x + 2 * r + 1]
+                want[y, x] = square.any() and not square.all()
+        got = near_outline(torch.from_numpy(fg.astype(np.float32)), r)
+        assert got.dtype == torch.bool and got.shape == (h, w)
+        np.testing.assert_array_equal(got.numpy(), want)
