@@ -213,6 +213,21 @@ class _Reader:
                 "is_first": np.ones(b, bool)}
 
 
+def _drop_stale_value_info(path: Path) -> None:
+    """Remove the shape records of tensors no node produces: the quantiser keeps the records of the
+    float tensors it replaced (the float64 light solve's casts among them), and a record without a
+    tensor keeps its symbolic batch size, so the file's every-shape-known check would refuse it."""
+    import onnx
+
+    m = onnx.load(str(path))
+    made = {o for n in m.graph.node for o in n.output}
+    keep = [v for v in m.graph.value_info if v.name in made]
+    if len(keep) < len(m.graph.value_info):
+        del m.graph.value_info[:]
+        m.graph.value_info.extend(keep)
+        onnx.save(m, str(path))
+
+
 def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range: bool = True) -> Path:
     """A second model file in int8.
 
@@ -254,6 +269,7 @@ def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range
                               quant_format=q.QuantFormat.QDQ, activation_type=q.QuantType.QUInt8,
                               weight_type=q.QuantType.QInt8, per_channel=True, reduce_range=bool(reduce_range),
                               op_types_to_quantize=["Conv", "MatMul", "Gemm"])
+        _drop_stale_value_info(tmp)
         tmp.replace(dst)
     finally:
         tmp.unlink(missing_ok=True)

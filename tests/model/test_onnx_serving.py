@@ -117,3 +117,26 @@ def test_run_video_streams_every_frame(exported, masked_clip, tmp_path):
     with pytest.raises(InputError, match="multiple of 16"):
         run_video(path, video, masks, tmp_path / "o2", size=20)
     assert not (tmp_path / "o2").exists()
+
+
+def test_int8_of_a_model_that_solves_its_light_opens(tmp_path):
+    """A hybrid network's float64 light solve leaves the quantiser shape records of tensors it replaced;
+    they are dropped, so the int8 file passes the every-shape-known check and runs (the shipped model is hybrid)."""
+    import onnx
+
+    from relightnet.model import NetConfig, RelightNet
+    from relightnet.model.onnx_export import export_onnx
+
+    from .conftest import TRAIN_CONFIG
+
+    torch.manual_seed(0)
+    net = RelightNet(NetConfig(width=4, max_width=8, levels=2, light_hidden=8, light_mode="hybrid")).eval()
+    path = export_onnx(net, tmp_path / "h.onnx", smoothing="pooled", train_config=TRAIN_CONFIG, example_size=32)
+    calib = [tuple(t.numpy() for t in _inputs(1, 32, 32, seed=s)) for s in range(2)]
+    q = quantize_int8(path, tmp_path / "h_int8.onnx", mode="static", calibration=calib)
+    g = onnx.load(str(q)).graph
+    made = {o for n in g.node for o in n.output}
+    assert all(v.name in made for v in g.value_info)
+    img, mask = _inputs(1, 32, 32, seed=3)
+    out = OnnxRelighter(q).step(img.numpy(), mask.numpy())
+    assert np.isfinite(out["light_smoothed"]).all() and out["albedo"].shape == (1, 3, 32, 32)
