@@ -278,11 +278,11 @@ def _pattern_mask(g: dict, pos: torch.Tensor, rng: np.random.Generator, repeat=N
         centres = pos[torch.as_tensor(idx)]
         radii = torch.as_tensor(g["blob_radius"] * rng.uniform(0.6, 1.4, g["n_blobs"]), dtype=torch.float32)
         first, inv = _distinct(repeat)
-        p = pos if first is None else pos[first]
-        warp = _noise3d(p, 2 * g["blob_radius"], rng, octaves=2)[:, 0] * 0.3 * g["blob_radius"]
-        m = torch.zeros(p.shape[0])
+        pts = pos if first is None else pos[first]
+        warp = _noise3d(pts, 2 * g["blob_radius"], rng, octaves=2)[:, 0] * 0.3 * g["blob_radius"]
+        m = torch.zeros(pts.shape[0])
         for c, r in zip(centres, radii, strict=True):
-            d = (p - c).norm(dim=1) + warp
+            d = (pts - c).norm(dim=1) + warp
             m = torch.maximum(m, (d < r).float())
         return m if first is None else m[inv]
     raise InputError(f"pattern: expected one of {PATTERNS}, got {p!r}")

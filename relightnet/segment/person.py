@@ -27,7 +27,7 @@ import torch.nn.functional as F
 from ..checks import InputError, check_shape
 from .models import INPUT_SIZE, PersonModels
 
-__all__ = ["PersonMask", "CROP_SCALE", "candidate_crops", "find_person", "crop_around", "segment_crop",
+__all__ = ["PersonMask", "CROP_SCALE", "candidate_crops", "find_person", "crop_around", "crop_pixels", "segment_crop",
            "refine_person", "segment_person", "mask_box"]
 
 #: The pose model's crop: this many times the person box's longer side (MediaPipe's ROI scale).
@@ -99,6 +99,14 @@ def crop_around(box: tuple[float, float, float, float], scale: float = CROP_SCAL
     return (x0 + x1) / 2, (y0 + y1) / 2, scale * max(x1 - x0, y1 - y0, 1.0)
 
 
+def crop_pixels(crop: tuple[float, float, float]) -> tuple[int, int, int]:
+    """(x0, y0, s): the whole pixels of a square crop (cx, cy, side) — its top-left corner and side
+    (at least 2), before clipping to the image (:func:`segment_crop` reads them)."""
+    cx, cy, side = crop
+    s = max(int(round(side)), 2)
+    return int(round(cx - s / 2)), int(round(cy - s / 2)), s
+
+
 def _tiles(h: int, w: int) -> list[tuple[int, int, int]]:
     """(x0, y0, side) square tiles of side min(h, w), half-overlapping along the longer side."""
     side = min(h, w)
@@ -158,9 +166,7 @@ def segment_crop(image: torch.Tensor, crop: tuple[float, float, float], models: 
         :class:`PersonMask` in image coordinates, or None when the model sees no person there.
     """
     h, w = _check_image(image, "image")
-    cx, cy, side = crop
-    s = max(int(round(side)), 2)
-    x0, y0 = int(round(cx - s / 2)), int(round(cy - s / 2))
+    x0, y0, s = crop_pixels(crop)
     out = models.pose(_to_input(_square_crop(image, x0, y0, s)))
     if out.presence < MIN_PRESENCE:
         return None

@@ -24,6 +24,7 @@ from .person import (
     PersonMask,
     _largest_region,
     crop_around,
+    crop_pixels,
     find_person,
     mask_box,
     refine_person,
@@ -43,9 +44,7 @@ def _crop_motion(prev: tuple[float, float, float], cur: tuple[float, float, floa
 
 def _window(crop: tuple[float, float, float], h: int, w: int) -> tuple[int, int, int, int]:
     """(x0, y0, x1, y1) of a square crop clipped to the frame (where its probability can be non-zero)."""
-    cx, cy, side = crop
-    s = max(int(round(side)), 2)
-    x0, y0 = int(round(cx - s / 2)), int(round(cy - s / 2))
+    x0, y0, s = crop_pixels(crop)
     return max(x0, 0), max(y0, 0), min(x0 + s, w), min(y0 + s, h)
 
 
