@@ -131,7 +131,7 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     bg = np.ascontiguousarray(bg, dtype=np.uint8)  # read only: composite_covered writes into its own copy
     if not bg.flags.writeable:  # torch.from_numpy wants a writable array (a plate repeated, a decoded frame)
         bg = bg.copy()
-    return composite_covered(fg, r.frags.frame.to_frame(r.frags.pix), torch.from_numpy(bg)).numpy()
+    return composite_covered(fg, r.frags.region.to_frame(r.frags.pix), torch.from_numpy(bg)).numpy()
 
 
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
@@ -172,7 +172,7 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     out = _composite_covered(r, bg)
     if not antialias:
         return out
-    to_frame = r.frags.frame.to_frame  # the window's flat pixel indices → the frame's
+    to_frame = r.frags.region.to_frame  # the window's flat pixel indices → the frame's
     flat = torch.from_numpy(out).view(-1, 3)  # the background where not covered
 
     def color_at(idx):  # fg·α + bg·(1−α) with α in {0, 1}, in [0, 1]

@@ -134,7 +134,7 @@ def antialias_pixels(color_at, frags: Fragments, verts_clip: torch.Tensor, faces
 def _crossing(pa, pb, fa, fb, depth, verts_clip, faces, frags: Fragments):
     """Boundary position (fraction from A to B) for pixel pairs; NaN where none is found."""
     V = verts_clip.shape[1]
-    H, W = frags.frame.frame  # pixel centres in the frame's NDC (a window's pixels as the frame's)
+    H, W = frags.region.frame  # pixel centres in the frame's NDC (a window's pixels as the frame's)
     bidx, ya, xa = frags.frame_pixels(pa)
     _, yb, xb = frags.frame_pixels(pb)
 

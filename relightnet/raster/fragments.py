@@ -86,8 +86,8 @@ class Fragments:
         return self.shape[0]
 
     @property
-    def frame(self) -> Window:
-        """The window of the frame that these fragments cover (the whole frame without a ``window``)."""
+    def region(self) -> Window:
+        """The part of the frame these fragments cover: their ``window``, or the whole frame."""
         return Window.full(self.size) if self.window is None else self.window
 
     def frame_pixels(self, pix: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -96,7 +96,7 @@ class Fragments:
         b = torch.div(pix, h * w, rounding_mode="floor")
         r = pix - b * (h * w)
         row = torch.div(r, w, rounding_mode="floor")
-        win = self.frame
+        win = self.region
         return b, row + win.top, r - row * w + win.left
 
     @property

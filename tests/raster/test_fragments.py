@@ -59,9 +59,9 @@ def test_locate_and_frame_pixels():
     assert frags.locate(torch.tensor([13, 1, 0, 5, 15])).tolist() == [2, -1, 1, 0, -1]
     b, row, col = frags.frame_pixels(torch.tensor([0, 5, 13]))
     assert b.tolist() == [0, 0, 1] and row.tolist() == [3, 4, 4] and col.tolist() == [1, 2, 2]
-    assert frags.frame == frags.window
+    assert frags.region == frags.window
     whole = Fragments(pix, torch.tensor([2, 0, 1]), torch.zeros(3, 3), torch.zeros(3), (2, 2, 4))
-    assert whole.frame == Window.full((2, 4)) and whole.frame_pixels(pix)[2].tolist() == [1, 0, 1]
+    assert whole.region == Window.full((2, 4)) and whole.frame_pixels(pix)[2].tolist() == [1, 0, 1]
     empty = Fragments(pix[:0], pix[:0], torch.zeros(0, 3), torch.zeros(0), (1, 2, 2))
     assert empty.locate(torch.tensor([0, 3])).tolist() == [-1, -1]
     with pytest.raises(ShapeError, match="window"):
