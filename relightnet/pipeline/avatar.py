@@ -122,16 +122,16 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
 def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
     uint8 elsewhere (:func:`relightnet.render.composite_covered`). Only the covered pixels are
-    converted; the same bytes as compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
+    converted (a render of a window of the frame lands at the window's place); the same bytes as
+    compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
     from ..color import linear_to_srgb
     from ..render.shading import composite_covered
 
-    fg = r.image.reshape(-1, 3).index_select(0, r.frags.pix)
-    fg = (linear_to_srgb(fg.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
+    fg = (linear_to_srgb(r.pix_image.clamp(0, 1)).clamp(0, 1) * 255).round().to(torch.uint8)
     bg = np.ascontiguousarray(bg, dtype=np.uint8)  # read only: composite_covered writes into its own copy
     if not bg.flags.writeable:  # torch.from_numpy wants a writable array (a plate repeated, a decoded frame)
         bg = bg.copy()
-    return composite_covered(fg, r.frags.pix, torch.from_numpy(bg)).numpy()
+    return composite_covered(fg, r.frags.region.to_frame(r.frags.pix), torch.from_numpy(bg)).numpy()
 
 
 def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
@@ -163,24 +163,28 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     (H, W, 3) uint8 (:func:`_composite_covered`); with ``antialias``, the silhouette's pixels then
     get what analytic edge antialiasing of the whole composited frame gives there
     (:func:`relightnet.raster.antialias_pixels`: the colours of the pixels along the silhouette
-    only, no float copy of the frame; a frame at the pixel limit is 150 MB in float)."""
+    only, no float copy of the frame; a frame at the pixel limit is 150 MB in float). The render may
+    be of a window of the frame (``render_body_frames(box=True)``, holding every pixel next to a
+    covered one): its images, mask and silhouette are the window's, and only the composite is the
+    frame's."""
     from ..color import linear_to_srgb
 
     out = _composite_covered(r, bg)
     if not antialias:
         return out
-    img, covered = r.image.reshape(-1, 3), r.frags.mask.reshape(-1)
+    to_frame = r.frags.region.to_frame  # the window's flat pixel indices → the frame's
     flat = torch.from_numpy(out).view(-1, 3)  # the background where not covered
 
     def color_at(idx):  # fg·α + bg·(1−α) with α in {0, 1}, in [0, 1]
-        c = flat[idx].float().div_(255)
-        on = covered[idx]
-        c[on] = linear_to_srgb(img[idx[on]].clamp(0, 1))
+        c = flat[to_frame(idx)].float().div_(255)
+        at = r.frags.locate(idx)
+        on = at >= 0
+        c[on] = linear_to_srgb(r.pix_image[at[on]].clamp(0, 1))
         return c
 
-    sil = silhouette_pixels(r.alpha[0] > 0)[None]
+    sil = silhouette_pixels(r.frags.mask[0])[None]
     idx, colors = antialias_pixels(color_at, r.frags, camera.transform(verts), faces, sil)
-    flat[idx] = colors.clamp_(0, 1).mul_(255).round_().to(torch.uint8)
+    flat[to_frame(idx)] = colors.clamp_(0, 1).mul_(255).round_().to(torch.uint8)
     return out
 
 
@@ -307,7 +311,7 @@ def avatar(
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,
                        lit.evidence, lit.prior, method, title=f"{Path(target).name}: light of the target, {method}")
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
-                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True)
+                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True, box=True)
     written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,
                              progress, plate or target)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)

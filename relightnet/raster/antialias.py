@@ -49,7 +49,6 @@ def _pairs(frags: Fragments, verts_clip: torch.Tensor, faces: torch.Tensor):
     (A, B) showing different triangles and where their boundary crosses (fraction from A to B; 0.5
     where none is found). Found from int32 face and float depth images made here (no index per pixel)."""
     B, H, W = frags.shape
-    V = verts_clip.shape[1]
     faces = faces.to(device=verts_clip.device, dtype=torch.long)
     n = B * H * W
     fid = torch.full((n,), -1, dtype=torch.int32, device=frags.pix.device).index_copy_(0, frags.pix,
@@ -64,7 +63,7 @@ def _pairs(frags: Fragments, verts_clip: torch.Tensor, faces: torch.Tensor):
             continue
         pa = (at[:, 0] * H + at[:, 1]) * W + at[:, 2]
         pb = pa + step
-        s = _crossing(pa, pb, fid[pa].long(), fid[pb].long(), depth, verts_clip, faces, V, H, W)
+        s = _crossing(pa, pb, fid[pa].long(), fid[pb].long(), depth, verts_clip, faces, frags)
         yield pa, pb, torch.where(torch.isfinite(s), s, torch.full_like(s, 0.5))
 
 
@@ -73,7 +72,8 @@ def antialias(color: torch.Tensor, frags: Fragments, verts_clip: torch.Tensor, f
 
     Args:
         color: (B, H, W, C) shaded image (background included) from the same rasterization.
-        frags: :class:`Fragments` of ``rasterize(verts_clip, faces, ...)``.
+        frags: :class:`Fragments` of ``rasterize(verts_clip, faces, ...)``, of the frame or of a
+            window of it (then ``color`` is the window's and pairs reaching outside it are not seen).
         verts_clip: (B, V, 4) clip-space vertices that were rasterized.
         faces: (F, 3).
 
@@ -131,19 +131,18 @@ def antialias_pixels(color_at, frags: Fragments, verts_clip: torch.Tensor, faces
     return idx, out
 
 
-def _crossing(pa, pb, fa, fb, depth, verts_clip, faces, V, H, W):
+def _crossing(pa, pb, fa, fb, depth, verts_clip, faces, frags: Fragments):
     """Boundary position (fraction from A to B) for pixel pairs; NaN where none is found."""
-    HW = H * W
-    bidx = torch.div(pa, HW, rounding_mode="floor")
+    V = verts_clip.shape[1]
+    H, W = frags.region.frame  # pixel centres in the frame's NDC (a window's pixels as the frame's)
+    bidx, ya, xa = frags.frame_pixels(pa)
+    _, yb, xb = frags.frame_pixels(pb)
 
-    def ndc(p):
-        r = p - bidx * HW
-        y = torch.div(r, W, rounding_mode="floor")
-        x = r - y * W
+    def ndc(x, y):
         return (2 * x + 1).to(verts_clip.dtype) / W - 1, 1 - (2 * y + 1).to(verts_clip.dtype) / H
 
-    ua, va = ndc(pa)
-    ub, vb = ndc(pb)
+    ua, va = ndc(xa, ya)
+    ub, vb = ndc(xb, yb)
     nan = torch.full_like(ua, float("nan"))
 
     def tri(f):

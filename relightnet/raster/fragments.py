@@ -8,6 +8,7 @@ from functools import cached_property
 import torch
 
 from ..checks import ShapeError, check_shape
+from .window import Window
 
 __all__ = ["Fragments"]
 
@@ -27,7 +28,10 @@ class Fragments:
             vertices (in the order of ``faces[face]``), summing to 1.
         pix_depth: (N,) NDC depth ``z_clip / w_clip`` in [−1, 1] (−1 on the near plane;
             :meth:`relightnet.raster.Camera.depth_to_view` converts to a distance).
-        shape: (B, H, W).
+        shape: (B, H, W) the pixel grid: the frame's, or the window's when ``window`` is set.
+        window: the :class:`~relightnet.raster.Window` of the frame that was rasterized
+            (``rasterize(..., window=)``; flat indices into its B·H·W pixels map to the frame's with
+            ``window.to_frame``), or None for the whole frame.
 
     Dense views, built on first access and cached:
 
@@ -42,11 +46,15 @@ class Fragments:
     pix_bary: torch.Tensor
     pix_depth: torch.Tensor
     shape: tuple[int, int, int]
+    window: Window | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", tuple(int(s) for s in self.shape))
         if len(self.shape) != 3:
             raise ShapeError(f"shape: expected (B, H, W), got {self.shape}")
+        if self.window is not None and self.window.size != self.shape[1:]:
+            raise ShapeError(f"shape: expected (B, {self.window.height}, {self.window.width}) for its window, "
+                             f"got {self.shape}")
         dims = check_shape(self.pix, ["N"], name="pix")
         check_shape(self.pix_face, ["N"], name="pix_face", dims=dims)
         check_shape(self.pix_bary, ["N", 3], name="pix_bary", dims=dims)
@@ -78,6 +86,20 @@ class Fragments:
         return self.shape[0]
 
     @property
+    def region(self) -> Window:
+        """The part of the frame these fragments cover: their ``window``, or the whole frame."""
+        return Window.full(self.size) if self.window is None else self.window
+
+    def frame_pixels(self, pix: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Flat indices into the B·H·W pixels → (batch, row, column) of the frame, each (N,) int64."""
+        B, h, w = self.shape
+        b = torch.div(pix, h * w, rounding_mode="floor")
+        r = pix - b * (h * w)
+        row = torch.div(r, w, rounding_mode="floor")
+        win = self.region
+        return b, row + win.top, r - row * w + win.left
+
+    @property
     def pix_batch(self) -> torch.Tensor:
         """(N,) int64 batch index of every covered pixel."""
         return torch.div(self.pix, self.shape[1] * self.shape[2], rounding_mode="floor")
@@ -103,6 +125,28 @@ class Fragments:
         used = faces.to(device=dev, dtype=torch.long)[hit].reshape(-1)
         seen = torch.zeros(int(n_verts), dtype=torch.bool, device=dev).index_fill_(0, used, True)
         return torch.nonzero(seen).squeeze(1)
+
+    @cached_property
+    def _order(self) -> tuple[torch.Tensor, torch.Tensor]:
+        return torch.sort(self.pix)
+
+    def locate(self, pix: torch.Tensor) -> torch.Tensor:
+        """Where pixels are in the compact fields: ``pix_*[locate(p)]`` are pixel p's values.
+
+        A binary search in the sorted covered pixels (sorted once, on first use), no image-sized
+        index.
+
+        Args:
+            pix: (M,) int64 flat indices into the B·H·W pixels.
+
+        Returns:
+            (M,) int64 positions into ``pix``, ``pix_face``, ... ; −1 where a pixel is not covered.
+        """
+        srt, order = self._order
+        if srt.numel() == 0:
+            return torch.full_like(pix, -1)
+        at = torch.searchsorted(srt, pix).clamp_(max=srt.numel() - 1)
+        return torch.where(srt[at] == pix, order[at], torch.full_like(at, -1))
 
     @cached_property
     def face_id(self) -> torch.Tensor:

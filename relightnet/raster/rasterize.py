@@ -40,14 +40,17 @@ from ..checks import InputError, check_finite, check_shape
 from .clip import GUARD_BAND, clip_triangles, outcodes
 from .fragments import Fragments
 from .spans import SUB, ZBuffer, _edge_kernel, _emit_kernel, _pair_kernel, rasterize_spans
+from .window import Window
 
-__all__ = ["rasterize"]
+__all__ = ["rasterize", "screen_box"]
 
 logger = logging.getLogger(__name__)
 
 #: Largest image side: keeps snapped coordinates (guard band included) below 2^23 subpixel
 #: steps, so every edge-function value is an integer below 2^53, exact in float64.
 _MAX_SIZE = 16384
+#: Covered pixels whose barycentrics are computed at once (about 100 bytes of float64 temporaries each).
+_BARY_CHUNK = 1 << 18
 
 
 def _snap_ndc(u, v, H: int, W: int):
@@ -55,17 +58,18 @@ def _snap_ndc(u, v, H: int, W: int):
     return torch.round((u + 1.0) * (W * SUB / 2)), torch.round((1.0 - v) * (H * SUB / 2))
 
 
-def _box_kernel(sx, sy, H: int, W: int):
-    """Pixel rows/columns whose centres lie in the boxes of triangles (3, n).
+def _box_kernel(sx, sy, top: int, left: int, bottom: int, right: int):
+    """Pixel rows/columns whose centres lie in the boxes of triangles (3, n), within the window.
 
     sx, sy: vertex positions in pixel units relative to pixel centres (snapped / 256 − 0.5).
-    Returns (nonempty (n,) bool, lo_y, hi_y) with rows clamped to the image.
+    top, left, bottom, right: the window's first/last row and column (the frame's pixels).
+    Returns (nonempty (n,) bool, lo_x, hi_x, lo_y, hi_y) clamped to the window.
     """
-    lo_x = torch.ceil(torch.minimum(torch.minimum(sx[0], sx[1]), sx[2])).clamp_(min=0)
-    hi_x = torch.floor(torch.maximum(torch.maximum(sx[0], sx[1]), sx[2])).clamp_(max=W - 1)
-    lo_y = torch.ceil(torch.minimum(torch.minimum(sy[0], sy[1]), sy[2])).clamp_(min=0)
-    hi_y = torch.floor(torch.maximum(torch.maximum(sy[0], sy[1]), sy[2])).clamp_(max=H - 1)
-    return (lo_x <= hi_x) & (lo_y <= hi_y), lo_y, hi_y
+    lo_x = torch.ceil(torch.minimum(torch.minimum(sx[0], sx[1]), sx[2])).clamp_(min=left)
+    hi_x = torch.floor(torch.maximum(torch.maximum(sx[0], sx[1]), sx[2])).clamp_(max=right)
+    lo_y = torch.ceil(torch.minimum(torch.minimum(sy[0], sy[1]), sy[2])).clamp_(min=top)
+    hi_y = torch.floor(torch.maximum(torch.maximum(sy[0], sy[1]), sy[2])).clamp_(max=bottom)
+    return (lo_x <= hi_x) & (lo_y <= hi_y), lo_x, hi_x, lo_y, hi_y
 
 
 def _plane_kernel(u, v, zn, iw):
@@ -111,14 +115,18 @@ def _homogeneous(cx, cy, cz, cw):
     return rows, zplane, det
 
 
-def _bary_kernel(pix, t, rows, zplane, gid, B: int, F: int, H: int, W: int):
-    """Barycentrics (3, N) float64, NDC depth (N,) and face index (N,) of covered pixels."""
+def _bary_kernel(pix, t, rows, zplane, gid, B: int, F: int, h: int, w: int, top: int, left: int, H: int, W: int):
+    """Barycentrics (3, N) float64, NDC depth (N,) and face index (N,) of covered pixels.
+
+    pix: flat indices into the B·h·w pixels of the window at (top, left) of the (H, W) frame; the
+    pixel centres' NDC are the frame's (for the whole frame the same operations as without a window).
+    """
     pf = pix.to(torch.float64)
     if B > 1:
-        pf = pf - torch.floor(pf / (H * W)) * (H * W)
-    py = torch.floor(pf / W)  # exact: integers below 2^53
-    u = (pf - py * W) * (2.0 / W) + (1.0 / W - 1.0)
-    v = py * (-2.0 / H) + (1.0 - 1.0 / H)
+        pf = pf - torch.floor(pf / (h * w)) * (h * w)
+    py = torch.floor(pf / w)  # exact: integers below 2^53
+    u = (pf - py * w + left) * (2.0 / W) + (1.0 / W - 1.0)
+    v = (py + top) * (-2.0 / H) + (1.0 - 1.0 / H)
     r = rows.reshape(9, -1)
     bt = [torch.addcmul(torch.addcmul(r[6 + i].index_select(0, t), r[i].index_select(0, t), u),
                         r[3 + i].index_select(0, t), v) for i in range(3)]
@@ -164,36 +172,117 @@ class _Fallback:
 
 
 def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backfaces: bool = False,
-              check: bool = True, compile: bool = False) -> Fragments:
+              check: bool = True, compile: bool = False, window: Window | None = None) -> Fragments:
     """Rasterize triangles given in clip space into (B, H, W) fragments.
 
     Args:
         verts_clip: (B, V, 4) clip-space vertices (``Camera.transform``), float32/float64.
         faces: (F, 3) int64 vertex indices shared by the batch.
-        size: (H, W) output size (pixel convention of :mod:`relightnet.raster.camera`), at most
+        size: (H, W) the frame's size (pixel convention of :mod:`relightnet.raster.camera`), at most
             16384 each.
         cull_backfaces: drop triangles that are clockwise in NDC (seen from behind).
         check: validate the inputs (shapes, finiteness, index range).
         compile: run the elementwise stages through ``torch.compile`` (module docstring).
+        window: a :class:`Window` of the (H, W) frame: only its pixels are rasterized, every buffer
+            is its size, and the fragments are bit for bit the whole frame's at those pixels (the
+            same snapped triangles, depths and pixel-centre NDC; e.g. :func:`screen_box`'s). None:
+            the whole frame.
 
     Returns:
-        :class:`Fragments` for the nearest triangle of every pixel: ``face_id`` (B, H, W)
-        (−1 = background), perspective-correct ``bary`` (B, H, W, 3) and NDC ``depth``
-        (B, H, W) (+inf = background), in ``verts_clip``'s dtype.
+        :class:`Fragments` for the nearest triangle of every pixel: ``face_id`` (B, h, w)
+        (−1 = background), perspective-correct ``bary`` (B, h, w, 3) and NDC ``depth``
+        (B, h, w) (+inf = background), in ``verts_clip``'s dtype; (h, w) is the window's size
+        ((H, W) without one) and ``Fragments.window`` the window.
     """
     H, W = int(size[0]), int(size[1])
     if check:
         _check(verts_clip, faces, H, W)
+    win = _window(window, H, W)
     k = _compiled_kernels() if compile else _EAGER
     dev = verts_clip.device
     out_dtype = verts_clip.dtype
-    B, V = verts_clip.shape[:2]
+    B = verts_clip.shape[0]
     F = faces.shape[0]
-    BF = B * F
-    if BF == 0:
+    shape = (B, win.height, win.width)
+    if B * F == 0:
         e = torch.zeros(0, dtype=torch.long, device=dev)
         return Fragments(e, e, torch.zeros(0, 3, dtype=out_dtype, device=dev),
-                         torch.zeros(0, dtype=out_dtype, device=dev), (B, H, W))
+                         torch.zeros(0, dtype=out_dtype, device=dev), shape, window)
+    X, Y, _, _, lo_y, hi_y, gid, rows, zplane, det = _triangles(verts_clip, faces, H, W, win, k)
+    n = gid.shape[0]
+    hw = win.height * win.width
+    zb = ZBuffer(B * hw, n, dev)
+    base = torch.div(gid, F, rounding_mode="floor").to(torch.float64) * hw
+    rasterize_spans(zb, X, Y, lo_y, hi_y, zplane, det, base, H, W, cull_backfaces, k,
+                    (win.top, win.left, win.width))
+    pix, t = zb.winners()
+    del zb  # the z-buffer and its candidates before the covered pixels' barycentrics
+    # pix_bary is (N, 3) with contiguous columns: consumers read it per vertex
+    bary = torch.empty(3, pix.shape[0], dtype=out_dtype, device=dev)
+    depth = torch.empty(pix.shape[0], dtype=out_dtype, device=dev)
+    face = torch.empty_like(pix)
+    for a in range(0, pix.shape[0], _BARY_CHUNK):  # float64 temporaries of a chunk at a time
+        s = slice(a, a + _BARY_CHUNK)
+        bary[:, s], depth[s], face[s] = k["bary"](pix[s], t[s], rows, zplane, gid, B, F, win.height, win.width,
+                                                  win.top, win.left, H, W)
+    return Fragments(pix, face, bary.T, depth, shape, window)
+
+
+def screen_box(verts_clip: torch.Tensor, faces: torch.Tensor, size, pad: int = 2,
+               check: bool = True) -> Window | None:
+    """The smallest :class:`Window` holding every pixel that :func:`rasterize` can cover, padded.
+
+    Found from the rasterizer's own triangles (snapped, and clipped where they cross the near or
+    far plane or the guard band, so a triangle behind the camera adds only what it can show): the
+    union of the boxes of pixel centres each one spans in the frame (over the batch), grown by
+    ``pad`` pixels on each side and cut to the frame. ``rasterize(..., window=screen_box(...))``
+    then covers the same pixels as the whole frame, and with ``pad >= 1`` every pixel next to a
+    covered one is in the window too (what :func:`relightnet.raster.antialias` looks at).
+
+    Args:
+        verts_clip: (B, V, 4) clip-space vertices.
+        faces: (F, 3) int64.
+        size: (H, W) the frame's size.
+        pad: pixels added on each side, >= 0.
+        check: validate the inputs.
+
+    Returns:
+        The window, or None when no triangle can cover a pixel centre of the frame.
+    """
+    H, W = int(size[0]), int(size[1])
+    if check:
+        _check(verts_clip, faces, H, W)
+    if isinstance(pad, bool) or int(pad) < 0:
+        raise InputError(f"pad: expected an integer >= 0, got {pad!r}")
+    if verts_clip.shape[0] * faces.shape[0] == 0:
+        return None
+    _, _, lo_x, hi_x, lo_y, hi_y, _, _, _, _ = _triangles(verts_clip, faces, H, W, Window.full((H, W)), _EAGER)
+    if lo_x.numel() == 0:
+        return None
+    p = int(pad)
+    top, left = max(int(lo_y.min()) - p, 0), max(int(lo_x.min()) - p, 0)
+    bottom, right = min(int(hi_y.max()) + p, H - 1), min(int(hi_x.max()) + p, W - 1)
+    return Window(top, left, bottom - top + 1, right - left + 1, (H, W))
+
+
+def _window(window, H: int, W: int) -> Window:
+    if window is None:
+        return Window.full((H, W))
+    if not isinstance(window, Window) or window.frame != (H, W):
+        raise InputError(f"window: expected a Window of the ({H}, {W}) frame, got {window!r}")
+    return window
+
+
+def _triangles(verts_clip, faces, H: int, W: int, win: Window, k):
+    """The triangles (and clipped pieces) whose box holds a pixel centre of the window.
+
+    Returns X, Y (3, n) snapped vertices, lo_x, hi_x, lo_y, hi_y (n,) their boxes in the window,
+    gid (n,) index into the B·F faces, rows (3, 3, n), zplane (3, n), det (n,) (:func:`_plane_kernel`).
+    """
+    dev = verts_clip.device
+    B, V = verts_clip.shape[:2]
+    BF = B * faces.shape[0]
+    bounds = (win.top, win.left, win.top + win.height - 1, win.left + win.width - 1)
     cx, cy, cz, cw = verts_clip.detach().to(torch.float64).reshape(B * V, 4).T.contiguous()
     # (3·B·F) vertex indices into the flattened (B·V) vertices, vertex-major
     fv = (faces.to(device=dev, dtype=torch.long).T[:, None, :]
@@ -208,8 +297,8 @@ def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backface
 
     # Per face: every vertex inside, and a pixel centre in the box → rasterized directly.
     half = SUB / 2
-    ok, lo_y, hi_y = k["box"](((Xv - half) / SUB).index_select(0, fv).view(3, BF),
-                              ((Yv - half) / SUB).index_select(0, fv).view(3, BF), H, W)
+    ok, lo_x, hi_x, lo_y, hi_y = k["box"](((Xv - half) / SUB).index_select(0, fv).view(3, BF),
+                                          ((Yv - half) / SUB).index_select(0, fv).view(3, BF), *bounds)
     if not all_inside:
         ins = inside.index_select(0, fv).view(3, BF)
         allin = ins[0] & ins[1] & ins[2]
@@ -220,23 +309,14 @@ def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backface
     tv = fv.index_select(0, tv)  # (3·n) vertex of each selected corner
     X = Xv.index_select(0, tv).view(3, n)
     Y = Yv.index_select(0, tv).view(3, n)
-    lo_y, hi_y = lo_y.index_select(0, gid), hi_y.index_select(0, gid)
+    boxes = [b.index_select(0, gid) for b in (lo_x, hi_x, lo_y, hi_y)]
     rows, zplane, det = k["plane"](*(a.index_select(0, tv).view(3, n) for a in (u, v, cz / cw, 1.0 / cw)))
-
+    out = (X, Y, *boxes, gid, rows, zplane, det)
     if not all_inside:
         need = torch.nonzero(~allin).squeeze(1)
         if need.numel():
-            X, Y, lo_y, hi_y, gid, rows, zplane, det = _add_clipped(
-                need, fv, (cx, cy, cz, cw), BF, H, W, X, Y, lo_y, hi_y, gid, rows, zplane, det)
-            n = gid.shape[0]
-
-    zb = ZBuffer(B * H * W, n, dev)
-    base = torch.div(gid, F, rounding_mode="floor").to(torch.float64) * (H * W)
-    rasterize_spans(zb, X, Y, lo_y, hi_y, zplane, det, base, H, W, cull_backfaces, k)
-    pix, t = zb.winners()
-    bary, depth, face = k["bary"](pix, t, rows, zplane, gid, B, F, H, W)
-    # pix_bary is (N, 3) with contiguous columns: consumers read it per vertex
-    return Fragments(pix, face, bary.to(out_dtype).T, depth.to(out_dtype), (B, H, W))
+            out = _add_clipped(need, fv, (cx, cy, cz, cw), BF, H, W, bounds, out)
+    return out
 
 
 def _check(verts_clip, faces, H, W) -> None:
@@ -253,25 +333,27 @@ def _check(verts_clip, faces, H, W) -> None:
     check_finite(verts_clip, "verts_clip")
 
 
-def _add_clipped(need, fv, comps, BF, H, W, X, Y, lo_y, hi_y, gid, rows, zplane, det):
-    """Clip faces ``need`` (some vertex outside the clip volume); append the pieces."""
+def _add_clipped(need, fv, comps, BF, H, W, bounds, tris):
+    """Clip faces ``need`` (some vertex outside the clip volume); append the pieces to ``tris``
+    (the tuple :func:`_triangles` returns)."""
     sel3 = (need[None] + torch.arange(0, 3 * BF, BF, device=need.device)[:, None]).view(-1)
     tv = fv.index_select(0, sel3)
     t = torch.stack([c.index_select(0, tv).view(3, -1) for c in comps], dim=-1).transpose(0, 1)
     codes = outcodes(t)  # (m, 3)
     live = torch.nonzero((codes[:, 0] & codes[:, 1] & codes[:, 2]) == 0).squeeze(1)
     if live.numel() == 0:
-        return X, Y, lo_y, hi_y, gid, rows, zplane, det
+        return tris
     t = t.index_select(0, live)
     pieces, loc = clip_triangles(t, torch.arange(live.shape[0], device=need.device))
     pieces = pieces.permute(2, 1, 0)  # (4, 3, m')
     Xp, Yp = _snap_ndc(pieces[0] / pieces[3], pieces[1] / pieces[3], H, W)
-    ok, plo, phi = _box_kernel((Xp - SUB / 2) / SUB, (Yp - SUB / 2) / SUB, H, W)
+    ok, *boxes = _box_kernel((Xp - SUB / 2) / SUB, (Yp - SUB / 2) / SUB, *bounds)
     keep = torch.nonzero(ok).squeeze(1)
     loc = loc.index_select(0, keep)
     # barycentrics and depth refer to the original (unclipped) triangle
     prow, pz, pdet = _homogeneous(*t.index_select(0, loc).permute(2, 1, 0))
+    X, Y, lo_x, hi_x, lo_y, hi_y, gid, rows, zplane, det = tris
     return (torch.cat([X, Xp[:, keep]], 1), torch.cat([Y, Yp[:, keep]], 1),
-            torch.cat([lo_y, plo[keep]]), torch.cat([hi_y, phi[keep]]),
+            *(torch.cat([a, b[keep]]) for a, b in zip((lo_x, hi_x, lo_y, hi_y), boxes, strict=True)),
             torch.cat([gid, need.index_select(0, live).index_select(0, loc)]),
             torch.cat([rows, prow], 2), torch.cat([zplane, pz], 1), torch.cat([det, pdet]))

@@ -67,20 +67,22 @@ def _edge_kernel(X, Y, zplane, det, lo_y, hi_y, slots, cull_backfaces: bool, H: 
     return Ds, Gs, Gys, zc, zx, zy, nrows
 
 
-def _pair_kernel(t, off, Ds, Gs, Gys, zc, zx, zy, base, W: int):
+def _pair_kernel(t, off, Ds, Gs, Gys, zc, zx, zy, base, top: int, left: int, w: int):
     """Covered column interval of each (triangle t, row) pair; row = pair index + off[t].
 
+    Rows and columns are the frame's; the columns are cut to the window's ``left .. left + w − 1``,
+    and pixel indices are the window's (of ``w`` columns, its row 0 the frame's row ``top``).
     Returns count (int64), flat pixel index of the first covered pixel (int64), depth (+2)
     there and the depth step per column.
     """
     y = torch.arange(t.shape[0], device=t.device, dtype=torch.float64) + off.index_select(0, t)
     q = [torch.addcmul(Gs[i].index_select(0, t), Gys[i].index_select(0, t), y) / Ds[i].index_select(0, t)
          for i in range(4)]
-    x0 = torch.clamp(torch.maximum(torch.ceil(q[0]), torch.ceil(q[1])), min=0.0)
-    x1 = torch.clamp(torch.minimum(torch.floor(q[2]), torch.floor(q[3])), max=W - 1.0)
+    x0 = torch.clamp(torch.maximum(torch.ceil(q[0]), torch.ceil(q[1])), min=float(left))
+    x1 = torch.clamp(torch.minimum(torch.floor(q[2]), torch.floor(q[3])), max=left + w - 1.0)
     cnt = torch.clamp(x1 - x0 + 1.0, min=0.0).long()
     zxp = zx.index_select(0, t)
-    pixoff = torch.addcmul(base.index_select(0, t) + x0, y, torch.full_like(y, W)).long()
+    pixoff = torch.addcmul(base.index_select(0, t) + (x0 - left), y - top, torch.full_like(y, w)).long()
     zoff = torch.addcmul(torch.addcmul(zc.index_select(0, t), zy.index_select(0, t), y), zxp, x0)
     return cnt, pixoff, zoff, zxp
 
@@ -155,12 +157,14 @@ class ZBuffer:
 
 
 def rasterize_spans(zb: ZBuffer, X, Y, lo_y, hi_y, zplane, det, base, H: int, W: int,
-                    cull_backfaces: bool, kernels) -> None:
+                    cull_backfaces: bool, kernels, window: tuple[int, int, int]) -> None:
     """Z-test every covered pixel of the snapped triangles X, Y (3, n) into ``zb``.
 
-    lo_y, hi_y: (n,) first/last pixel row; zplane (3, n) NDC depth = zplane · (u, v, 1);
-    det (n,) 0 for degenerate triangles; base (n,) flat offset of each triangle's image.
-    ``kernels`` maps kernel names to callables (eager or compiled).
+    lo_y, hi_y: (n,) first/last pixel row (the frame's, within the window); zplane (3, n) NDC
+    depth = zplane · (u, v, 1); det (n,) 0 for degenerate triangles; base (n,) flat offset of each
+    triangle's image in ``zb``; H, W the frame's size; window (top, left, width): the window's first
+    row and column and its width (``zb`` holds the window's pixels). ``kernels`` maps kernel names to
+    callables (eager or compiled).
     """
     slots = torch.tensor(_SLOTS, device=X.device)
     Ds, Gs, Gys, zc, zx, zy, nrows = kernels["edge"](X, Y, zplane, det, lo_y, hi_y, slots,
@@ -173,7 +177,7 @@ def rasterize_spans(zb: ZBuffer, X, Y, lo_y, hi_y, zplane, det, base, H: int, W:
         t = torch.repeat_interleave(nr, output_size=P)  # triangle of each (triangle, row) pair
         off = lo_y[a:b] - (torch.cumsum(nr, 0) - nr)
         cnt, pixoff, zoff, zxp = kernels["pair"](t, off, Ds[:, a:b], Gs[:, a:b], Gys[:, a:b], zc[a:b],
-                                                 zx[a:b], zy[a:b], base[a:b], W)
+                                                 zx[a:b], zy[a:b], base[a:b], *window)
         tid = t + a
         for c, d in chunks(cnt):
             cn = cnt[c:d]

@@ -13,11 +13,12 @@ by the camera rotation; for the default camera (R = I) this is the identity.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import torch
 
 from ..checks import InputError, check_sh_count, check_shape
-from ..raster import Camera, Fragments, interpolate, interpolate_pixels, rasterize, texture_pixels
+from ..raster import Camera, Fragments, Window, interpolate, interpolate_pixels, rasterize, texture_pixels
 from ..sh import rotate_sh, rotation_world_to_light
 from .shading import shading
 
@@ -43,25 +44,45 @@ class TexturedAlbedo:
 class RenderOutput:
     """What :func:`render_mesh` returns (channels-last, linear RGB).
 
+    (H, W) is the frame's size, or the window's when one was rendered (``frags.window``: where it lies
+    in the frame).
+
     Attributes:
-        image: (B, H, W, 3) shaded radiance, 0 on background.
-        alpha: (B, H, W) coverage in {0, 1}.
+        pix_image: (N, 3) shaded radiance of the N covered pixels (at ``frags.pix``, in its order).
         frags: the :class:`~relightnet.raster.Fragments`.
         transport: (B, H, W, K) (or (B, H, W, K, 3) for per-channel transport), when maps were asked.
         albedo: (B, H, W, 3), when maps were asked.
         normals: (B, H, W, 3) unit world-frame normals (0 on background), when maps were asked.
         depth: (B, H, W) distance in front of the camera (+inf on background), when maps were asked.
         shading: (B, H, W, 3) S = T·L, when maps were asked.
+
+    Dense views, built on first access and cached (a caller that composites the covered pixels only
+    never makes them):
+
+    - ``image`` (B, H, W, 3) shaded radiance, 0 on background;
+    - ``alpha`` (B, H, W) coverage in {0, 1}, in ``pix_image``'s dtype.
     """
 
-    image: torch.Tensor
-    alpha: torch.Tensor
+    pix_image: torch.Tensor
     frags: Fragments
     transport: torch.Tensor | None = None
     albedo: torch.Tensor | None = None
     normals: torch.Tensor | None = None
     depth: torch.Tensor | None = None
     shading: torch.Tensor | None = None
+
+    @cached_property
+    def image(self) -> torch.Tensor:
+        """(B, H, W, 3) shaded radiance, 0 on background."""
+        B, H, W = self.frags.shape
+        x = self.pix_image
+        return torch.zeros(B * H * W, 3, dtype=x.dtype, device=x.device).index_copy(0, self.frags.pix, x).view(
+            B, H, W, 3)
+
+    @cached_property
+    def alpha(self) -> torch.Tensor:
+        """(B, H, W) coverage in {0, 1}."""
+        return self.frags.mask.to(self.pix_image.dtype)
 
 
 def light_in_world(light: torch.Tensor, camera: Camera) -> torch.Tensor:
@@ -98,6 +119,7 @@ def render_mesh(
     light_frame: str = "camera",
     maps: bool = False,
     frags: Fragments | None = None,
+    window: Window | None = None,
 ) -> RenderOutput:
     """Render a mesh with precomputed per-vertex transport under an SH light.
 
@@ -108,12 +130,16 @@ def render_mesh(
             or per-channel (V, K, 3) / (B, V, K, 3) after coloured interreflection.
         albedo: (V, 3) / (B, V, 3) per-vertex linear albedo, or a :class:`TexturedAlbedo`.
         light: (K, 3) or (B, K, 3) SH light.
-        camera: B cameras (``camera.size`` is the image size).
+        camera: B cameras (``camera.size`` is the frame's size).
         normals: (V, 3) / (B, V, 3) world normals, needed only for the ``normals`` map.
         light_frame: ``"camera"`` (light relative to the camera, docs/design.md) or ``"world"``.
         maps: also return the transport, albedo, normals, depth and shading maps.
-        frags: the :class:`Fragments` of ``rasterize(camera.transform(verts), faces, camera.size)``
-            when already computed (e.g. to find the visible vertices first); None rasterizes.
+        frags: the :class:`Fragments` of ``rasterize(camera.transform(verts), faces, camera.size,
+            window=window)`` when already computed (e.g. to find the visible vertices first); None
+            rasterizes.
+        window: render only this :class:`~relightnet.raster.Window` of the frame (e.g. the mesh's
+            :func:`~relightnet.raster.screen_box`): every image is the window's size and holds the
+            whole frame's render at those pixels. None: the whole frame.
 
     Returns:
         :class:`RenderOutput`.
@@ -136,7 +162,9 @@ def render_mesh(
     check_shape(L, [B, k, 3], name="light")
 
     if frags is None:
-        frags = rasterize(camera.transform(verts), faces, camera.size)
+        frags = rasterize(camera.transform(verts), faces, camera.size, window=window)
+    elif window is not None and frags.window != window:
+        raise InputError(f"frags: rasterized in {frags.window}, not in the window {window} asked for")
     # Per-vertex shading, batched over cameras: (B, V, 3).
     Tb = transport.expand(B, *transport.shape) if transport.dim() == len(tail) else transport
     S_v = torch.stack([shading(Tb[b], L[b]) for b in range(B)])
@@ -152,17 +180,18 @@ def render_mesh(
         albedo = _batched(albedo, B, ["V", 3], "albedo", nv)
         A = interpolate_pixels(albedo.to(S), frags, faces)
 
-    H, W = camera.size
-    image = torch.zeros(B * H * W, 3, dtype=S.dtype, device=S.device)
-    image.index_copy_(0, frags.pix, A * S)
-    out = dict(image=image.view(B, H, W, 3), alpha=frags.mask.to(S.dtype), frags=frags)
-    if maps:
-        t_flat = Tb.reshape(B, Tb.shape[1], -1)
-        out["transport"] = interpolate(t_flat, frags, faces).view(B, H, W, *Tb.shape[2:])
-        out["albedo"] = torch.zeros_like(image).index_copy_(0, frags.pix, A).view(B, H, W, 3)
-        out["shading"] = torch.zeros_like(image).index_copy_(0, frags.pix, S).view(B, H, W, 3)
-        out["depth"] = camera.depth_to_view(frags.depth)
-        if normals is not None:
-            n = interpolate(normals.to(S), frags, faces)
-            out["normals"] = torch.nn.functional.normalize(n, dim=-1)
-    return RenderOutput(**out)
+    return RenderOutput(A * S, frags, **(_maps(Tb, A, S, normals, frags, faces, camera) if maps else {}))
+
+
+def _maps(Tb, A, S, normals, frags: Fragments, faces, camera: Camera) -> dict:
+    """:class:`RenderOutput`'s maps from the (B, V, K[, 3]) transport and the covered pixels' (N, 3)
+    albedo and shading."""
+    B, H, W = frags.shape
+    out = {"transport": interpolate(Tb.reshape(B, Tb.shape[1], -1), frags, faces).view(B, H, W, *Tb.shape[2:])}
+    for name, x in (("albedo", A), ("shading", S)):
+        out[name] = torch.zeros(B * H * W, 3, dtype=S.dtype, device=S.device).index_copy_(0, frags.pix, x).view(
+            B, H, W, 3)
+    out["depth"] = camera.depth_to_view(frags.depth)
+    if normals is not None:
+        out["normals"] = torch.nn.functional.normalize(interpolate(normals.to(S), frags, faces), dim=-1)
+    return out

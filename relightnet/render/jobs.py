@@ -18,7 +18,7 @@ from ..body.base import vertex_normals
 from ..checks import InputError, sh_order_from_count
 from ..io.documents import clip
 from ..prt import check_mesh, vertex_transport
-from ..raster import Camera, default_camera, look_at, perspective_camera, rasterize
+from ..raster import Camera, Window, default_camera, look_at, perspective_camera, rasterize, screen_box
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
 
 logger = logging.getLogger(__name__)
@@ -113,6 +113,25 @@ def render_mesh_file(path, light: torch.Tensor, size=512, occlusion: bool = True
                        normals=mesh.normals, light_frame="world", maps=True)
 
 
+def _visible(camera: Camera, verts: torch.Tensor, faces: torch.Tensor, box: bool, seen: bool):
+    """What :func:`render_body_frames` renders a pose with: ``(window, frags, seen vertices)``, each None
+    unless asked for. The window (``box``): the (V, 3) mesh's screen box padded by 2 pixels
+    (antialiasing looks one pixel beyond the silhouette), or, when nothing of it can be on screen, the
+    frame's top-left pixel (which it does not cover). The fragments and the vertices they show (``seen``):
+    to compute the transport at those vertices only."""
+    if not (box or seen):
+        return None, None, None
+    vc = camera.transform(verts)
+    win = None
+    if box:
+        win = screen_box(vc, faces, camera.size, pad=2)
+        win = Window(0, 0, 1, 1, camera.size) if win is None else win
+    if not seen:
+        return win, None, None
+    frags = rasterize(vc, faces, camera.size, window=win)
+    return win, frags, frags.seen_vertices(faces, verts.shape[0])
+
+
 @dataclass(frozen=True, eq=False)
 class BodyFrame:
     """One rendered body frame: its index, the render, the per-vertex transport (V, K[, 3]) and
@@ -150,6 +169,7 @@ def render_body_frames(
     n_frames: int | None = None,
     chunk: int = 16,
     visible_only: bool = False,
+    box: bool = False,
 ) -> Iterator[BodyFrame]:
     """Pose a body model and render it frame by frame (streaming: one frame in memory at a time).
 
@@ -170,6 +190,11 @@ def render_body_frames(
         visible_only: compute the transport only at the vertices of faces the camera sees
             (the image is the same; ``BodyFrame.transport`` is 0 elsewhere). About twice as
             fast for a body; ignored with ``bounces`` (which need every vertex).
+        box: render only the body's box on screen (its :func:`~relightnet.raster.screen_box`, padded
+            by 2 pixels; the top-left pixel when none of it is on screen): the render's images are
+            the window's size (``render.frags.window`` says where it lies), the same pixels as the
+            whole frame's. The memory of a frame then follows the body's size on screen, not the
+            frame's.
 
     Yields:
         :class:`BodyFrame` per frame.
@@ -198,14 +223,11 @@ def render_body_frames(
             raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
         for i in range(out.batch_size):
             v, nrm = out.verts[i], out.normals[i]
-            frags, seen = None, None
-            if visible_only and not bounces:
-                frags = rasterize(camera.transform(v), out.faces, camera.size)
-                seen = frags.seen_vertices(out.faces, v.shape[0])
+            win, frags, seen = _visible(camera, v, out.faces, box, visible_only and not bounces)
             T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
                                  albedo=bounce_albedo, seed=seed, vertices=seen, manifold="ignore")
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
-            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags)
+            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags, window=win)
             yield BodyFrame(t, r, T, v)
             del r, T, frags  # the next frame is rendered without this one's (a frame at the pixel limit: ~0.5 GB)
             t += 1

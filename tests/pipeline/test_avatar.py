@@ -287,3 +287,27 @@ def test_avatar_light_from_the_plate_and_both(target, tmp_path, capsys):
     torch.testing.assert_close(both, combine_person_plate(person, *plate), rtol=1e-5, atol=1e-6)
     assert main([*base, "--light-from", "plate", "--light", "studio", "--out", str(tmp_path / "c.mkv")]) == 1
     assert "give --light or --light-from, not both" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("target_at", [(0.0, 0.85, 0.0), (0.45, 0.5, 0.0), (9.0, 0.85, 0.0)])
+def test_composite_of_the_box_render_is_the_frames(anny_body, target_at):
+    """The job renders the body's screen box only (render_body_frames(box=True)): composited over the
+    frame, antialiased or not, the same bytes as the whole frame's render (body inside the frame, cut by
+    its left and top borders, wholly off-screen)."""
+    from relightnet.body import make_motion
+    from relightnet.pipeline.avatar import _composite_frame
+    from relightnet.pipeline.scene import avatar_albedo
+    from relightnet.raster import default_camera
+    from relightnet.sh import preset_light
+
+    cam = default_camera((40, 32), target=target_at)
+    kw = dict(camera=cam, n_dirs=8, occlusion=False, n_frames=2, visible_only=True)
+    args = (anny_body, make_motion("walk", 2), preset_light("studio"), avatar_albedo(anny_body))
+    bg = np.random.default_rng(1).integers(0, 256, (40, 32, 3), dtype=np.uint8)
+    for full, box in zip(render_body_frames(*args, **kw), render_body_frames(*args, box=True, **kw), strict=True):
+        assert box.render.frags.window is not None and full.render.frags.window is None
+        got = [_composite_frame(box.render, bg, aa, cam, box.verts, anny_body.faces) for aa in (False, True)]
+        for aa, g in zip((False, True), got, strict=True):
+            assert np.array_equal(g, _composite_frame(full.render, bg, aa, cam, full.verts, anny_body.faces))
+        visible = target_at[0] < 5
+        assert (got[0] != bg).any() == visible and (got[1] != got[0]).any() == visible  # antialiasing did work

@@ -46,3 +46,24 @@ def test_seen_vertices_are_the_vertices_of_the_nearest_faces():
     empty = Fragments(torch.zeros(0, dtype=torch.long), torch.zeros(0, dtype=torch.long), torch.zeros(0, 3),
                       torch.zeros(0), (1, 2, 2))
     assert empty.seen_vertices(faces, 9).numel() == 0
+
+
+def test_locate_and_frame_pixels():
+    """locate: a pixel's position in the compact fields (−1 off the mesh); frame_pixels: the frame's
+    (batch, row, column) of a window's pixel."""
+    from relightnet.raster import Window
+
+    pix = torch.tensor([5, 0, 13])
+    frags = Fragments(pix, torch.tensor([2, 0, 1]), torch.zeros(3, 3), torch.zeros(3), (2, 2, 4),
+                      Window(3, 1, 2, 4, (6, 9)))
+    assert frags.locate(torch.tensor([13, 1, 0, 5, 15])).tolist() == [2, -1, 1, 0, -1]
+    b, row, col = frags.frame_pixels(torch.tensor([0, 5, 13]))
+    assert b.tolist() == [0, 0, 1] and row.tolist() == [3, 4, 4] and col.tolist() == [1, 2, 2]
+    assert frags.region == frags.window
+    whole = Fragments(pix, torch.tensor([2, 0, 1]), torch.zeros(3, 3), torch.zeros(3), (2, 2, 4))
+    assert whole.region == Window.full((2, 4)) and whole.frame_pixels(pix)[2].tolist() == [1, 0, 1]
+    empty = Fragments(pix[:0], pix[:0], torch.zeros(0, 3), torch.zeros(0), (1, 2, 2))
+    assert empty.locate(torch.tensor([0, 3])).tolist() == [-1, -1]
+    with pytest.raises(ShapeError, match="window"):
+        Fragments(pix, torch.tensor([2, 0, 1]), torch.zeros(3, 3), torch.zeros(3), (2, 2, 4),
+                  Window(0, 0, 3, 4, (6, 9)))

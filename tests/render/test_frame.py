@@ -99,3 +99,33 @@ def test_bad_inputs():
         render_mesh(v, f, T, torch.ones(3, 3), _light(), default_camera(16))
     with pytest.raises(InputError, match="light_frame"):
         render_mesh(v, f, T, torch.ones(len(v), 3), _light(), default_camera(16), light_frame="view")
+
+
+def test_a_window_renders_the_frame_there():
+    """render_mesh(window=): every image is the window's, the frame's render at its pixels (exactly: the
+    window's fragments are the frame's bit for bit, and the shading of a pixel reads only its own); the
+    covered pixels' radiance is kept compact, the dense image and alpha built on first use."""
+    from relightnet.raster import Window, rasterize, screen_box
+
+    v, f, n = _sphere(2)
+    v = v + torch.tensor([0.55, 0.3, 0.0])  # cut by the frame's right border
+    T = _closed_form(n)
+    tex = TexturedAlbedo(torch.rand(16, 16, 3, generator=torch.Generator().manual_seed(0)), torch.rand(len(v), 2), f)
+    cam = default_camera((48, 40))
+    full = render_mesh(v, f, T, tex, _light(), cam, normals=n, maps=True)
+    win = screen_box(cam.transform(v), f, cam.size, pad=2)
+    assert win.left + win.width == 40 and win.height * win.width < 48 * 40 / 2
+    part = render_mesh(v, f, T, tex, _light(), cam, normals=n, maps=True, window=win)
+    assert "image" not in vars(part) and "alpha" not in vars(part)  # not made until asked for
+    r, c = win.slices()
+    assert part.image.shape == (1, win.height, win.width, 3) and part.frags.window == win
+    for name in ("image", "alpha", "albedo", "shading", "transport", "normals", "depth"):
+        assert torch.equal(getattr(part, name), getattr(full, name)[:, r, c]), name
+    assert part.alpha.sum() == full.alpha.sum() > 0
+    at = part.frags.pix
+    assert torch.equal(part.image.reshape(-1, 3)[at], part.pix_image)
+    again = render_mesh(v, f, T, tex, _light(), cam, frags=rasterize(cam.transform(v), f, cam.size, window=win),
+                        window=win)
+    assert torch.equal(again.pix_image, part.pix_image)
+    with pytest.raises(InputError, match="window"):
+        render_mesh(v, f, T, tex, _light(), cam, frags=part.frags, window=Window.full(cam.size))

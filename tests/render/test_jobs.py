@@ -102,3 +102,31 @@ def test_visible_only_transport_gives_the_same_frames(anny_body):
         assert 0.02 < seen.float().mean() < 0.6  # only vertices of faces hit by a pixel (not the back)
         t_tol = ulps * float(a.transport.abs().max())
         torch.testing.assert_close(b.transport[seen], a.transport[seen], rtol=0, atol=t_tol)
+
+
+@pytest.mark.slow
+def test_box_renders_the_frame_there(anny_body):
+    """box=True: each frame's render is its body's screen box, the same pixels as the whole frame's (the
+    same fragments, so the same vertices seen and the same transport); a body partly off-screen gets a box
+    cut by the border, one wholly off-screen the frame's top-left pixel, covering nothing."""
+    from relightnet.raster import Window, default_camera
+
+    motion = make_motion("walk", 2, seed=3)
+    light = ambient_light(0.5) + directional_light([0.3, 0.8, 0.5])
+    alb = torch.full((anny_body.num_verts, 3), 0.6)
+    for target, where in (((0.0, 0.85, 0.0), "inside"), ((0.45, 0.5, 0.0), "cut"), ((9.0, 0.85, 0.0), "off")):
+        cam = default_camera((48, 36), target=target)
+        kw = dict(camera=cam, n_dirs=8, occlusion=False, visible_only=True)
+        full = list(render_body_frames(anny_body, motion, light, alb, **kw))
+        box = list(render_body_frames(anny_body, motion, light, alb, box=True, **kw))
+        for a, b in zip(full, box, strict=True):
+            win = b.render.frags.window
+            r, c = win.slices()
+            assert torch.equal(b.render.image, a.render.image[:, r, c]) and torch.equal(b.transport, a.transport)
+            assert b.render.alpha.sum() == a.render.alpha.sum()
+            if where == "inside":
+                assert 0 < win.left and win.left + win.width < 36 and win.height * win.width < 48 * 36 * 0.6
+            elif where == "cut":
+                assert win.left == 0 and win.top == 0 and a.render.alpha.sum() > 0  # cut at the left and top
+            else:
+                assert win == Window(0, 0, 1, 1, (48, 36)) and a.render.alpha.sum() == 0
