@@ -19,7 +19,7 @@ from relightnet.data.person import (
     transport_to_camera,
     vertex_colors,
 )
-from relightnet.data.render_sample import _seen, _streams, _view_stage, clip_geometry, render_clip
+from relightnet.data.render_sample import CLIP_KEY, _seen, _streams, _view_stage, clip_geometry, render_clip
 from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import vertex_transport
 from relightnet.raster import perspective_camera
@@ -155,6 +155,12 @@ def test_casting_only_the_seen_vertices_changes_no_array(assets):
         assert ref.meta == one.meta and all(ref.arrays[k].tobytes() == v.tobytes() for k, v in one.arrays.items())
     with pytest.raises(InputError, match="seen"):
         person_transport(CFG, person, seen[:, :10])
+    # A clip casts, frame by frame, the vertices that frame shows: the same arrays as from the full PRT.
+    cfg, ss = CFG.replace(res=32), np.random.SeedSequence(sample_seed(CFG, "train", 3).entropy, spawn_key=(CLIP_KEY,))
+    clip_person = person_transport(cfg, person_stage(cfg, _streams(ss), assets, 2))
+    ref = render_clip(cfg, "train", 3, ss, assets, 2, clip_person)
+    one = generate_sequence(cfg, "train", 3, 2, assets)
+    assert ref.meta == one.meta and all(ref.arrays[k].tobytes() == v.tobytes() for k, v in one.arrays.items())
     f = person.mesh.faces
     assert torch.equal(seen_vertices(f, V, [torch.tensor([0, 3]), torch.tensor([3])]).nonzero().flatten(),
                        f[[0, 3]].flatten().unique())
