@@ -22,6 +22,12 @@ while the workers share nothing, so 2 workers on 2 free cores make 2 / (CPU s pe
 samples/s (pool start-up aside). Then, over ``--n`` stills at 64², the garment types worn
 and, per type, the share of samples where body shows through cloth (``hidden_body_share`` >
 1 % of the cloth's pixels) and its mean.
+
+``--cpu-still START`` prints one line, ``CPU_MS_PER_STILL KB_PER_STILL``: this process, single-threaded,
+generates 24 warm-up stills and then ``--n`` stills from START of ``--config`` (default
+``train/configs/data_clothed.yaml``; ``--res`` overrides its size) group by group and writes them as
+one shard, as a pool worker does (``_cpu_per_sample``). Run it alternately with ``PYTHONPATH`` at two
+checkouts to compare code on a loaded machine (BENCHMARKS.md, "Casting only what the views show").
 """
 
 from __future__ import annotations
@@ -46,7 +52,7 @@ from relightnet.data import render_sample as rs  # noqa: E402
 from relightnet.data.generate import generate_sample, prepare_assets  # noqa: E402
 from relightnet.data.shards import stack_samples, write_shard  # noqa: E402
 
-_PHASES = {"PRT": ("vertex_transport",), "raster": ("render_mesh", "interpolate", "antialias")}
+_PHASES = {"PRT": ("person_transport",), "raster": ("rasterize", "render_mesh", "interpolate", "antialias")}
 
 
 def _timed(fn, bucket: list):
@@ -131,6 +137,23 @@ def _cpu_per_sample(cfg: SynthConfig, start: int, n: int, assets) -> float:
     return (time.process_time() - t0) / n
 
 
+def cpu_still(args) -> None:
+    """``--cpu-still``: one line, CPU ms and shard kB per still (module docstring)."""
+    from relightnet.data.config import load_config
+    from relightnet.data.generate import generate_samples
+
+    torch.set_num_threads(1)
+    cfg = load_config(args.config)
+    cfg = cfg if args.res is None else cfg.replace(res=args.res)
+    assets = prepare_assets()
+    generate_samples(cfg, "train", range(10**6, 10**6 + 24), assets)  # env maps, clothing variants' regions
+    t0 = time.process_time()
+    samples = generate_samples(cfg, "train", range(args.cpu_still, args.cpu_still + args.n), assets)
+    with tempfile.TemporaryDirectory() as d:
+        info = write_shard(Path(d) / "train-00000.npz", stack_samples(samples))
+    print(f"{1e3 * (time.process_time() - t0) / args.n:.1f} {info['bytes'] / args.n / 1e3:.1f}")
+
+
 def bench_clothes(args) -> None:
     """Painted vs clothed, PRT reuse 1 / 4 / 8: CPU s per sample side by side, then body-through-cloth per type."""
     torch.set_num_threads(1)
@@ -169,11 +192,17 @@ def bench_clothes(args) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=16, help="samples per measurement (default: 16)")
-    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--res", type=int, default=None, help="image size (default: 256; --cpu-still: the config's)")
+    ap.add_argument("--cpu-still", type=int, default=None, metavar="START",
+                    help="print CPU ms and shard kB per still of --n stills from START (see above)")
+    ap.add_argument("--config", default="train/configs/data_clothed.yaml", help="the config of --cpu-still")
     ap.add_argument("--repeat", type=int, default=3, help="pool runs per worker count (default: 3)")
     ap.add_argument("--clothes", action="store_true", help="painted vs clothed, PRT reuse 1/4/8 (see above)")
     ap.add_argument("--n-quality", type=int, default=96, help="stills for the garment table of --clothes")
     args = ap.parse_args()
+    if args.cpu_still is not None:
+        return cpu_still(args)
+    args.res = args.res or 256
     if args.clothes:
         print(f"## Synthetic data with clothes: {os.cpu_count()} CPUs, torch {torch.__version__}")
         return bench_clothes(args)

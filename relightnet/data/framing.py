@@ -20,6 +20,7 @@ freely by up to ``jitter`` of the side.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +29,7 @@ import torch
 from ..checks import InputError, check_finite, check_shape
 from ..raster import Camera, perspective_camera
 
-__all__ = ["CROP_MODES", "CropBox", "camera_intrinsics", "crop_camera"]
+__all__ = ["CROP_MODES", "CropBox", "base_camera", "camera_intrinsics", "crop_camera", "draw_view", "place_in_camera"]
 
 CROP_MODES = ("full", "upper", "head")
 _BANDS = {"full": 1.0, "upper": 0.55, "head": 0.25}
@@ -126,3 +127,59 @@ def crop_camera(
     intr = (fx * k, fy * k, (cx - u0) * k, (cy - v0) * k)
     cam = perspective_camera(base_camera.view[:1], (res, res), intrinsics=intr, near=near, far=far)
     return cam, CropBox(float(u0), float(v0), float(side), mode)
+
+
+def _rot_x(a: float) -> torch.Tensor:
+    c, s = math.cos(a), math.sin(a)
+    return torch.tensor([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]], dtype=torch.float64)
+
+
+def _rot_y(a: float) -> torch.Tensor:
+    c, s = math.cos(a), math.sin(a)
+    return torch.tensor([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]], dtype=torch.float64)
+
+
+def draw_view(rng: np.random.Generator, partial_crop_prob: float) -> dict:
+    """The generator's camera placement and crop mode, drawn from ``rng`` (all draws in a fixed order):
+    ``{"mode", "distance", "height", "lateral", "pitch_noise"}`` (metres, radians)."""
+    partial = bool(rng.uniform() < partial_crop_prob)
+    mode = ("upper", "head")[int(rng.integers(2))] if partial else "full"
+    return {
+        "mode": mode,
+        "distance": float(rng.uniform(1.3, 3.0) if partial else rng.uniform(2.5, 6.0)),
+        "height": float(rng.uniform(0.6, 1.9)),
+        "lateral": float(rng.uniform(-0.4, 0.4)),
+        "pitch_noise": float(rng.normal(0.0, math.radians(3))),
+    }
+
+
+def place_in_camera(verts, normals, joints, view: dict, yaw: float):
+    """World (T, V, 3) → camera frame: yaw about the pelvis, camera at the view's distance/height, pitched
+    toward the crop mode's target height (:func:`draw_view`).
+
+    Returns v_cam, n_cam (T, V, 3) float32, R (3, 3) pitch rotation, pitch, world→camera (4, 4).
+    """
+    v = verts.double()
+    root = joints[0, 0].double()
+    pivot = torch.tensor([float(root[0]), 0.0, float(root[2])], dtype=torch.float64)
+    Ry = _rot_y(yaw)
+    v = (v - pivot) @ Ry.T + pivot
+    n = normals.double() @ Ry.T
+    y0, y1 = float(v[..., 1].min()), float(v[..., 1].max())
+    target = {"full": (y0 + y1) / 2, "upper": y1 - 0.25 * (y1 - y0), "head": y1 - 0.1 * (y1 - y0)}[view["mode"]]
+    eye = pivot + torch.tensor([view["lateral"], view["height"], view["distance"]], dtype=torch.float64)
+    pitch = math.atan2(view["height"] - target, view["distance"]) + view["pitch_noise"]
+    R = _rot_x(pitch)
+    w2c = torch.eye(4, dtype=torch.float64)  # world (before yaw) → camera
+    w2c[:3, :3] = R @ Ry
+    w2c[:3, 3] = R @ (pivot - Ry @ pivot - eye)
+    n_cam = n @ R.T
+    n_cam = n_cam / n_cam.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    return ((v - eye) @ R.T).float(), n_cam.float(), R, pitch, w2c
+
+
+def base_camera() -> Camera:
+    """The generator's base camera (1024², f = 1000 px, at the origin looking along −z) that
+    :func:`crop_camera` crops."""
+    return perspective_camera(torch.eye(4)[None], (1024, 1024), intrinsics=(1000.0, 1000.0, 512.0, 512.0),
+                              near=0.05)

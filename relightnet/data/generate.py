@@ -20,7 +20,9 @@ Arrays (H = W = ``cfg.res``; float32 linear unless stated):
 - ``transport`` (H, W, K): per-vertex PRT (``refined_transport``: occlusion by ray casting,
   ``cfg.n_dirs`` directions of a Fibonacci set randomly rotated per sample; the midpoints of
   the garments' subdivided outer sides are ray cast at shadow edges only) interpolated
-  with the rasterizer's perspective-correct barycentrics. With a bounce (probability
+  with the rasterizer's perspective-correct barycentrics. Only the vertices of faces that a
+  pixel of the group's views shows are ray cast (the views are drawn and rasterized first);
+  their rows equal those of casting every vertex, bit for bit. With a bounce (probability
   ``cfg.bounce_prob``, ``meta["flags"]["bounce"]``) it includes one interreflection off
   *grey* reflectors (each vertex's mean RGB albedo), so transport stays scalar (H, W, K).
 - ``transport_unoccluded`` (H, W, K): the same quadrature with ``occlusion=False``,

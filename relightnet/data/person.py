@@ -35,8 +35,8 @@ from .poses import sample_phenotype, sample_pose
 from .sample import SynthAssets
 from .textures import paint_albedo, sample_outfit
 
-__all__ = ["GROUP_KEY", "PersonStage", "group_seed", "person_stage", "person_transport", "transport_to_camera",
-           "vertex_colors"]
+__all__ = ["GROUP_KEY", "PersonStage", "group_seed", "person_stage", "person_transport", "seen_vertices",
+           "transport_to_camera", "vertex_colors"]
 
 #: The group seed sequence of stills is ``SeedSequence([seed, split, group, GROUP_KEY])``.
 GROUP_KEY = 7
@@ -101,26 +101,50 @@ def vertex_colors(mesh: ClothedMesh) -> torch.Tensor:
     return texture_pixels(tex, mesh.uv[idx], check=False)
 
 
-def person_transport(cfg: SynthConfig, person: PersonStage) -> PersonStage:
+def person_transport(cfg: SynthConfig, person: PersonStage, seen: torch.Tensor | None = None) -> PersonStage:
     """The person with its world-frame PRT (every frame; occluded, with the bounce if drawn, and unoccluded).
 
     Without a bounce, vertices hidden under garments on every side (``mesh.hidden``) are not
-    ray cast (transport 0: a pixel never shows them unless the body pokes through the cloth).
+    ray cast (transport 0: a pixel never shows them unless the body pokes through the cloth),
+    nor, when ``seen`` is given, the vertices no pixel of the samples that use this PRT shows.
     The midpoints of the garments' subdivided outer sides are ray cast only at shadow edges
     (:func:`relightnet.prt.refined_transport`).
+
+    Args:
+        cfg: the config. person: from :func:`person_stage`.
+        seen: None, or (T, V') bool: per frame, the vertices of the faces some pixel shows
+            (:func:`seen_vertices`). The rows of those vertices equal the rows computed without
+            ``seen`` bit for bit (a vertex's transport does not depend on which others are cast);
+            the others are 0. Ignored with a bounce, which gathers light from every vertex.
     """
     m = person.mesh
+    T, V = m.verts.shape[:2]
+    if seen is not None:
+        seen = torch.as_tensor(seen, dtype=torch.bool)
+        if seen.shape != (T, V):
+            raise InputError(f"seen: expected ({T}, {V}) bool, got {tuple(seen.shape)}")
     kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=person.dir_seed, threads=torch.get_num_threads(),
               manifold="ignore")
     grey = vertex_colors(m).mean(1) if person.bounce else None
-    keep = None if person.bounce else torch.nonzero(~m.hidden).flatten()
     occ, un = [], []
-    for t in range(m.verts.shape[0]):
+    for t in range(T):
         v, n = m.verts[t], m.normals[t]
+        keep = None
+        if not person.bounce:
+            keep = torch.nonzero(~m.hidden if seen is None else ~m.hidden & seen[t]).flatten()
         occ.append(refined_transport(v, m.faces, n, m.midpoints, bounces=int(person.bounce), albedo=grey,
                                      vertices=keep, **kw))
         un.append(vertex_transport(v, m.faces, n, occlusion=False, **kw))
     return dataclasses.replace(person, transport=torch.stack(occ), transport_unoccluded=torch.stack(un))
+
+
+def seen_vertices(faces: torch.Tensor, n_verts: int, pix_faces) -> torch.Tensor:
+    """(V,) bool: the vertices of the faces ``pix_faces`` (each an (N,) int64 tensor of the faces pixels
+    show, e.g. ``Fragments.pix_face`` of every view that will use one PRT)."""
+    out = torch.zeros(n_verts, dtype=torch.bool)
+    for pf in pix_faces:
+        out[faces[pf].flatten()] = True
+    return out
 
 
 def transport_to_camera(transport: torch.Tensor, world_to_camera: torch.Tensor, lmax: int) -> torch.Tensor:

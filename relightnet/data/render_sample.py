@@ -16,16 +16,16 @@ import torch
 from ..checks import InputError
 from ..color import luminance
 from ..io.image import to_uint8
-from ..raster import antialias, interpolate, perspective_camera, silhouette_pixels
+from ..raster import antialias, interpolate, rasterize, silhouette_pixels
 from ..render.frame import TexturedAlbedo, render_mesh
 from ..render.shading import composite
 from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
 from .clothed import hidden_body_share
 from .config import SynthConfig, sample_seed
-from .framing import camera_intrinsics, crop_camera
+from .framing import base_camera, camera_intrinsics, crop_camera, draw_view, place_in_camera
 from .lights import LightDraw, light_at, sample_light
-from .person import PersonStage, group_seed, person_stage, person_transport, transport_to_camera
+from .person import PersonStage, group_seed, person_stage, person_transport, seen_vertices, transport_to_camera
 from .poses import sample_yaw
 from .sample import GENERATOR_VERSION, Sample, SynthAssets, assets_for
 
@@ -42,58 +42,6 @@ _SWITCH_PROB = 0.3
 def _streams(ss: np.random.SeedSequence) -> dict[str, np.random.Generator]:
     kids = np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key).spawn(len(STREAMS))
     return {n: np.random.default_rng(k) for n, k in zip(STREAMS, kids, strict=True)}
-
-
-def _rot_x(a: float) -> torch.Tensor:
-    c, s = math.cos(a), math.sin(a)
-    return torch.tensor([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]], dtype=torch.float64)
-
-
-def _rot_y(a: float) -> torch.Tensor:
-    c, s = math.cos(a), math.sin(a)
-    return torch.tensor([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]], dtype=torch.float64)
-
-
-def _view(rng: np.random.Generator, cfg: SynthConfig) -> dict:
-    """Camera placement and crop mode (all draws in a fixed order)."""
-    partial = bool(rng.uniform() < cfg.partial_crop_prob)
-    mode = ("upper", "head")[int(rng.integers(2))] if partial else "full"
-    return {
-        "mode": mode,
-        "distance": float(rng.uniform(1.3, 3.0) if partial else rng.uniform(2.5, 6.0)),
-        "height": float(rng.uniform(0.6, 1.9)),
-        "lateral": float(rng.uniform(-0.4, 0.4)),
-        "pitch_noise": float(rng.normal(0.0, math.radians(3))),
-    }
-
-
-def _place(verts, normals, joints, view: dict, yaw: float):
-    """World (T, V, 3) → camera frame: yaw about the pelvis, camera at distance/height, pitched.
-
-    Returns v_cam, n_cam (T, V, 3) float32, R (3, 3) pitch rotation, pitch, world→camera (4, 4).
-    """
-    v = verts.double()
-    root = joints[0, 0].double()
-    pivot = torch.tensor([float(root[0]), 0.0, float(root[2])], dtype=torch.float64)
-    Ry = _rot_y(yaw)
-    v = (v - pivot) @ Ry.T + pivot
-    n = normals.double() @ Ry.T
-    y0, y1 = float(v[..., 1].min()), float(v[..., 1].max())
-    target = {"full": (y0 + y1) / 2, "upper": y1 - 0.25 * (y1 - y0), "head": y1 - 0.1 * (y1 - y0)}[view["mode"]]
-    eye = pivot + torch.tensor([view["lateral"], view["height"], view["distance"]], dtype=torch.float64)
-    pitch = math.atan2(view["height"] - target, view["distance"]) + view["pitch_noise"]
-    R = _rot_x(pitch)
-    w2c = torch.eye(4, dtype=torch.float64)  # world (before yaw) → camera
-    w2c[:3, :3] = R @ Ry
-    w2c[:3, 3] = R @ (pivot - Ry @ pivot - eye)
-    n_cam = n @ R.T
-    n_cam = n_cam / n_cam.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-    return ((v - eye) @ R.T).float(), n_cam.float(), R, pitch, w2c
-
-
-def _base_camera():
-    return perspective_camera(torch.eye(4)[None], (1024, 1024), intrinsics=(1000.0, 1000.0, 512.0, 512.0),
-                              near=0.05)
 
 
 def _light_to_env(draw: LightDraw, angle: float, tilt: torch.Tensor) -> torch.Tensor:
@@ -203,9 +151,9 @@ def _geometry(cfg: SynthConfig, person: PersonStage, rv: np.random.Generator) ->
     """Draw the view stream (yaw, then the camera) and place the person in front of the camera."""
     m = person.mesh
     yaw = sample_yaw(rv)
-    view = _view(rv, cfg)
-    v_cam, n_cam, R, pitch, w2c = _place(m.verts, m.normals, person.joints, view, yaw)
-    cam, box = crop_camera(v_cam.reshape(-1, 3), _base_camera(), cfg.res, cfg.pad, cfg.jitter, rv, view["mode"])
+    view = draw_view(rv, cfg.partial_crop_prob)
+    v_cam, n_cam, R, pitch, w2c = place_in_camera(m.verts, m.normals, person.joints, view, yaw)
+    cam, box = crop_camera(v_cam.reshape(-1, 3), base_camera(), cfg.res, cfg.pad, cfg.jitter, rv, view["mode"])
     return ClipGeometry(verts=v_cam, normals=n_cam, faces=m.faces, camera=cam,
                         albedo=TexturedAlbedo(m.tex, m.uv, m.uv_faces), box=box, pitch=pitch, R=R,
                         world_to_camera=w2c, phenotype=person.phenotype, pose=person.pose, yaw=yaw, view=view,
@@ -246,23 +194,22 @@ def clip_geometry(cfg: SynthConfig, split: str, index: int, n_frames: int | None
     return _geometry(cfg, person, _streams(ss)["view"])
 
 
-def _render_frames(cfg: SynthConfig, geo: ClipGeometry, person: PersonStage, draws, frames, tilt):
+def _render_frames(cfg: SynthConfig, geo: ClipGeometry, person: PersonStage, draws, frames, tilt, frs):
     """Stage render: the person's PRT turned into the camera's light frame and the maps of every
-    frame under its light → (per-field lists, fragments, clip-space vertices, body-through-cloth
+    frame (fragments ``frs``, :func:`_view_stage`) under its light → (per-field lists, body-through-cloth
     shares) for the composite stage."""
     faces, cam, talb = geo.faces, geo.camera, geo.albedo
     field = torch.as_tensor(geo.regions)
     Q = geo.world_to_camera[:3, :3]
     keys = ("image", "mask", "albedo", "transport", "transport_unoccluded", "light", "normals", "depth", "parts")
     acc = {k: [] for k in keys}
-    clips, frs, through = [], [], []
+    through = []
     for t in range(len(frames)):
         i, angle, level = frames[t]
         light = light_at(draws[i], angle, level, tilt)
-        v, n = geo.verts[t], geo.normals[t]
+        v, n, fr = geo.verts[t], geo.normals[t], frs[t]
         Tv, Tu = transport_to_camera(torch.stack([person.transport[t], person.transport_unoccluded[t]]), Q, cfg.lmax)
-        rend = render_mesh(v, faces, Tv, talb, light, cam, normals=n, maps=True)
-        fr = rend.frags
+        rend = render_mesh(v, faces, Tv, talb, light, cam, normals=n, maps=True, frags=fr)
         through.append(hidden_body_share(fr.pix_face, geo.covered, geo.n_body_faces))
         reg = torch.einsum("nk,nkr->nr", fr.pix_bary.float(), field[faces[fr.pix_face]]).argmax(1)
         parts = torch.zeros(cfg.res * cfg.res, dtype=torch.uint8)
@@ -272,9 +219,7 @@ def _render_frames(cfg: SynthConfig, geo: ClipGeometry, person: PersonStage, dra
                      ("light", light), ("normals", world_to_light(rend.normals[0])),
                      ("depth", torch.nan_to_num(rend.depth[0], posinf=0.0)), ("parts", parts.view(cfg.res, cfg.res))):
             acc[k].append(x)
-        clips.append(cam.transform(v))
-        frs.append(fr)
-    return acc, frs, clips, through
+    return acc, through
 
 
 def _composite_frames(cfg: SynthConfig, noise_rng, acc: dict, bg: torch.Tensor, frs, clips, faces):
@@ -332,23 +277,59 @@ def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draw
     return meta
 
 
+@dataclass(frozen=True, eq=False)
+class _View:
+    """A sample's streams after its view was drawn, its geometry and every frame's clip-space vertices and
+    fragments (what its PRT must cover: :func:`~relightnet.data.person.seen_vertices`)."""
+
+    streams: dict
+    geo: ClipGeometry
+    clips: list
+    frags: list
+
+
+def _view_stage(cfg: SynthConfig, person: PersonStage, ss: np.random.SeedSequence) -> _View:
+    """Draw the view (the sample's ``view`` stream), place the person and rasterize every frame."""
+    r = _streams(ss)
+    geo = _geometry(cfg, person, r["view"])
+    clips = [geo.camera.transform(geo.verts[t]) for t in range(geo.verts.shape[0])]
+    return _View(r, geo, clips, [rasterize(c, geo.faces, geo.camera.size) for c in clips])
+
+
+def _seen(person: PersonStage, views: list[_View]) -> torch.Tensor:
+    """(T, V') the vertices some frame of ``views`` shows, per frame."""
+    m = person.mesh
+    return torch.stack([seen_vertices(m.faces, m.verts.shape[1], [vw.frags[t].pix_face for vw in views])
+                        for t in range(m.verts.shape[0])])
+
+
 def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequence, assets: SynthAssets,
                 n_frames: int | None, person: PersonStage | None = None) -> Sample:
     """Make a still (``n_frames`` None: arrays without a T axis) or a clip of ``n_frames`` frames.
 
-    Stages: the person (body, pose, look, garments, PRT: from the group's streams for a still,
-    :mod:`relightnet.data.person`; pass ``person`` — with its transport — to reuse it across the
-    group) → draw the view and lights (the sample's streams) → render every frame's maps →
+    Stages: the person (body, pose, look, garments: from the group's streams for a still,
+    :mod:`relightnet.data.person`) → draw the view (the sample's streams) and rasterize it → the
+    person's PRT of the vertices the view shows (pass ``person`` with its transport to reuse it
+    across the group; it must cover them) → draw the lights → render every frame's maps →
     composite over the drawn background → the arrays and metadata.
     """
-    T = 1 if n_frames is None else n_frames
-    r = _streams(ss)
     if person is None:
-        person = person_transport(cfg, person_stage(cfg, _person_streams(cfg, split, index, ss, n_frames), assets, T))
-    geo = _geometry(cfg, person, r["view"])
+        T = 1 if n_frames is None else n_frames
+        person = person_stage(cfg, _person_streams(cfg, split, index, ss, n_frames), assets, T)
+    view = _view_stage(cfg, person, ss)
+    if person.transport is None:
+        person = person_transport(cfg, person, _seen(person, [view]))
+    return _finish(cfg, split, index, assets, n_frames, person, view)
+
+
+def _finish(cfg: SynthConfig, split: str, index: int, assets: SynthAssets, n_frames: int | None,
+            person: PersonStage, view: _View) -> Sample:
+    """The stages of :func:`render_clip` after the view and the PRT: lights, maps, composite, arrays."""
+    T = 1 if n_frames is None else n_frames
+    r, geo = view.streams, view.geo
     draws, frames, switches = _light_schedule(r["light"], cfg, split, n_frames)
     tilt = rotation_world_to_light(geo.R).float()
-    acc, frs, clips, through = _render_frames(cfg, geo, person, draws, frames, tilt)
+    acc, through = _render_frames(cfg, geo, person, draws, frames, tilt, view.frags)
 
     m0 = acc["mask"][0] > 0
     lum0 = luminance(acc["image"][0])
@@ -356,7 +337,7 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
     i0, a0, _ = frames[0]
     bg, bg_desc = _background(r["background"], cfg, split, assets, draws[i0], a0, tilt,
                               camera_intrinsics(geo.camera), subject)
-    srgb, comp = _composite_frames(cfg, r["noise"], acc, bg, frs, clips, geo.faces)
+    srgb, comp = _composite_frames(cfg, r["noise"], acc, bg, view.frags, view.clips, geo.faces)
 
     arrays = {k: torch.stack(v) for k, v in acc.items()}
     arrays["image_srgb"] = torch.stack(srgb)
@@ -374,14 +355,17 @@ def render_clip(cfg: SynthConfig, split: str, index: int, ss: np.random.SeedSequ
 def render_group(cfg: SynthConfig, split: str, indices, assets: SynthAssets) -> list[Sample]:
     """Make the stills ``indices`` (ascending), computing each group's person stage and PRT once.
 
-    Every sample equals :func:`render_clip` of it alone (bit for bit at the same thread count).
+    Each group's views are drawn and rasterized first, so that its PRT casts only the vertices
+    one of them shows. Every sample equals :func:`render_clip` of it alone (bit for bit at the
+    same thread count).
     """
-    out, person, key = [], None, None
+    groups: dict[int, list[int]] = {}
     for i in indices:
-        i = int(i)
-        gss, group, _ = group_seed(cfg, split, i)
-        if key != group:
-            person = person_transport(cfg, person_stage(cfg, _streams(gss), assets, 1))
-            key = group
-        out.append(render_clip(cfg, split, i, sample_seed(cfg, split, i), assets, None, person))
+        groups.setdefault(group_seed(cfg, split, int(i))[1], []).append(int(i))
+    out = []
+    for members in groups.values():
+        person = person_stage(cfg, _streams(group_seed(cfg, split, members[0])[0]), assets, 1)
+        views = [_view_stage(cfg, person, sample_seed(cfg, split, i)) for i in members]
+        person = person_transport(cfg, person, _seen(person, views))
+        out += [_finish(cfg, split, i, assets, None, person, vw) for i, vw in zip(members, views, strict=True)]
     return out

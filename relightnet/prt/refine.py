@@ -16,6 +16,9 @@ its own cosine lobe, projected like every row: ``T_m = (V̂_m ⊙ max(n_m·ω, 0
 Both are exact where the endpoints agree (no shadow in between); only the interpolated
 visibility of edges with a small disagreement is an estimate.
 
+Every row is projected by one product over all V rows (a BLAS sums a row in an order that depends
+on its place in the matrix), so a vertex's row does not depend on which vertices are wanted.
+
 Interreflection (``bounces ≥ 1``): the bounce operator gathers the rays of every cast vertex;
 a midpoint that was not cast takes the mean of its endpoints' bounced transport.
 
@@ -57,13 +60,15 @@ def _check_midpoints(midpoints, n: int) -> torch.Tensor:
     return mid
 
 
-def _cast(eng: RayEngine, idx: torch.Tensor, verts, normals, dirs, offset: float, scale: float, hits: bool):
-    """Rays of the vertices ``idx``: (lit (N, D) float32 cosine where visible, rays with global vertex ids,
-    their hits or None)."""
-    rays = vertex_rays(verts[idx], normals[idx], dirs, offset, scale=scale)
-    lit, h = cast_lit(eng, rays, hits)
+def _cast(eng: RayEngine, idx: torch.Tensor, verts, normals, dirs, cos, offset: float, scale: float, hits: bool,
+          lit: np.ndarray):
+    """Cast the rays of the vertices ``idx`` into their rows of ``lit`` (V, D) (the cosine where visible,
+    0 elsewhere; ``cos`` (V, D) is n·ω of every vertex): (rays with global vertex ids, their hits or None)."""
+    rays = vertex_rays(verts[idx], normals[idx], dirs, offset, scale=scale, cosines=cos[idx])
     rays = dataclasses.replace(rays, vertex=idx.numpy()[rays.vertex], n_verts=verts.shape[0])
-    return lit, rays, h
+    lit[idx.numpy()] = 0.0
+    _, h = cast_lit(eng, rays, hits, out=lit)
+    return rays, h
 
 
 def _estimate(lit_a, lit_b, cos_a, cos_b, cos_m, threshold: float):
@@ -79,18 +84,17 @@ def _estimate(lit_a, lit_b, cos_a, cos_b, cos_m, threshold: float):
     return vis * cos_m, d > threshold
 
 
-def _midpoint_rows(T, lit, cast_v, wm, normals, dirs, Yw, threshold: float, chunk: int = 4096) -> torch.Tensor:
-    """Fill the estimated rows of the midpoints ``wm`` (E, 3) into T (V, K) from the cast vertices' lit
-    (N, D) (rows ``cast_v``); returns (E,) bool, the shadow edges (whose rows are to be cast)."""
-    pos = torch.full((T.shape[0],), -1, dtype=torch.int64)
-    pos[cast_v] = torch.arange(len(cast_v))
+def _midpoint_rows(lit: torch.Tensor, cos: torch.Tensor, wm: torch.Tensor, threshold: float,
+                   chunk: int = 4096) -> torch.Tensor:
+    """Write the estimated visibility-times-cosine rows of the midpoints ``wm`` (E, 3) into ``lit`` (V, D)
+    from their endpoints' rows (``cos`` (V, D): n·ω of every vertex); returns (E,) bool, the shadow edges
+    (whose rows are to be cast)."""
     shadow = torch.zeros(len(wm), dtype=torch.bool)
     for s in range(0, len(wm), chunk):
         w = wm[s:s + chunk]
-        cos = (normals[w.flatten()] @ dirs.T).reshape(len(w), 3, -1)
-        est, shadow[s:s + chunk] = _estimate(lit[pos[w[:, 1]]], lit[pos[w[:, 2]]], cos[:, 1], cos[:, 2],
-                                             cos[:, 0].clamp_min(0), threshold)
-        T[w[:, 0]] = est @ Yw
+        est, shadow[s:s + chunk] = _estimate(lit[w[:, 1]], lit[w[:, 2]], cos[w[:, 1]], cos[w[:, 2]],
+                                             cos[w[:, 0]].clamp_min(0), threshold)
+        lit[w[:, 0]] = est
     return shadow
 
 
@@ -130,7 +134,8 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: i
         midpoints: (M, 3) int64 rows (midpoint vertex m, endpoint a, endpoint b): m lies on edge a–b
             (:attr:`relightnet.body.SubdividedFaces.midpoints`); endpoints are not midpoints.
         lmax, n_dirs, bounces, albedo, seed, engine, offset, threads, manifold: as for ``vertex_transport``.
-        vertices: (N,) indices of the only rows wanted (others 0); not with ``bounces``.
+        vertices: (N,) indices of the only rows wanted (others 0); not with ``bounces``. The rows
+            wanted equal those of the full computation bit for bit.
         threshold: the endpoints' visibility difference ``d`` above which a midpoint is ray cast
             (module docstring); 0 casts every midpoint whose endpoints differ at all.
         return_cast: also return which midpoints were ray cast.
@@ -166,16 +171,19 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: i
     eng = make_engine(verts, faces, engine, threads)
     scale = mesh_scale(verts)
     cast_v, wm = _rows(want, is_mid, mid)
-    lit, rays, hits = _cast(eng, cast_v, verts, normals, dirs, offset, scale, bool(bounces))
-    T = torch.zeros(nv, Yw.shape[1])
-    T[cast_v] = torch.from_numpy(lit) @ Yw
-    shadow = _midpoint_rows(T, torch.from_numpy(lit), cast_v, wm, normals, dirs, Yw, float(threshold))
+    # Every row of n·ω and of the projection below is one product over the whole mesh: BLAS sums a row in
+    # an order that depends on its place in the matrix, so this keeps a vertex's row independent of
+    # which vertices are wanted (a subset's rows equal the full computation's, bit for bit).
+    cos = normals @ dirs.T
+    lit = np.zeros((nv, dirs.shape[0]), dtype=np.float32)  # visibility × cosine of every row wanted
+    rays, hits = _cast(eng, cast_v, verts, normals, dirs, cos, offset, scale, bool(bounces), lit)
+    shadow = _midpoint_rows(torch.from_numpy(lit), cos, wm, float(threshold))
     all_rays, all_hits = [rays], [hits]
     if bool(shadow.any()):
-        lit_m, rays_m, hits_m = _cast(eng, wm[shadow, 0], verts, normals, dirs, offset, scale, bool(bounces))
-        T[wm[shadow, 0]] = torch.from_numpy(lit_m) @ Yw
+        rays_m, hits_m = _cast(eng, wm[shadow, 0], verts, normals, dirs, cos, offset, scale, bool(bounces), lit)
         all_rays.append(rays_m)
         all_hits.append(hits_m)
+    T = torch.from_numpy(lit) @ Yw
     if vertices is not None:
         T[~want] = 0.0  # endpoints cast only for their midpoints
     if bounces:

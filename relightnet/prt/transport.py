@@ -52,15 +52,23 @@ def _vertex_subset(vertices, n: int, bounces: int) -> torch.Tensor | None:
     return idx
 
 
-def cast_lit(eng, rays, with_hits: bool):
+def cast_lit(eng, rays, with_hits: bool, out: np.ndarray | None = None):
     """Cast ``rays`` (:class:`~relightnet.prt.VertexRays`) with ``eng``: (lit (N, D) float32, the ray's
-    cosine where it escapes and 0 where it is blocked; the hits, when ``with_hits``, else None)."""
+    cosine where it escapes and 0 where it is blocked; the hits, when ``with_hits``, else None).
+
+    ``out``: a C-contiguous (N, D) float32 array to write the rays' entries into (and return) instead
+    of a new zero array; its other entries are left as they are."""
     if with_hits:
         hits = eng.intersect(rays.origins, rays.dirs)
         blocked = hits.prim >= 0
     else:
         hits, blocked = None, eng.occluded(rays.origins, rays.dirs)
-    lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
+    if out is None:
+        lit = np.zeros((rays.n_verts, rays.n_dirs), dtype=np.float32)
+    else:
+        lit = out
+        if lit.shape != (rays.n_verts, rays.n_dirs) or lit.dtype != np.float32 or not lit.flags.c_contiguous:
+            raise InputError(f"out: expected a C-contiguous ({rays.n_verts}, {rays.n_dirs}) float32 array")
     lit.reshape(-1)[rays.vertex * rays.n_dirs + rays.direction] = np.where(blocked, np.float32(0.0), rays.cosine)
     return lit, hits
 

@@ -303,7 +303,7 @@ class VertexRays:
 
 
 def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, offset: float = 1e-4,
-                scale: float | None = None) -> VertexRays:
+                scale: float | None = None, cosines: torch.Tensor | None = None) -> VertexRays:
     """Enumerate the rays (vertex, direction) with n·ω > 0, vertex-major.
 
     Args:
@@ -311,12 +311,19 @@ def vertex_rays(verts: torch.Tensor, normals: torch.Tensor, dirs: torch.Tensor, 
         dirs: (D, 3) unit world-frame directions.
         offset: origin offset along the normal, relative to the bounding-box diagonal.
         scale: that diagonal (default: of ``verts``; give the whole mesh's when ``verts`` is a subset).
+        cosines: (V, D) float32 ``normals @ dirs.T`` when already computed (rows of a product over the
+            whole mesh, so that a vertex's rays do not depend on which others are in ``verts``); None
+            computes it.
     """
     if not (offset >= 0 and np.isfinite(offset)):
         raise InputError(f"offset: expected a finite value >= 0, got {offset!r}")
     # torch: its gathers and nonzero are about twice as fast as numpy's fancy indexing here.
     d = dirs.detach().cpu().to(torch.float32).contiguous()
-    cos = normals @ d.T  # (V, D)
+    if cosines is None:
+        cos = normals @ d.T  # (V, D)
+    else:
+        cos = torch.as_tensor(cosines)
+        check_shape(cos, [verts.shape[0], d.shape[0]], name="cosines")
     up = cos > 0
     vi, di = up.nonzero(as_tuple=True)
     org = verts + float(offset * (mesh_scale(verts) if scale is None else scale)) * normals

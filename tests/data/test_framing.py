@@ -3,7 +3,14 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.data.framing import CROP_MODES, camera_intrinsics, crop_camera
+from relightnet.data.framing import (
+    CROP_MODES,
+    base_camera,
+    camera_intrinsics,
+    crop_camera,
+    draw_view,
+    place_in_camera,
+)
 from relightnet.raster import default_camera, perspective_camera, rasterize
 
 
@@ -82,6 +89,24 @@ def test_intrinsics_round_trip_and_other_base_cameras():
     assert torch.equal(cam.view, base.view)
     uv = cam.project(v)[0]
     assert float(uv.min()) > 0 and float(uv.max()) < 32
+
+
+def test_placement_in_the_camera_frame():
+    views = [draw_view(np.random.default_rng(s), 0.5) for s in range(40)]
+    assert {v["mode"] for v in views} == set(CROP_MODES) and all(2.5 <= v["distance"] <= 6 for v in views
+                                                                  if v["mode"] == "full")
+    assert {draw_view(np.random.default_rng(s), 0.0)["mode"] for s in range(10)} == {"full"}
+    v = _person(1)[None] + torch.tensor([0.0, 1.2, 4.0])  # standing on y = 0 near the origin
+    n = torch.nn.functional.normalize(torch.randn(v.shape, generator=torch.Generator().manual_seed(0)), dim=-1)
+    joints = torch.zeros(1, 2, 3)
+    v_cam, n_cam, R, pitch, w2c = place_in_camera(v, n, joints, views[0], 0.4)
+    # world_to_camera (before the yaw) is what moved the vertices and turned the normals; R is the pitch.
+    torch.testing.assert_close(v_cam[0].double(), v[0].double() @ w2c[:3, :3].T + w2c[:3, 3], atol=1e-5, rtol=0)
+    torch.testing.assert_close(n_cam[0].double(), n[0].double() @ w2c[:3, :3].T, atol=1e-6, rtol=0)
+    torch.testing.assert_close(R, torch.tensor([[1.0, 0, 0], [0, np.cos(pitch), -np.sin(pitch)],
+                                                [0, np.sin(pitch), np.cos(pitch)]], dtype=torch.float64))
+    assert float(v_cam[0, :, 2].max()) < 0  # in front of the camera (it looks along -z)
+    assert camera_intrinsics(base_camera()) == pytest.approx((1000.0, 1000.0, 512.0, 512.0), abs=1e-3)
 
 
 def test_bad_inputs_raise():

@@ -6,12 +6,20 @@ import numpy as np
 import pytest
 import torch
 
+from relightnet.checks import InputError
 from relightnet.data.clothed import clothed_mesh, hidden_body_share
-from relightnet.data.config import SynthConfig
+from relightnet.data.config import SynthConfig, sample_seed
 from relightnet.data.garments import garment_probs, sample_garments
 from relightnet.data.generate import generate_sample, generate_samples, generate_sequence, prepare_assets
-from relightnet.data.person import group_seed, person_stage, person_transport, transport_to_camera, vertex_colors
-from relightnet.data.render_sample import _streams, clip_geometry
+from relightnet.data.person import (
+    group_seed,
+    person_stage,
+    person_transport,
+    seen_vertices,
+    transport_to_camera,
+    vertex_colors,
+)
+from relightnet.data.render_sample import CLIP_KEY, _seen, _streams, _view_stage, clip_geometry, render_clip
 from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import vertex_transport
 from relightnet.raster import perspective_camera
@@ -126,6 +134,36 @@ def test_person_transport_skips_only_hidden_vertices(assets):
     cloth = T[assets.body.num_verts:, 0]
     assert (cloth > 0).float().mean() > 0.5 and float(cloth.max()) > 0.5
     assert (T[:, 0] <= p.transport_unoccluded[0, :, 0] + 1e-5).all()
+
+
+def test_casting_only_the_seen_vertices_changes_no_array(assets):
+    # The PRT of a group casts the vertices its views show; a vertex's row is that of the full
+    # computation bit for bit, so every array equals the one rendered from the full PRT.
+    person = person_stage(CFG, _streams(group_seed(CFG, "train", 8)[0]), assets, 1)
+    full = person_transport(CFG, person)
+    views = [_view_stage(CFG, person, sample_seed(CFG, "train", i)) for i in (8, 9)]
+    seen = _seen(person, views)
+    part = person_transport(CFG, person, seen)
+    V = person.mesh.verts.shape[1]
+    assert seen.shape == (1, V) and 0 < int(seen.sum()) < V
+    rows = seen[0] & ~person.mesh.hidden
+    assert torch.equal(part.transport[0, rows], full.transport[0, rows]) and (part.transport[0, ~rows] == 0).all()
+    assert torch.equal(part.transport_unoccluded, full.transport_unoccluded)
+    for i in (8, 9):  # the samples made with the full PRT are the generated ones
+        ref = render_clip(CFG, "train", i, sample_seed(CFG, "train", i), assets, None, full)
+        one = generate_sample(CFG, "train", i, assets)
+        assert ref.meta == one.meta and all(ref.arrays[k].tobytes() == v.tobytes() for k, v in one.arrays.items())
+    with pytest.raises(InputError, match="seen"):
+        person_transport(CFG, person, seen[:, :10])
+    # A clip casts, frame by frame, the vertices that frame shows: the same arrays as from the full PRT.
+    cfg, ss = CFG.replace(res=32), np.random.SeedSequence(sample_seed(CFG, "train", 3).entropy, spawn_key=(CLIP_KEY,))
+    clip_person = person_transport(cfg, person_stage(cfg, _streams(ss), assets, 2))
+    ref = render_clip(cfg, "train", 3, ss, assets, 2, clip_person)
+    one = generate_sequence(cfg, "train", 3, 2, assets)
+    assert ref.meta == one.meta and all(ref.arrays[k].tobytes() == v.tobytes() for k, v in one.arrays.items())
+    f = person.mesh.faces
+    assert torch.equal(seen_vertices(f, V, [torch.tensor([0, 3]), torch.tensor([3])]).nonzero().flatten(),
+                       f[[0, 3]].flatten().unique())
 
 
 def test_clothed_clips_move_with_the_body(assets):

@@ -159,3 +159,25 @@ def test_manifold_option_passes_to_the_mesh_check():
     torch.testing.assert_close(quiet, warned, rtol=0, atol=0)
     with pytest.raises(InputError, match="non-manifold"):
         vertex_transport(v, f3, n, n_dirs=32, manifold="error")
+
+
+def test_cast_lit_writes_into_a_given_array():
+    import numpy as np
+
+    from relightnet.prt import make_engine, vertex_rays
+    from relightnet.prt.transport import cast_lit
+
+    v, f, n, _ = plane_under_sphere()
+    dirs, _ = fibonacci_sphere(32)
+    rays = vertex_rays(v, n, dirs)
+    eng = make_engine(v, f)
+    lit, hits = cast_lit(eng, rays, False)
+    assert hits is None and lit.shape == (len(v), 32) and (lit[rays.vertex, rays.direction] >= 0).all()
+    out = np.full((len(v), 32), 7.0, dtype=np.float32)
+    got, hits = cast_lit(eng, rays, True, out=out)
+    assert got is out and hits.prim.shape == rays.vertex.shape
+    ray = np.zeros((len(v), 32), dtype=bool)
+    ray[rays.vertex, rays.direction] = True
+    assert np.array_equal(out[ray], lit[ray]) and (out[~ray] == 7).all()
+    with pytest.raises(InputError, match="out"):
+        cast_lit(eng, rays, False, out=np.zeros((len(v), 31), dtype=np.float32))

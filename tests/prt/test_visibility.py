@@ -162,6 +162,12 @@ def test_vertex_rays_cull_the_lower_hemisphere():
     assert (rays.cosine > 0).all()
     scale = float((v.max(0).values - v.min(0).values).norm())
     np.testing.assert_allclose(rays.origins, (v + 1e-3 * scale * n).numpy()[rays.vertex], atol=1e-6)
+    # Given the cosines (rows of a product over a larger mesh), the same rays.
+    given = vertex_rays(v, n, dirs, offset=1e-3, cosines=cos)
+    for k in ("vertex", "direction", "origins", "dirs", "cosine"):
+        assert np.array_equal(getattr(given, k), getattr(rays, k))
+    with pytest.raises(ShapeError, match="cosines"):
+        vertex_rays(v, n, dirs, cosines=cos[:, :3])
 
 
 def test_bad_inputs_raise_clear_errors():
