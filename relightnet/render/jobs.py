@@ -203,13 +203,14 @@ def render_body_frames(
     if n_frames is not None and (isinstance(n_frames, bool) or int(n_frames) < 1 or int(chunk) < 1):
         raise InputError(f"n_frames, chunk: expected integers >= 1, got {n_frames}, {chunk}")
 
+    # Grad mode is switched off around the work, never across a yield: a generator suspended inside
+    # ``torch.no_grad()`` leaves it off in its consumer, and two of them interleaved restore each
+    # other's state in the wrong order (grad mode stayed off after such a pair).
     def posed():
-        with torch.no_grad():
-            if n_frames is None:
-                yield body(params)
-                return
-            for a in range(0, n_frames, chunk):
-                yield body(frame_slice(params, a, min(a + chunk, n_frames), n_frames))
+        for a in range(0, 1 if n_frames is None else n_frames, chunk):
+            with torch.no_grad():
+                out = body(params if n_frames is None else frame_slice(params, a, min(a + chunk, n_frames), n_frames))
+            yield out
 
     lmax = sh_order_from_count(light.shape[-2], "light")
     bounce_albedo = vertex_albedo if vertex_albedo is not None else albedo if isinstance(albedo, torch.Tensor) else None
@@ -223,11 +224,12 @@ def render_body_frames(
             raise InputError(f"light: a light sequence has {light.shape[0]} frames but the motion has {n}")
         for i in range(out.batch_size):
             v, nrm = out.verts[i], out.normals[i]
-            win, frags, seen = _visible(camera, v, out.faces, box, visible_only and not bounces)
-            T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion, bounces=bounces,
-                                 albedo=bounce_albedo, seed=seed, vertices=seen, manifold="ignore")
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
-            r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags, window=win)
+            with torch.no_grad():
+                win, frags, seen = _visible(camera, v, out.faces, box, visible_only and not bounces)
+                T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion,
+                                     bounces=bounces, albedo=bounce_albedo, seed=seed, vertices=seen, manifold="ignore")
+                r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags, window=win)
             yield BodyFrame(t, r, T, v)
             del r, T, frags  # the next frame is rendered without this one's (a frame at the pixel limit: ~0.5 GB)
             t += 1

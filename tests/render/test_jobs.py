@@ -130,3 +130,21 @@ def test_box_renders_the_frame_there(anny_body):
                 assert win.left == 0 and win.top == 0 and a.render.alpha.sum() > 0  # cut at the left and top
             else:
                 assert win == Window(0, 0, 1, 1, (48, 36)) and a.render.alpha.sum() == 0
+
+
+def test_interleaved_frame_streams_leave_grad_mode_as_it_was(anny_body):
+    """Two streams advanced in turn (zip), one abandoned half-way: grad mode is what it was before, in
+    the consumer between frames and afterwards (a generator suspended inside ``torch.no_grad()`` leaked
+    its state: two interleaved streams left grad mode off for the rest of the process)."""
+    motion = make_motion("walk", 2, seed=1)
+    alb = default_albedo(anny_body, texture_size=16).vertex
+    kw = dict(size=16, n_dirs=4, occlusion=False, n_frames=2, chunk=1)
+    assert torch.is_grad_enabled()
+    for a, b in zip(render_body_frames(anny_body, motion, ambient_light(1.0), alb, **kw),
+                    render_body_frames(anny_body, motion, ambient_light(1.0), alb, **kw), strict=True):
+        assert torch.is_grad_enabled() and not a.render.image.requires_grad and torch.equal(a.transport, b.transport)
+    stream = render_body_frames(anny_body, motion, ambient_light(1.0), alb, **kw)
+    next(stream)
+    assert torch.is_grad_enabled()
+    del stream
+    assert torch.is_grad_enabled()
