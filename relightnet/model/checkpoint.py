@@ -28,7 +28,7 @@ from ..io.documents import clip, short
 from .network import NetConfig, RelightNet
 
 __all__ = ["FORMAT", "SHIPPED", "MAX_PARAMETERS", "MAX_ACTIVATION", "save_checkpoint", "load_checkpoint",
-           "load_model", "shipped_checkpoint", "release_checkpoint"]
+           "load_model", "shipped_checkpoint", "release_checkpoint", "average_checkpoints"]
 
 FORMAT = "relightnet-ckpt-2"
 #: Formats read: 1 had the same plain content (it loads with ``weights_only=True`` too).
@@ -243,3 +243,52 @@ def release_checkpoint(src, dst, **extra) -> Path:
     state.update(extra)
     state["format"] = FORMAT
     return _write(dst, state)
+
+
+def average_checkpoints(srcs, dst, weights=None) -> Path:
+    """A checkpoint whose weights are a weighted mean of several of the same network's.
+
+    Averaging the weights of runs that share their start (a network and its own continuation) is a
+    cheap ensemble in one network (Wortsman et al. 2022, "Model soups"). The result has no optimiser,
+    schedule or RNG state (a later run starts from it with ``init``); its metadata is the last
+    source's, plus ``averaged_from``: one ``{"file", "step", "weight"}`` per source.
+
+    Args:
+        srcs: two or more checkpoint paths with the same ``net_config`` and the same tensor names and shapes.
+        dst: output path (written atomically).
+        weights: one non-negative number per source, summing to more than 0 (normalised to 1);
+            None: equal weights.
+
+    Returns:
+        ``dst`` as a Path.
+    """
+    srcs = [Path(p) for p in srcs]
+    if len(srcs) < 2:
+        raise InputError(f"srcs: expected two or more checkpoints, got {len(srcs)}")
+    w = [1.0] * len(srcs) if weights is None else [float(x) for x in weights]
+    if len(w) != len(srcs) or not all(math.isfinite(x) and x >= 0 for x in w) or sum(w) <= 0:
+        raise InputError(f"weights: expected {len(srcs)} finite numbers >= 0 with a positive sum, got {weights!r}")
+    w = [x / sum(w) for x in w]
+    states = [load_checkpoint(p) for p in srcs]
+    first = states[0]
+
+    def shapes(st):
+        return {k: tuple(v.shape) for k, v in st["model"].items()}
+
+    for p, st in zip(srcs[1:], states[1:], strict=True):
+        if st["net_config"] != first["net_config"]:
+            raise InputError(f"{p}: another network than {srcs[0]} (net_config differs); only one network's "
+                             "checkpoints are averaged")
+        if shapes(st) != shapes(first):
+            raise InputError(f"{p}: its tensors' names or shapes differ from {srcs[0]}'s")
+    model = {}
+    for name, last in states[-1]["model"].items():
+        if last.is_floating_point():
+            acc = sum(x * st["model"][name].double() for x, st in zip(w, states, strict=True))
+            model[name] = acc.to(last.dtype)
+        else:
+            model[name] = last.clone()
+    out = {k: v for k, v in states[-1].items() if k not in ("optimizer", "scheduler", "rng")}
+    out.update(model=model, format=FORMAT, averaged_from=[
+        {"file": p.name, "step": st["step"], "weight": x} for p, st, x in zip(srcs, states, w, strict=True)])
+    return _write(dst, out)

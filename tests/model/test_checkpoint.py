@@ -108,3 +108,30 @@ def test_pose_encoder_checkpoint_holds_only_what_trained(tmp_path):
     x = torch.rand(1, 4, 32, 32)
     with torch.no_grad():
         torch.testing.assert_close(m(x).transport, net.eval()(x).transport)
+
+
+def test_average_checkpoints_is_the_weighted_mean(tmp_path):
+    """The weights are the weighted mean (in float64, stored in the sources' dtype); the file loads as a
+    network; another network, an odd number of weights and a single source are refused in one line."""
+    from relightnet.model.checkpoint import average_checkpoints
+
+    a, b = _state(optimizer={"x": 1}), _state(step=7)
+    b["model"] = {k: v + 1.0 if v.is_floating_point() else v for k, v in b["model"].items()}
+    torch.save(a, tmp_path / "a.pt")
+    torch.save(b, tmp_path / "b.pt")
+    out = average_checkpoints([tmp_path / "a.pt", tmp_path / "b.pt"], tmp_path / "m.pt", weights=[3, 1])
+    state = torch.load(out, weights_only=True)
+    assert "optimizer" not in state and state["step"] == 7
+    assert [d["weight"] for d in state["averaged_from"]] == [0.75, 0.25]
+    for k, v in state["model"].items():
+        if v.is_floating_point():
+            torch.testing.assert_close(v, a["model"][k] + 0.25, rtol=0, atol=1e-6)
+    load_model(out)
+    other = _state(net_config={**dataclasses.asdict(CFG), "width": 8})
+    torch.save(other, tmp_path / "o.pt")
+    for srcs, w, text in (([tmp_path / "a.pt", tmp_path / "o.pt"], None, "another network"),
+                          ([tmp_path / "a.pt", tmp_path / "b.pt"], [1], "weights: expected 2"),
+                          ([tmp_path / "a.pt"], None, "two or more")):
+        with pytest.raises(InputError, match=text):
+            average_checkpoints(srcs, tmp_path / "x.pt", weights=w)
+    assert not (tmp_path / "x.pt").exists()
