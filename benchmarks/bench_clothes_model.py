@@ -2,8 +2,8 @@
 
 Run: ``.venv/bin/python benchmarks/bench_clothes_model.py [--n 96] [--painted 48]`` (ANNY_CACHE_DIR set by make).
 
-The shipped model was trained on version-1 data (every garment painted on the body). Here the
-generator (version 2, test split: held-out HDRIs, default garment draws, ``prt_reuse`` 1: one person each) makes
+The shipped model is named in its model card (since session 9: trained on clothed people). Here the
+generator (today's version, test split: held-out HDRIs, default garment draws, ``prt_reuse`` 1: one person each) makes
 ``--n`` stills at the model's 128², plus ``--painted`` stills of the same config with every
 garment painted (``garment_probs`` all ``none``/``painted``) as the reference. The model
 predicts albedo, transport and light from each image and mask; per sample: masked transport
@@ -24,7 +24,7 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
-from relightnet.data import GARMENT_TYPES, SynthConfig, generate_samples  # noqa: E402
+from relightnet.data import GARMENT_TYPES, GENERATOR_VERSION, SynthConfig, generate_samples  # noqa: E402
 from relightnet.data.generate import prepare_assets  # noqa: E402
 from relightnet.model.checkpoint import load_model  # noqa: E402
 from relightnet.model.network import shading_map  # noqa: E402
@@ -72,7 +72,7 @@ def main() -> None:
     rows = [row("painted (as trained)", painted), row("clothed, all", clothed)]
     rows += [row(t, [e for e in clothed if t in e["types"]]) for t in GARMENT_TYPES]
     rows.append(row("clothed, none worn", [e for e in clothed if not e["types"]]))
-    print(f"## The shipped CNN on generator version 2 (test split, 128², {os.cpu_count()} CPUs)\n")
+    print(f"## The shipped CNN on generator version {GENERATOR_VERSION} (test split, 128², {os.cpu_count()} CPUs)\n")
     print(table(["people", "samples", "transport RMSE", "light RMSE", "shading RMSE"], rows))
 
 
