@@ -69,7 +69,7 @@ def main() -> None:
         return [name, len(errs), *(statistics.mean(e[k] for e in errs) if errs else float("nan")
                                    for k in ("transport", "light", "shading"))]
 
-    rows = [row("painted (as trained)", painted), row("clothed, all", clothed)]
+    rows = [row("painted (garments as texture)", painted), row("clothed, all", clothed)]
     rows += [row(t, [e for e in clothed if t in e["types"]]) for t in GARMENT_TYPES]
     rows.append(row("clothed, none worn", [e for e in clothed if not e["types"]]))
     print(f"## The shipped CNN on generator version {GENERATOR_VERSION} (test split, 128², {os.cpu_count()} CPUs)\n")
