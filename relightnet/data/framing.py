@@ -29,9 +29,12 @@ import torch
 from ..checks import InputError, check_finite, check_shape
 from ..raster import Camera, perspective_camera
 
-__all__ = ["CROP_MODES", "CropBox", "base_camera", "camera_intrinsics", "crop_camera", "draw_view", "place_in_camera"]
+__all__ = ["BASE_INTRINSICS", "CROP_MODES", "CropBox", "base_camera", "camera_intrinsics", "crop_camera", "draw_view",
+           "place_in_camera"]
 
 CROP_MODES = ("full", "upper", "head")
+#: The generator's base camera (:func:`base_camera`): fx, fy, cx, cy of a 1024² image.
+BASE_INTRINSICS = (1000.0, 1000.0, 512.0, 512.0)
 _BANDS = {"full": 1.0, "upper": 0.55, "head": 0.25}
 
 
@@ -181,5 +184,4 @@ def place_in_camera(verts, normals, joints, view: dict, yaw: float):
 def base_camera() -> Camera:
     """The generator's base camera (1024², f = 1000 px, at the origin looking along −z) that
     :func:`crop_camera` crops."""
-    return perspective_camera(torch.eye(4)[None], (1024, 1024), intrinsics=(1000.0, 1000.0, 512.0, 512.0),
-                              near=0.05)
+    return perspective_camera(torch.eye(4)[None], (1024, 1024), intrinsics=BASE_INTRINSICS, near=0.05)

@@ -138,12 +138,12 @@ def person_transport(cfg: SynthConfig, person: PersonStage, seen: torch.Tensor |
     return dataclasses.replace(person, transport=torch.stack(occ), transport_unoccluded=torch.stack(un))
 
 
-def seen_vertices(faces: torch.Tensor, n_verts: int, pix_faces) -> torch.Tensor:
-    """(V,) bool: the vertices of the faces ``pix_faces`` (each an (N,) int64 tensor of the faces pixels
-    show, e.g. ``Fragments.pix_face`` of every view that will use one PRT)."""
+def seen_vertices(faces: torch.Tensor, n_verts: int, frags) -> torch.Tensor:
+    """(V,) bool: the vertices some pixel of ``frags`` shows (the union of each one's
+    :meth:`~relightnet.raster.Fragments.seen_vertices`; e.g. every view that will use one PRT)."""
     out = torch.zeros(n_verts, dtype=torch.bool)
-    for pf in pix_faces:
-        out[faces[pf].flatten()] = True
+    for fr in frags:
+        out[fr.seen_vertices(faces, n_verts)] = True
     return out
 
 

@@ -23,7 +23,7 @@ from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
 from .backgrounds import envmap_background, procedural_background
 from .clothed import hidden_body_share
 from .config import SynthConfig, sample_seed
-from .framing import base_camera, camera_intrinsics, crop_camera, draw_view, place_in_camera
+from .framing import BASE_INTRINSICS, base_camera, camera_intrinsics, crop_camera, draw_view, place_in_camera
 from .lights import LightDraw, light_at, sample_light
 from .person import PersonStage, group_seed, person_stage, person_transport, seen_vertices, transport_to_camera
 from .poses import sample_yaw
@@ -261,7 +261,7 @@ def _clip_meta(cfg: SynthConfig, split: str, index: int, geo: ClipGeometry, draw
         "camera": {"intrinsics": list(intr), "res": cfg.res, "view": torch.eye(4).tolist(),
                    "world_to_camera": geo.world_to_camera.tolist(), "pitch_deg": math.degrees(pitch),
                    "distance": view["distance"], "height": view["height"], "lateral": view["lateral"],
-                   "crop_box": box.as_list(), "crop_mode": box.mode, "base_intrinsics": [1000.0, 1000.0, 512.0, 512.0]},
+                   "crop_box": box.as_list(), "crop_mode": box.mode, "base_intrinsics": list(BASE_INTRINSICS)},
         "light": {**_light_meta(draws[0]), "tilt_deg": math.degrees(pitch)},
         "background": bg_desc,
         "flags": {"bounce": bounce, "noise_std": float(cfg.noise_std)},
@@ -299,7 +299,7 @@ def _view_stage(cfg: SynthConfig, person: PersonStage, ss: np.random.SeedSequenc
 def _seen(person: PersonStage, views: list[_View]) -> torch.Tensor:
     """(T, V') the vertices some frame of ``views`` shows, per frame."""
     m = person.mesh
-    return torch.stack([seen_vertices(m.faces, m.verts.shape[1], [vw.frags[t].pix_face for vw in views])
+    return torch.stack([seen_vertices(m.faces, m.verts.shape[1], [vw.frags[t] for vw in views])
                         for t in range(m.verts.shape[0])])
 
 

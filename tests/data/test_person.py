@@ -22,7 +22,7 @@ from relightnet.data.person import (
 from relightnet.data.render_sample import CLIP_KEY, _seen, _streams, _view_stage, clip_geometry, render_clip
 from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import vertex_transport
-from relightnet.raster import perspective_camera
+from relightnet.raster import Fragments, perspective_camera
 from relightnet.render import light_in_world
 from relightnet.sh import cosine_lobe_per_coeff, sh_basis
 
@@ -162,8 +162,9 @@ def test_casting_only_the_seen_vertices_changes_no_array(assets):
     one = generate_sequence(cfg, "train", 3, 2, assets)
     assert ref.meta == one.meta and all(ref.arrays[k].tobytes() == v.tobytes() for k, v in one.arrays.items())
     f = person.mesh.faces
-    assert torch.equal(seen_vertices(f, V, [torch.tensor([0, 3]), torch.tensor([3])]).nonzero().flatten(),
-                       f[[0, 3]].flatten().unique())
+    views = [Fragments(torch.tensor(pix), torch.tensor(pix_face), torch.full((len(pix), 3), 1 / 3),
+                       torch.zeros(len(pix)), (1, 2, 2)) for pix, pix_face in (([0, 1], [0, 3]), ([2], [3]))]
+    assert torch.equal(seen_vertices(f, V, views).nonzero().flatten(), f[[0, 3]].flatten().unique())
 
 
 def test_clothed_clips_move_with_the_body(assets):
