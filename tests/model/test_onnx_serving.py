@@ -1,12 +1,14 @@
 """Serving an exported model with ONNX Runtime: OnnxRelighter (streaming state, input checks), int8, run_video."""
 
+import re
+
 import numpy as np
 import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.model import normalize_input
-from relightnet.model.onnx_serving import OnnxRelighter, calibration_set, quantize_int8, run_video
+from relightnet.model.onnx_serving import INT8_KEEP_FLOAT, OnnxRelighter, calibration_set, quantize_int8, run_video
 from relightnet.temporal import make_smoother
 
 from .conftest import make_inputs as _inputs
@@ -71,6 +73,62 @@ def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
     assert rel < 0.1
     with pytest.raises(InputError, match="mode"):
         quantize_int8(path, tmp_path / "x.onnx", mode="int4")
+
+
+def _weight_sources(path):
+    """{weight-carrying node's weight input: the op type that makes it, or None for a stored float tensor}."""
+    import onnx
+
+    g = onnx.load(str(path)).graph
+    made = {o: n.op_type for n in g.node for o in n.output}
+    return {n.input[1]: (n.op_type, made.get(n.input[1])) for n in g.node
+            if n.op_type in ("Conv", "ConvInteger", "MatMul", "MatMulInteger", "Gemm") and len(n.input) > 1}
+
+
+def _in_float(op, maker):
+    """A float layer: a float op whose weight is a stored tensor (static int8 dequantises its weight;
+    dynamic int8 runs ``ConvInteger`` / ``MatMulInteger``)."""
+    return op in ("Conv", "Gemm", "MatMul") and maker is None
+
+
+@pytest.mark.parametrize("mode", ["static", "dynamic"])
+def test_keep_float_leaves_the_matching_layers_in_float(exported, tmp_path, mode):
+    _, path = exported
+    calib = [tuple(t.numpy() for t in _inputs(1, 32, 32, seed=s)) for s in range(2)]
+    q = quantize_int8(path, tmp_path / "m_int8.onnx", mode=mode, calibration=calib, keep_float=[r"net\.stem\..*"])
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+    src = _weight_sources(q)
+    kept = {w for w, (op, maker) in src.items() if _in_float(op, maker)}
+    assert kept == {"net.stem.0.weight", "net.stem.3.weight"}  # the stem's two convolutions, in float
+    assert len(src) > 4 + len(kept)  # and the other layers in int8
+    a, b = OnnxRelighter(path), OnnxRelighter(q)
+    img, mask = _inputs(1, 32, 32, seed=9)
+    fa, fb = a.step(img.numpy(), mask.numpy()), b.step(img.numpy(), mask.numpy())
+    assert np.abs(fa["albedo"] - fb["albedo"]).mean() / np.abs(fa["albedo"]).mean() < 0.1
+    everything = _weight_sources(quantize_int8(path, tmp_path / "all.onnx", mode=mode, calibration=calib,
+                                               keep_float=()))
+    assert not any(_in_float(op, maker) for op, maker in everything.values())
+    with pytest.raises(InputError, match="keep_float: not a regular expression"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float=["net.(stem"])
+    with pytest.raises(InputError, match="keep_float: expected a sequence"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float="net.stem")
+    assert not (tmp_path / "x.onnx").exists()
+
+
+def test_default_keep_float_names_the_pose_encoders_first_convolutions(exported):
+    """The default patterns match the six convolution weights of the shipped model's pose encoder before
+    its first residual connection, by the names the export gives them (``net.`` + the torch name)."""
+    import onnx
+
+    from relightnet.model import load_model
+
+    _, path = exported
+    assert any(i.name == "net.stem.0.weight" for i in onnx.load(str(path)).graph.initializer)
+    net = load_model(None)
+    tensors = dict(net.named_parameters()) | dict(net.named_buffers())
+    hits = {n: t for n, t in tensors.items() if any(re.fullmatch(p, "net." + n) for p in INT8_KEEP_FLOAT)}
+    assert sorted(hits) == [f"pose.encoder.params.w{i}" for i in (1, 13, 16, 18, 5, 7)]
+    assert all(t.dim() == 4 for t in hits.values())  # convolution weights, not biases
 
 
 @pytest.mark.slow
