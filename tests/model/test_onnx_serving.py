@@ -198,3 +198,36 @@ def test_int8_of_a_model_that_solves_its_light_opens(tmp_path):
     img, mask = _inputs(1, 32, 32, seed=3)
     out = OnnxRelighter(q).step(img.numpy(), mask.numpy())
     assert np.isfinite(out["light_smoothed"]).all() and out["albedo"].shape == (1, 3, 32, 32)
+
+
+@pytest.mark.slow
+def test_int8_of_the_shipped_model_relights_within_5_percent_of_fp32(tmp_path):
+    """Issue 23's quality goal for the default int8 file, on 16 generated test people at the model's size:
+    relit RMSE (each person relit with the next one's light) within 5% of the fp32 file's (measured: +0.5–0.8%
+    on 48 and 64 people; every layer in int8 gave +9–17%). Not an exact value: int8 kernels differ by CPU."""
+    from relightnet.body import AnnyBody
+    from relightnet.data import SynthConfig, generate_sample
+    from relightnet.model import load_model, shading_map
+    from relightnet.model.onnx_export import export_onnx
+
+    net = load_model(None)
+    fp32 = export_onnx(net, tmp_path / "m.onnx", smoothing="pooled" if net.solves else "ema")
+    int8 = quantize_int8(fp32, tmp_path / "m_int8.onnx")
+    body, size = AnnyBody(), net.config.input_size
+    people = [generate_sample(SynthConfig(res=size, n_dirs=64), "test", i, body=body).arrays for i in range(16)]
+
+    def relit_rmse(path):
+        r, errs = OnnxRelighter(path, threads=1), []
+        for i, a in enumerate(people):
+            light = torch.from_numpy(people[(i + 1) % len(people)]["light"])
+            img = np.ascontiguousarray(a["image_srgb"].transpose(2, 0, 1)[None], dtype=np.float32) / 255
+            m = a["mask"][None, None].astype(np.float32)
+            r.reset()
+            out = r.step(img, m)
+            pred = torch.from_numpy(out["albedo"]) * shading_map(torch.from_numpy(out["transport"]), light)
+            gt = torch.from_numpy(a["albedo"]).permute(2, 0, 1)[None] * shading_map(
+                torch.from_numpy(a["transport"]).permute(2, 0, 1)[None], light)
+            errs.append(float((((pred - gt) ** 2) * torch.from_numpy(m)).sum() / (m.sum() * 3)) ** 0.5)
+        return float(np.mean(errs))
+
+    assert relit_rmse(int8) <= 1.05 * relit_rmse(fp32)
