@@ -26,7 +26,7 @@ __all__ = ["INT8_KEEP_FLOAT", "OnnxRelighter", "calibration_set", "quantize_int8
 #: MediaPipe pose encoder's six convolutions before its first residual connection (its weights w1–w18:
 #: the stem and two inverted-residual blocks, at 1/2 and 1/4 of the pose input's size). A per-layer
 #: sweep on the shipped model found nearly all of int8's error there: with them in float the relit RMSE is
-#: within 1% of fp32 instead of +17% (BENCHMARKS.md, "issue 23 part 6"), for a few per cent more int8 time.
+#: within 1% of fp32 instead of +9–17% (BENCHMARKS.md, "Issue 23 part 6"), for a few per cent more int8 time.
 #: A model without a pose encoder has no such weight, and every layer is quantised.
 INT8_KEEP_FLOAT = (r"net\.pose\.encoder\.params\.w(1|5|7|13|16|18)",)
 
@@ -246,7 +246,7 @@ def _float_nodes(path: Path, patterns) -> list[str]:
 
     import onnx
 
-    if isinstance(patterns, str) or not all(isinstance(p, str) for p in patterns):
+    if not isinstance(patterns, (list, tuple)) or not all(isinstance(p, str) for p in patterns):
         raise InputError(f"keep_float: expected a sequence of regular expressions, got {patterns!r}")
     try:
         regexes = [re.compile(p) for p in patterns]

@@ -112,6 +112,8 @@ def test_keep_float_leaves_the_matching_layers_in_float(exported, tmp_path, mode
         quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float=["net.(stem"])
     with pytest.raises(InputError, match="keep_float: expected a sequence"):
         quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float="net.stem")
+    with pytest.raises(InputError, match="keep_float: expected a sequence"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float=None)
     assert not (tmp_path / "x.onnx").exists()
 
 
