@@ -2,9 +2,10 @@
 
 Run: ``.venv/bin/python benchmarks/bench_onnx.py [--checkpoint C]`` (default: the shipped model,
 with its default smoothing in the graph; 2 threads; B = 1). int8 quality: relit RMSE (each test
-item relit with the next item's light) of the int8 models relative to the fp32 one, on generated
+item relit with the next item's light) of the int8 models relative to the fp32 one, on 48 generated
 test-split samples; static int8 with 7-bit weights (the default) and 8-bit weights (for CPUs with
-VNNI/AMX).
+VNNI/AMX), both with the default layers kept in float (``INT8_KEEP_FLOAT``), and static int8 of every
+layer (``keep_float=()``, the default before issue 23 part 6).
 """
 
 from __future__ import annotations
@@ -82,9 +83,11 @@ def main() -> None:
     fp32 = export_onnx(net, tmp / "m.onnx", smoothing="pooled" if net.solves else "ema")
     int8 = quantize_int8(fp32, tmp / "m_int8.onnx", mode="static")
     int8w8 = quantize_int8(fp32, tmp / "m_int8_w8.onnx", mode="static", reduce_range=False)
+    every = quantize_int8(fp32, tmp / "m_int8_every.onnx", mode="static", keep_float=())
     dyn = quantize_int8(fp32, tmp / "m_int8_dynamic.onnx", mode="dynamic")
     sess = {"fp32": OnnxRelighter(fp32, threads=2), "int8": OnnxRelighter(int8, threads=2),
-            "int8 8-bit": OnnxRelighter(int8w8, threads=2), "int8 dynamic": OnnxRelighter(dyn, threads=2)}
+            "int8 8-bit": OnnxRelighter(int8w8, threads=2), "int8 dynamic": OnnxRelighter(dyn, threads=2),
+            "int8 every layer": OnnxRelighter(every, threads=2)}
     rows = []
     for size in (256, 512):
         img = np.random.default_rng(0).random((1, 3, size, size), dtype=np.float32)
@@ -94,24 +97,28 @@ def main() -> None:
         with torch.no_grad():
             eager = median_ms(lambda m=m, x=x: m(x), repeat=7)
         times = {k: median_ms(lambda r=r, img=img, mask=mask: r.step(img, mask), repeat=7) for k, r in sess.items()}
-        rows.append([f"{size}²", eager, times["fp32"], times["int8"], times["int8 8-bit"], times["int8 dynamic"],
-                     eager / times["fp32"], eager / times["int8"], eager / times["int8 8-bit"]])
+        rows.append([f"{size}²", eager, times["fp32"], times["int8"], times["int8 8-bit"], times["int8 every layer"],
+                     times["int8 dynamic"], eager / times["fp32"], eager / times["int8"], eager / times["int8 8-bit"],
+                     eager / times["int8 every layer"]])
     from relightnet.body import AnnyBody
     from relightnet.data import SynthConfig, generate_sample
 
     body = AnnyBody()
-    samples = [generate_sample(SynthConfig(res=128, n_dirs=64), "test", i, body=body).arrays for i in range(12)]
+    samples = [generate_sample(SynthConfig(res=128, n_dirs=64), "test", i, body=body).arrays for i in range(48)]
     q = {k: relit_rmse(r, samples) for k, r in sess.items()}
     img = np.random.default_rng(0).random((1, 3, 256, 256), dtype=np.float32)
     ones = np.ones((1, 1, 256, 256), np.float32)
-    share = {k: conv_share_ms(p, img, ones) for k, p in (("fp32", fp32), ("int8", int8), ("int8 8-bit", int8w8))}
+    share = {k: conv_share_ms(p, img, ones) for k, p in (("fp32", fp32), ("int8", int8), ("int8 8-bit", int8w8),
+                                                          ("int8 every layer", every))}
     print(table(["size", "torch eager ms (channels_last)", "ORT fp32 ms", "ORT int8 static ms", "ORT int8 8-bit ms",
-                 "ORT int8 dynamic ms", "eager/fp32", "eager/int8 static", "eager/int8 8-bit"], rows))
+                 "ORT int8 every layer ms", "ORT int8 dynamic ms", "eager/fp32", "eager/int8 static",
+                 "eager/int8 8-bit", "eager/int8 every layer"], rows))
     print()
-    print(table(["model", "relit RMSE (12 test samples, 128²)", "vs fp32"],
+    print(table(["model", f"relit RMSE ({len(samples)} test samples, 128²)", "vs fp32"],
                 [["ORT fp32", q["fp32"], 1.0],
                  ["ORT int8 static (QDQ, 7-bit weights)", q["int8"], q["int8"] / q["fp32"]],
                  ["ORT int8 static (QDQ, 8-bit weights)", q["int8 8-bit"], q["int8 8-bit"] / q["fp32"]],
+                 ["ORT int8 static, every layer (7-bit)", q["int8 every layer"], q["int8 every layer"] / q["fp32"]],
                  ["ORT int8 dynamic", q["int8 dynamic"], q["int8 dynamic"] / q["fp32"]]]))
     print()
     print(table(["256², ORT profiler", "convolution kernels ms", "whole graph ms", "convolutions / eager 256²"],

@@ -18,7 +18,19 @@ from .onnx_export import EVIDENCE_OUTPUTS, INPUTS
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["OnnxRelighter", "calibration_set", "quantize_int8", "run_video"]
+__all__ = ["INT8_KEEP_FLOAT", "OnnxRelighter", "calibration_set", "quantize_int8", "run_video"]
+
+#: The weights whose layers :func:`quantize_int8` leaves in float by default: regular expressions matched
+#: in full against the name of a convolution's or matrix product's weight (the torch parameter names,
+#: which every export keeps; node names change from one export to the next). They are the frozen
+#: MediaPipe pose encoder's six convolutions before its first residual connection (its weights w1–w18:
+#: the stem and two inverted-residual blocks, at 1/2 and 1/4 of the pose input's size). A per-layer
+#: sweep on the shipped model found nearly all of int8's error there: with them in float the relit RMSE is
+#: within 1% of fp32 instead of +9–17% (BENCHMARKS.md, "Issue 23 part 6"), for a few per cent more int8 time.
+#: A model without a pose encoder has no such weight, and every layer is quantised.
+INT8_KEEP_FLOAT = (r"net\.pose\.encoder\.params\.w(1|5|7|13|16|18)",)
+
+_QUANTISED_OPS = ("Conv", "MatMul", "Gemm")
 
 
 class OnnxRelighter:
@@ -228,22 +240,45 @@ def _drop_stale_value_info(path: Path) -> None:
         onnx.save(m, str(path))
 
 
-def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range: bool = True) -> Path:
+def _float_nodes(path: Path, patterns) -> list[str]:
+    """Names of the nodes of ``path`` (quantisable ops) whose weight name matches one of ``patterns``."""
+    import re
+
+    import onnx
+
+    if not isinstance(patterns, (list, tuple)) or not all(isinstance(p, str) for p in patterns):
+        raise InputError(f"keep_float: expected a sequence of regular expressions, got {patterns!r}")
+    try:
+        regexes = [re.compile(p) for p in patterns]
+    except re.error as e:
+        raise InputError(f"keep_float: not a regular expression ({e})") from None
+    if not regexes:
+        return []
+    g = onnx.load(str(path), load_external_data=False).graph
+    return [n.name for n in g.node if n.op_type in _QUANTISED_OPS and len(n.input) > 1
+            and any(r.fullmatch(n.input[1]) for r in regexes)]
+
+
+def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range: bool = True,
+                  keep_float=INT8_KEEP_FLOAT) -> Path:
     """A second model file in int8.
 
     Args:
         src: the fp32 model from :func:`~relightnet.model.export_onnx`.
         dst: output path (written atomically).
         mode: ``"static"`` (default): QDQ format, convolutions and matrix products in int8
-            (per-channel 7-bit weights, uint8 activations with ranges calibrated on ``calibration``;
-            normalisation layers stay in float). 7-bit weights (``reduce_range``) because x86 CPUs
-            without VNNI sum uint8 × int8 products in saturating 16-bit registers: with 8-bit
-            weights the relit RMSE grew 6.5% over fp32 here, with 7-bit 2%. ``"dynamic"``: int8
-            weights, activations quantised on the fly (small file, but slow for convolutions).
+            (per-channel 7-bit weights, uint8 activations with min–max ranges calibrated on
+            ``calibration``; normalisation layers stay in float). ``"dynamic"``: int8 weights,
+            activations quantised on the fly (small file, but slow for convolutions).
         calibration: (image (B, 3, H, W), mask (B, 1, H, W)) float32 pairs for ``static``
-            (default: :func:`calibration_set` at the model's training size).
-        reduce_range: 7-bit weights (the default: right on every x86 CPU); False gives 8-bit weights,
-            for CPUs with VNNI or AMX int8 instructions (32-bit sums, no saturation).
+            (default: :func:`calibration_set`, 16 people at the model's training size).
+        reduce_range: 7-bit weights (the default: right on every x86 CPU). x86 CPUs without VNNI
+            sum pairs of uint8 × int8 products in saturating 16-bit registers; with 7-bit weights
+            a pair cannot saturate (2 · 255 · 64 < 2¹⁵), so the int8 arithmetic is exact everywhere.
+            False gives 8-bit weights, for CPUs with VNNI or AMX int8 instructions (32-bit sums).
+        keep_float: regular expressions over weight names (matched in full): the convolutions and
+            matrix products whose weight matches stay in float, in either mode. Default
+            :data:`INT8_KEEP_FLOAT` (the pose encoder's first layers); ``()`` quantises every one.
     """
     import onnxruntime.quantization as q
     from onnxruntime.quantization.shape_inference import quant_pre_process
@@ -254,21 +289,24 @@ def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range
     from ..io.atomic import remove_stale, temp_path
 
     r = OnnxRelighter(src)  # validates the file
+    excluded = _float_nodes(src, keep_float)  # validates the patterns before any work
     remove_stale(dst)  # of an earlier quantisation that was killed
     tmp, pre = temp_path(dst, "quant"), temp_path(dst, "pre")
     try:
         if mode == "dynamic":
-            q.quantize_dynamic(str(src), str(tmp), weight_type=q.QuantType.QInt8)
+            q.quantize_dynamic(str(src), str(tmp), weight_type=q.QuantType.QInt8, nodes_to_exclude=excluded)
         else:
             if calibration is None:
                 calibration = calibration_set(size=r.input_size)
             # Pre-processing (shape inference, graph clean-up) makes graphs from the dynamo exporter
             # quantisable: without it the QDQ pass duplicates a value name.
             quant_pre_process(str(src), str(pre), skip_symbolic_shape=True)
+            excluded = _float_nodes(pre, keep_float)  # the names after the clean-up
             q.quantize_static(str(pre), str(tmp), _Reader(calibration, (r.state_size, r.n_coeffs, 3)),
                               quant_format=q.QuantFormat.QDQ, activation_type=q.QuantType.QUInt8,
                               weight_type=q.QuantType.QInt8, per_channel=True, reduce_range=bool(reduce_range),
-                              op_types_to_quantize=["Conv", "MatMul", "Gemm"])
+                              op_types_to_quantize=list(_QUANTISED_OPS), nodes_to_exclude=excluded)
+        logger.info("int8 (%s): %d layers kept in float by keep_float", mode, len(excluded))
         _drop_stale_value_info(tmp)
         tmp.replace(dst)
     finally:

@@ -1,12 +1,14 @@
 """Serving an exported model with ONNX Runtime: OnnxRelighter (streaming state, input checks), int8, run_video."""
 
+import re
+
 import numpy as np
 import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.model import normalize_input
-from relightnet.model.onnx_serving import OnnxRelighter, calibration_set, quantize_int8, run_video
+from relightnet.model.onnx_serving import INT8_KEEP_FLOAT, OnnxRelighter, calibration_set, quantize_int8, run_video
 from relightnet.temporal import make_smoother
 
 from .conftest import make_inputs as _inputs
@@ -71,6 +73,64 @@ def test_int8_model_runs_close_to_fp32(exported, tmp_path, mode):
     assert rel < 0.1
     with pytest.raises(InputError, match="mode"):
         quantize_int8(path, tmp_path / "x.onnx", mode="int4")
+
+
+def _weight_sources(path):
+    """{weight-carrying node's weight input: the op type that makes it, or None for a stored float tensor}."""
+    import onnx
+
+    g = onnx.load(str(path)).graph
+    made = {o: n.op_type for n in g.node for o in n.output}
+    return {n.input[1]: (n.op_type, made.get(n.input[1])) for n in g.node
+            if n.op_type in ("Conv", "ConvInteger", "MatMul", "MatMulInteger", "Gemm") and len(n.input) > 1}
+
+
+def _in_float(op, maker):
+    """A float layer: a float op whose weight is a stored tensor (static int8 dequantises its weight;
+    dynamic int8 runs ``ConvInteger`` / ``MatMulInteger``)."""
+    return op in ("Conv", "Gemm", "MatMul") and maker is None
+
+
+@pytest.mark.parametrize("mode", ["static", "dynamic"])
+def test_keep_float_leaves_the_matching_layers_in_float(exported, tmp_path, mode):
+    _, path = exported
+    calib = [tuple(t.numpy() for t in _inputs(1, 32, 32, seed=s)) for s in range(2)]
+    q = quantize_int8(path, tmp_path / "m_int8.onnx", mode=mode, calibration=calib, keep_float=[r"net\.stem\..*"])
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+    src = _weight_sources(q)
+    kept = {w for w, (op, maker) in src.items() if _in_float(op, maker)}
+    assert kept == {"net.stem.0.weight", "net.stem.3.weight"}  # the stem's two convolutions, in float
+    assert len(src) > 4 + len(kept)  # and the other layers in int8
+    a, b = OnnxRelighter(path), OnnxRelighter(q)
+    img, mask = _inputs(1, 32, 32, seed=9)
+    fa, fb = a.step(img.numpy(), mask.numpy()), b.step(img.numpy(), mask.numpy())
+    assert np.abs(fa["albedo"] - fb["albedo"]).mean() / np.abs(fa["albedo"]).mean() < 0.1
+    everything = _weight_sources(quantize_int8(path, tmp_path / "all.onnx", mode=mode, calibration=calib,
+                                               keep_float=()))
+    assert not any(_in_float(op, maker) for op, maker in everything.values())
+    with pytest.raises(InputError, match="keep_float: not a regular expression"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float=["net.(stem"])
+    with pytest.raises(InputError, match="keep_float: expected a sequence"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float="net.stem")
+    with pytest.raises(InputError, match="keep_float: expected a sequence"):
+        quantize_int8(path, tmp_path / "x.onnx", mode=mode, keep_float=None)
+    assert not (tmp_path / "x.onnx").exists()
+
+
+def test_default_keep_float_names_the_pose_encoders_first_convolutions(exported):
+    """The default patterns match the six convolution weights of the shipped model's pose encoder before
+    its first residual connection, by the names the export gives them (``net.`` + the torch name)."""
+    import onnx
+
+    from relightnet.model import load_model
+
+    _, path = exported
+    assert any(i.name == "net.stem.0.weight" for i in onnx.load(str(path)).graph.initializer)
+    net = load_model(None)
+    tensors = dict(net.named_parameters()) | dict(net.named_buffers())
+    hits = {n: t for n, t in tensors.items() if any(re.fullmatch(p, "net." + n) for p in INT8_KEEP_FLOAT)}
+    assert sorted(hits) == [f"pose.encoder.params.w{i}" for i in (1, 13, 16, 18, 5, 7)]
+    assert all(t.dim() == 4 for t in hits.values())  # convolution weights, not biases
 
 
 @pytest.mark.slow
@@ -140,3 +200,36 @@ def test_int8_of_a_model_that_solves_its_light_opens(tmp_path):
     img, mask = _inputs(1, 32, 32, seed=3)
     out = OnnxRelighter(q).step(img.numpy(), mask.numpy())
     assert np.isfinite(out["light_smoothed"]).all() and out["albedo"].shape == (1, 3, 32, 32)
+
+
+@pytest.mark.slow
+def test_int8_of_the_shipped_model_relights_within_5_percent_of_fp32(tmp_path):
+    """Issue 23's quality goal for the default int8 file, on 16 generated test people at the model's size:
+    relit RMSE (each person relit with the next one's light) within 5% of the fp32 file's (measured: +0.5–0.8%
+    on 48 and 64 people; every layer in int8 gave +9–17%). Not an exact value: int8 kernels differ by CPU."""
+    from relightnet.body import AnnyBody
+    from relightnet.data import SynthConfig, generate_sample
+    from relightnet.model import load_model, shading_map
+    from relightnet.model.onnx_export import export_onnx
+
+    net = load_model(None)
+    fp32 = export_onnx(net, tmp_path / "m.onnx", smoothing="pooled" if net.solves else "ema")
+    int8 = quantize_int8(fp32, tmp_path / "m_int8.onnx")
+    body, size = AnnyBody(), net.config.input_size
+    people = [generate_sample(SynthConfig(res=size, n_dirs=64), "test", i, body=body).arrays for i in range(16)]
+
+    def relit_rmse(path):
+        r, errs = OnnxRelighter(path, threads=1), []
+        for i, a in enumerate(people):
+            light = torch.from_numpy(people[(i + 1) % len(people)]["light"])
+            img = np.ascontiguousarray(a["image_srgb"].transpose(2, 0, 1)[None], dtype=np.float32) / 255
+            m = a["mask"][None, None].astype(np.float32)
+            r.reset()
+            out = r.step(img, m)
+            pred = torch.from_numpy(out["albedo"]) * shading_map(torch.from_numpy(out["transport"]), light)
+            gt = torch.from_numpy(a["albedo"]).permute(2, 0, 1)[None] * shading_map(
+                torch.from_numpy(a["transport"]).permute(2, 0, 1)[None], light)
+            errs.append(float((((pred - gt) ** 2) * torch.from_numpy(m)).sum() / (m.sum() * 3)) ** 0.5)
+        return float(np.mean(errs))
+
+    assert relit_rmse(int8) <= 1.05 * relit_rmse(fp32)
