@@ -18,6 +18,8 @@ An encoder–decoder with skip connections reads a masked image of a person and 
 
 ``encoder="pose"`` adds, at every level of the encoder, the projected features of MediaPipe's pose
 network (trained on photographs of real people; :mod:`.pose_features`) to the network's own.
+``work_scale=2`` runs the CNN at half resolution and brings its raw maps back by a trainable fast
+guided filter, guided by the full-resolution input (:mod:`.guided`); the light solve runs at full size.
 
 Normalisation (``normalize_input``) is KE18's: the 8-bit sRGB image mapped to [−1, 1] and
 multiplied by the mask, with the mask as a fourth input channel. Images are RGB everywhere
@@ -40,6 +42,7 @@ from ..raster.interpolate import to_channels_first, to_channels_last
 from ..render.shading import shade, shading
 from ..sh.irradiance import cone_transport
 from ..sh.light_solve import Evidence, light_evidence, solve_light
+from .guided import FastGuidedUpsample, double_to, pool_input
 
 __all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
            "RelightNet", "normalize_input", "relight",
@@ -66,6 +69,7 @@ class NetConfig:
     features added at every level, :mod:`.pose_features`; frozen, or trained after the stride
     ``encoder_train_after``).
 
+    ``work_scale`` 2 runs the CNN at half resolution, its maps brought back by guided upsampling (:mod:`.guided`).
     ``input_size`` is not part of the architecture (any H, W that are multiples of 16 run): it is
     the side of the square crops the network was trained on, its working size at inference
     (training sets it from the data; a checkpoint stores it). Predictors read it from here.
@@ -83,6 +87,7 @@ class NetConfig:
     transport_head: str = "free"
     encoder: str = "own"
     encoder_train_after: int = 0
+    work_scale: int = 1
 
     def __post_init__(self) -> None:
         if self.light_mode not in LIGHT_MODES:
@@ -97,6 +102,8 @@ class NetConfig:
                              f"the pose network after which it trains, got {self.encoder_train_after!r}")
         if self.encoder == "pose" and self.levels > 4:
             raise InputError(f"net config levels: the pose encoder has 4 levels below the first, got {self.levels}")
+        if self.work_scale not in (1, 2) or isinstance(self.work_scale, bool):
+            raise InputError(f"net config work_scale: expected 1 (full resolution) or 2, got {self.work_scale!r}")
         if not self.solve_reg > 0:
             raise InputError(f"net config solve_reg: expected > 0, got {self.solve_reg!r}")
         if isinstance(self.input_size, bool) or not isinstance(self.input_size, int) or self.input_size < 1:
@@ -286,8 +293,9 @@ class _Block(nn.Sequential):
 
 
 class _Decoder(nn.Module):
-    def __init__(self, widths: list[int], out: int) -> None:
+    def __init__(self, widths: list[int], out: int, doubling: bool = False) -> None:
         super().__init__()
+        self.doubling = doubling
         rev = widths[::-1]
         self.ups = nn.ModuleList(_Block(rev[i] + rev[i + 1], rev[i + 1]) for i in range(len(rev) - 1))
         self.head = nn.Conv2d(rev[-1], out, 3, 1, 1)
@@ -296,7 +304,8 @@ class _Decoder(nn.Module):
         x = feats[-1]
         inner = []
         for up, skip in zip(self.ups, feats[-2::-1], strict=True):
-            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = double_to(x, skip) if self.doubling else F.interpolate(x, size=skip.shape[-2:], mode="bilinear",
+                                                                        align_corners=False)
             x = up(torch.cat([x, skip], 1))
             inner.append(x)
         return self.head(x), inner
@@ -315,16 +324,20 @@ class RelightNet(nn.Module):
         if cfg.encoder == "pose":
             from .pose_features import PoseFeatures
 
-            self.pose = PoseFeatures(widths, train_after=cfg.encoder_train_after or None)
+            self.pose = PoseFeatures(widths, train_after=cfg.encoder_train_after or None, upsample=2 // cfg.work_scale)
         self.down = nn.ModuleList(_Block(widths[i], widths[i + 1], stride=2) for i in range(cfg.levels))
         k = cfg.n_coeffs
         self.solves = cfg.light_mode != "head"
         self.transport_channels = 4 if cfg.transport_head == "cone" else k  # cone: bent normal (3) + aperture
-        self.transport_dec = _Decoder(widths, self.transport_channels + (1 if self.solves else 0))  # + confidence
+        lowres = cfg.work_scale > 1
+        self.transport_dec = _Decoder(widths, self.transport_channels + (1 if self.solves else 0), lowres)  # + conf.
         if cfg.transport_head == "cone":
             with torch.no_grad():  # start at cones facing the camera (light-frame x), half-open (c ≈ 0.18)
                 self.transport_dec.head.bias[:4] = torch.tensor([1.0, 0.0, 0.0, -1.5])
-        self.albedo_dec = _Decoder(widths, 3 + (1 if cfg.mask_head else 0))
+        self.albedo_dec = _Decoder(widths, 3 + (1 if cfg.mask_head else 0), lowres)
+        # At half resolution: guided upsampling of the raw maps (before normalisation and sigmoids).
+        self.up_t = FastGuidedUpsample(self.transport_dec.head.out_channels, cfg.work_scale) if lowres else None
+        self.up_a = FastGuidedUpsample(self.albedo_dec.head.out_channels, cfg.work_scale) if lowres else None
         pooled = widths[-1] + sum(widths[:-1])
         self.light_head = None
         if cfg.light_mode != "solve":
@@ -345,16 +358,21 @@ class RelightNet(nn.Module):
             raise InputError(
                 f"input: H and W must be multiples of {m}, got {tuple(x.shape[-2:])} (use pad_to_multiple)"
             )
+        full, s = x, self.config.work_scale
+        if s > 1:  # the CNN at 1/s, the pose network (at twice the CNN's size) on the full-size input
+            x = pool_input(full, s)
         feats = [self.stem(x)]
-        extra = self.pose(x) if self.pose is not None else None
+        extra = self.pose(full) if self.pose is not None else None
         if extra is not None:
             feats[0] = feats[0] + extra[0]
         for i, d in enumerate(self.down):
             feats.append(d(feats[-1]) if extra is None else d(feats[-1]) + extra[i + 1])
         out, t_inner = self.transport_dec(feats)
+        a, a_inner = self.albedo_dec(feats)
+        if s > 1:
+            out, a = self.up_t(out, full), self.up_a(a, full)
         k, tc = self.config.n_coeffs, self.transport_channels
         transport = cone_maps(out[:, :tc], self.config.lmax) if self.config.transport_head == "cone" else out[:, :k]
-        a, a_inner = self.albedo_dec(feats)
         albedo = torch.sigmoid(a[:, :3])
         mask = torch.sigmoid(a[:, 3:4]) if self.config.mask_head else None
         head = None
@@ -364,7 +382,7 @@ class RelightNet(nn.Module):
             head = self.light_head(torch.cat(pooled, 1)).view(x.shape[0], k, 3)
         if not self.solves:
             return Prediction(albedo=albedo, transport=transport, light=head, mask=mask)
-        return self._solve(x, albedo, transport, out[:, tc:], head, mask)
+        return self._solve(full, albedo, transport, out[:, tc:], head, mask)
 
     def _solve(self, x, albedo, transport, conf_logit, head, mask) -> Prediction:
         """The light that makes the maps explain the input image (module docstring)."""

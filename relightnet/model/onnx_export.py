@@ -7,11 +7,11 @@ The exported graph is one step of a stream (loop-free, so any video length works
     outputs: albedo (B, 3, H, W), transport (B, K, H, W), light_raw (B, K, 3),
              light_smoothed (B, K, 3), light_state_out (B, S, K, 3)
 
-B, H and W are dynamic (H, W multiples of 16). ``is_first`` starts a new sequence (the
-smoother's state is ignored and reset). A network that solves its light adds three outputs,
-the solve's per-frame evidence ``evidence_M`` (B, 3, K, K), ``evidence_r`` (B, 3, K) (both float64) and
-``light_prior`` (B, K, 3) (zeros without a prior), so that a whole video can be pooled offline;
-its ``pooled`` smoother pools the evidence inside the graph
+B, H and W are dynamic (H, W multiples of 16; of 32 for a network at half resolution, ``work_scale`` 2).
+``is_first`` starts a new sequence (the smoother's state is ignored and reset). A network that solves
+its light adds three outputs, the solve's per-frame evidence ``evidence_M`` (B, 3, K, K),
+``evidence_r`` (B, 3, K) (both float64) and ``light_prior`` (B, K, 3) (zeros without a prior), so that a
+whole video can be pooled offline; its ``pooled`` smoother pools the evidence inside the graph
 (:class:`relightnet.temporal.pooling.PooledSolve`). The smoother is any module with
 ``forward(x (B, K, 3), state (B, S, K, 3), is_first (B,)) -> (y, new_state)`` and an int
 attribute ``state_size`` (S); ``"none"`` passes the raw light through (S = 1).
@@ -68,7 +68,8 @@ def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: di
         "relightnet.sh_convention": "real orthonormal SH, no Condon-Shortley phase, k=l(l+1)+m, "
                                     "light frame x=toward camera, y=image right, z=up; light (K,3) linear RGB",
         "relightnet.input": "image: sRGB in [0,1] RGB (B,3,H,W); mask (B,1,H,W); normalised inside the graph "
-                            "as KE18: (2*image-1)*mask, mask appended; H, W multiples of 16",
+                            "as KE18: (2*image-1)*mask, mask appended; H, W multiples of "
+                            f"{16 * net.config.work_scale}",
         "relightnet.smoothing": smoothing,
         "relightnet.light_mode": net.config.light_mode,
         "relightnet.solve_reg": repr(net.config.solve_reg),
@@ -88,7 +89,7 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
         smoothing: a causal method (:func:`relightnet.names.smoothing_names` ``(causal=True)``; each can
             live inside the graph, built by :func:`relightnet.temporal.make_smoother`).
         train_config: stored as a hash in the model metadata.
-        example_size: H = W of the example used for tracing (any multiple of 16).
+        example_size: H = W of the example used for tracing (a multiple of 16; of 32 at ``work_scale`` 2).
 
     Returns:
         The path written.
@@ -97,8 +98,9 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
 
     if Path(out).suffix.lower() != ".onnx":
         raise InputError(f"{out}: expected an .onnx output file")
-    if example_size % 16:
-        raise InputError(f"example_size: expected a multiple of 16, got {example_size}")
+    mult = 16 * net.config.work_scale  # at half resolution, multiples of 32: every level doubles exactly
+    if example_size % mult:
+        raise InputError(f"example_size: expected a multiple of {mult}, got {example_size}")
     if smoothing == "pooled":
         if not net.solves:
             raise InputError("smoothing pooled: this network regresses its light (light_mode head); "
@@ -111,8 +113,8 @@ def export_onnx(net: RelightNet, out, smoothing: str = "ema", train_config: dict
     args = (torch.rand(b, 3, hw, hw), torch.ones(b, 1, hw, hw), torch.zeros(b, s, k, 3),
             torch.ones(b, dtype=torch.bool))
     batch = torch.export.Dim("batch", min=1, max=1024)
-    h16, w16 = torch.export.Dim("h16", min=1, max=512), torch.export.Dim("w16", min=1, max=512)
-    spatial = {0: batch, 2: 16 * h16, 3: 16 * w16}
+    h16, w16 = torch.export.Dim("h16", min=1, max=8192 // mult), torch.export.Dim("w16", min=1, max=8192 // mult)
+    spatial = {0: batch, 2: mult * h16, 3: mult * w16}
     shapes = {"image": spatial, "mask": spatial, "light_state": {0: batch}, "is_first": {0: batch}}
     import warnings
 

@@ -32,15 +32,20 @@ class PoseFeatures(nn.Module):
         widths: the CNN's channel count per level (level i at stride 2**i), at most five levels.
         train_after: None (frozen) or a stride of :data:`~.onnx_torch.POSE_TAPS` after which the
             pose network's weights train.
+        upsample: 2 (the pose network reads the input at twice its size: the CNN's own input) or 1
+            (it reads it as it is: a CNN at half resolution, ``NetConfig.work_scale`` 2, given the full one).
 
     ``forward(x)``: x (B, 4, H, W) from :func:`~relightnet.model.normalize_input` (H, W multiples of
-    16) -> a list of (B, widths[i], H / 2**i, W / 2**i).
+    16 · 2 / upsample) -> a list of (B, widths[i], H · upsample / 2**(i + 1), W · upsample / 2**(i + 1)).
     """
 
-    def __init__(self, widths: list[int], train_after: int | None = None) -> None:
+    def __init__(self, widths: list[int], train_after: int | None = None, upsample: int = 2) -> None:
         super().__init__()
         if len(widths) > len(POSE_TAPS):
             raise ShapeError(f"widths: the pose network has {len(POSE_TAPS)} levels, got {len(widths)}")
+        if upsample not in (1, 2):
+            raise ShapeError(f"upsample: expected 1 or 2, got {upsample!r}")
+        self.upsample = upsample
         taps = POSE_TAPS[: len(widths)]
         self.encoder = pose_encoder([t.name for t in taps], train_after=train_after)
         self.proj = nn.ModuleList(nn.Conv2d(t.channels, w, 1) for t, w in zip(taps, widths, strict=True))
@@ -55,7 +60,8 @@ class PoseFeatures(nn.Module):
         if x.dim() != 4 or x.shape[1] != 4:
             raise ShapeError(f"input: expected (B, 4, H, W) from normalize_input, got {tuple(x.shape)}")
         person = ((x[:, :3] + x[:, 3:4]) / 2).float()  # the sRGB person on black, in [0, 1]
-        up = F.interpolate(person, scale_factor=2, mode="bilinear", align_corners=False)
+        up = person if self.upsample == 1 else F.interpolate(person, scale_factor=2, mode="bilinear",
+                                                             align_corners=False)
         trains = any(p.requires_grad for p in self.encoder.parameters())
         with torch.set_grad_enabled(trains and torch.is_grad_enabled()):
             feats = self.encoder(up)

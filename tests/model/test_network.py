@@ -118,3 +118,55 @@ def test_unknown_transport_head_is_refused():
     with pytest.raises(InputError, match="transport_head"):
         NetConfig(transport_head="spline")
 
+
+
+LOWRES = NetConfig(width=8, max_width=32, light_hidden=32, light_mode="hybrid", transport_head="cone", work_scale=2)
+
+
+@pytest.mark.parametrize("b,h,w", [(2, 112, 112), (1, 32, 48), (1, 16, 16)])
+def test_half_resolution_network_gives_full_size_maps(b, h, w):
+    """work_scale 2: the CNN at H/2 (112 → 56: its deepest level rounds 7 up to 4), maps at H × W."""
+    net = RelightNet(LOWRES)
+    image, mask = torch.rand(b, 3, h, w), (torch.rand(b, 1, h, w) > 0.3).float()
+    p = net(normalize_input(image, mask))
+    assert p.albedo.shape == (b, 3, h, w) and p.transport.shape == (b, 9, h, w)
+    assert p.mask.shape == (b, 1, h, w) and p.confidence.shape == (b, 1, h, w) and p.light.shape == (b, 9, 3)
+    assert 0 <= p.albedo.min() and p.albedo.max() <= 1 and 0 <= p.mask.min() and p.mask.max() <= 1
+    assert torch.isfinite(p.light).all() and torch.isfinite(p.transport).all()
+    (p.albedo.mean() + p.transport.mean() + p.light.mean() + p.mask.mean()).backward()
+    missing = [n for n, q in net.named_parameters() if q.grad is None or not torch.isfinite(q.grad).all()]
+    assert not missing
+
+
+def test_half_resolution_pose_network_reads_the_full_size_input():
+    cfg = NetConfig(width=8, max_width=32, light_hidden=32, encoder="pose", work_scale=2)
+    net = RelightNet(cfg).eval()
+    assert net.pose.upsample == 1 and RelightNet(NetConfig(width=8, max_width=32, encoder="pose")).pose.upsample == 2
+    with torch.no_grad():
+        p = net(normalize_input(torch.rand(1, 3, 48, 80), torch.ones(1, 1, 48, 80)))
+    assert p.albedo.shape == (1, 3, 48, 80)
+
+
+def test_work_scale_defaults_to_full_resolution_and_is_checked():
+    assert NetConfig().work_scale == 1
+    net = RelightNet(TINY)
+    assert net.up_t is None and not any(k.startswith(("up_t", "up_a")) for k in net.state_dict())
+    for bad in (0, 3, True):
+        with pytest.raises(InputError, match="work_scale"):
+            NetConfig(work_scale=bad)
+
+
+def test_a_checkpoint_without_work_scale_loads_at_full_resolution(tmp_path):
+    from relightnet.model import load_model, save_checkpoint
+
+    torch.manual_seed(0)
+    net = RelightNet(TINY).eval()
+    save_checkpoint(tmp_path / "c.pt", net, TINY, step=1)
+    state = torch.load(tmp_path / "c.pt", weights_only=True)
+    del state["net_config"]["work_scale"]  # as written before the option existed
+    torch.save(state, tmp_path / "old.pt")
+    old = load_model(tmp_path / "old.pt").eval()
+    assert old.config.work_scale == 1
+    x = normalize_input(torch.rand(1, 3, 32, 32), torch.ones(1, 1, 32, 32))
+    with torch.no_grad():
+        assert torch.equal(old(x).transport, net(x).transport)

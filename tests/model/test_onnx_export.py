@@ -112,3 +112,32 @@ def test_pose_encoder_and_cone_head_export_into_one_graph(tmp_path):
     for o, e in zip(outs, expected, strict=True):
         scale = max(1.0, float(e.abs().max()))
         assert np.abs(o - e.numpy()).max() <= 1e-4 * scale
+
+
+def test_half_resolution_network_exports_and_ort_agrees(tmp_path):
+    """work_scale 2 (pose encoder, cone head, hybrid solve, guided upsampling) in one graph, at multiples of 32.
+    Float32 rounding (2⁻²⁴ ≈ 6e-8 per operation) over a few hundred dependent operations: 1e-4 of the
+    output's scale bounds the difference between ONNX Runtime's and torch's kernels."""
+    cfg = NetConfig(width=8, max_width=32, light_hidden=32, light_mode="hybrid", transport_head="cone",
+                    encoder="pose", input_size=64, work_scale=2)
+    torch.manual_seed(0)
+    net = RelightNet(cfg).eval()
+    with torch.no_grad():
+        for p in net.pose.proj.parameters():
+            p.normal_(0, 0.1)
+    with pytest.raises(InputError, match="multiple of 32"):
+        export_onnx(net, tmp_path / "bad.onnx", example_size=48)
+    path = export_onnx(net, tmp_path / "m.onnx", smoothing="ema")
+    r = OnnxRelighter(path)
+    assert "multiples of 32" in r.metadata["relightnet.input"]
+    ref = StreamingRelighter(net, make_smoother("ema")).eval()
+    for b, h, w in ((2, 64, 32), (1, 32, 96)):
+        img, mask = _inputs(b, h, w)
+        state, first = torch.zeros(b, 1, 9, 3), torch.ones(b, dtype=torch.bool)
+        outs = r.run({"image": img.numpy(), "mask": mask.numpy(), "light_state": state.numpy(),
+                      "is_first": first.numpy()})
+        with torch.no_grad():
+            expected = ref(img, mask, state, first)
+        for o, e in zip(outs, expected, strict=True):
+            assert o.shape == tuple(e.shape)
+            assert np.abs(o - e.numpy()).max() <= 1e-4 * max(1.0, float(e.abs().max()))
