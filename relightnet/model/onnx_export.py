@@ -75,6 +75,7 @@ def _metadata(net: RelightNet, smoothing: str, state_size: int, train_config: di
         "relightnet.solve_reg": repr(net.config.solve_reg),
         "relightnet.state_size": str(state_size),
         "relightnet.input_size": str(net.config.input_size),
+        "relightnet.multiple": str(16 * net.config.work_scale),
         "relightnet.train_config_sha256": hashlib.sha256(cfg_text.encode()).hexdigest(),
     }
 

@@ -99,6 +99,18 @@ class OnnxRelighter:
             self._checked.add((batch, height, width))
 
     @property
+    def multiple(self) -> int:
+        """What the input's H and W must be multiples of: 16, or 32 for a network at half resolution
+        (metadata ``relightnet.multiple``; 16 when absent, as in files exported before it existed)."""
+        try:
+            m = int(self.metadata.get("relightnet.multiple", 16))
+        except ValueError:
+            raise InputError(f"{self.path}: metadata relightnet.multiple is not an integer") from None
+        if m not in (16, 32):
+            raise InputError(f"{self.path}: metadata relightnet.multiple {m}: expected 16 or 32")
+        return m
+
+    @property
     def input_size(self) -> int:
         """The model's working size: the training size stored by the export (metadata
         ``relightnet.input_size``; :data:`~relightnet.model.network.DEFAULT_INPUT_SIZE` when absent)."""
@@ -120,8 +132,8 @@ class OnnxRelighter:
         if image.ndim != 4 or image.shape[1] != 3:
             raise ShapeError(f"image: expected (B, 3, H, W), got {tuple(image.shape)}")
         b, _, h, w = image.shape
-        if h % 16 or w % 16:
-            raise ShapeError(f"image: H and W must be multiples of 16, got ({h}, {w})")
+        if h % self.multiple or w % self.multiple:
+            raise ShapeError(f"image: H and W must be multiples of {self.multiple}, got ({h}, {w})")
         mask = np.asarray(mask, dtype=np.float32)
         if mask.shape != (b, 1, h, w):
             raise ShapeError(f"mask: expected ({b}, 1, {h}, {w}), got {tuple(mask.shape)}")
@@ -335,8 +347,8 @@ def run_video(model_path, video, masks, out_dir, size: int | None = None, thread
 
     r = OnnxRelighter(model_path, threads=threads)
     size = r.input_size if size is None else int(size)
-    if size % 16:
-        raise InputError(f"size: expected a multiple of 16, got {size}")
+    if size % r.multiple:
+        raise InputError(f"size: expected a multiple of {r.multiple}, got {size}")
     info, _, pairs = video_masks(video, masks, "segment")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():

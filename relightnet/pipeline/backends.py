@@ -124,7 +124,7 @@ class OnnxPredictor:
         from ..model.onnx_serving import OnnxRelighter
 
         self.relighter = OnnxRelighter(path, threads=threads)
-        self.size = _check_size(self.relighter.input_size if size is None else size)
+        self.size = _check_size(self.relighter.input_size if size is None else size, self.relighter.multiple)
         self.lmax = sh_order_from_count(self.relighter.n_coeffs, "ONNX model light")
         self.has_mask_head = False
         self.solve_reg = float(self.relighter.metadata.get("relightnet.solve_reg", 1e-2))

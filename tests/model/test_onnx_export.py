@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.checks import InputError
+from relightnet.checks import InputError, ShapeError
 from relightnet.model import NetConfig, RelightNet
 from relightnet.model.onnx_export import StreamingRelighter, export_onnx
 from relightnet.model.onnx_serving import OnnxRelighter
@@ -129,7 +129,13 @@ def test_half_resolution_network_exports_and_ort_agrees(tmp_path):
         export_onnx(net, tmp_path / "bad.onnx", example_size=48)
     path = export_onnx(net, tmp_path / "m.onnx", smoothing="ema")
     r = OnnxRelighter(path)
-    assert "multiples of 32" in r.metadata["relightnet.input"]
+    assert "multiples of 32" in r.metadata["relightnet.input"] and r.multiple == 32
+    with pytest.raises(ShapeError, match="multiples of 32"):  # a one-line error, not one from inside the graph
+        r.step(*(a.numpy() for a in _inputs(1, 48, 48)))
+    from relightnet.pipeline.backends import OnnxPredictor
+
+    with pytest.raises(InputError, match="multiple of 32"):
+        OnnxPredictor(path, size=48)
     ref = StreamingRelighter(net, make_smoother("ema")).eval()
     for b, h, w in ((2, 64, 32), (1, 32, 96)):
         img, mask = _inputs(b, h, w)
