@@ -71,6 +71,8 @@ class OnnxRelighter:
             raise InputError(f"{self.path}: not a relightnet model (inputs {names}, expected {list(INPUTS)})")
         meta = self.session.get_modelmeta().custom_metadata_map
         self.metadata = dict(meta)
+        #: what the input's H and W must be multiples of (read once from the metadata: 16, or 32)
+        self.multiple = self._meta_multiple()
         state = self.session.get_inputs()[2].shape  # [batch, S, K, 3]
         if len(state) != 4 or not all(isinstance(n, int) and 0 < n <= 4096 for n in state[1:]):
             raise InputError(f"{self.path}: not a relightnet model (light_state is {state}, expected "
@@ -99,8 +101,7 @@ class OnnxRelighter:
             self._check_graph(self._graph, self.path, batch, height, width)
             self._checked.add((batch, height, width))
 
-    @property
-    def multiple(self) -> int:
+    def _meta_multiple(self) -> int:
         """What the input's H and W must be multiples of: 16, or 32 for a network at half resolution
         (metadata ``relightnet.multiple``; 16 when absent, as in files exported before it existed)."""
         try:
