@@ -144,6 +144,22 @@ class _Handlers:
         return str(out)
 
 
+def _pointed(index):
+    """The sliders' (azimuth, elevation, source) for a click on the sphere at pixel ``index`` = (x, y).
+
+    ``index`` is None when the browser clicked an image it had not loaded yet (it has no pixel size
+    then): the sliders are left as they are (``gradio.skip()`` each), instead of an error.
+    """
+    import gradio as gr
+
+    from .controls import sphere_point_to_direction
+
+    if index is None:
+        return gr.skip(), gr.skip(), gr.skip()
+    az, el = sphere_point_to_direction(index[0] + 0.5, index[1] + 0.5, SPHERE_SIZE)
+    return round(az), round(el), "direction"
+
+
 def _photo_tab(gr) -> dict:
     """The photo tab's components, by name."""
     from ..names import light_presets
@@ -201,10 +217,7 @@ def build_app(workdir, predictor=None):
     h = _Handlers(workdir, predictor)
 
     def click_sphere(evt: gr.SelectData):
-        from .controls import sphere_point_to_direction
-
-        az, el = sphere_point_to_direction(evt.index[0] + 0.5, evt.index[1] + 0.5, SPHERE_SIZE)
-        return round(az), round(el), "direction"
+        return _pointed(evt.index)
 
     def drag_pad(value):
         from .controls import sphere_point_to_direction

@@ -34,6 +34,14 @@ def _fetch_png(url) -> np.ndarray:
         return np.asarray(PIL.Image.open(io.BytesIO(r.read())).convert("RGB")).astype(np.float64)
 
 
+def _loaded(drv, elem_id):
+    """The element's image is shown (its pixels are loaded), as a user sees it before clicking."""
+    from selenium.webdriver.common.by import By
+
+    imgs = drv.find_elements(By.CSS_SELECTOR, f"#{elem_id} img")
+    return bool(imgs) and drv.execute_script("return arguments[0].complete && arguments[0].naturalWidth > 0;", imgs[0])
+
+
 def _new_image(drv, elem_id, old, what):
     return _wait(lambda: (s := _img_src(drv, elem_id)) and s != old and s, what=what)
 
@@ -69,10 +77,11 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, mo
     mask = (load_photo(person_photo).mask > 0.5).numpy()
 
     # Point the light by clicking the sphere: on its left, then on its right (same height).
-    sphere = _wait(lambda: drv.find_elements(By.CSS_SELECTOR, "#light-sphere img"), what="the sphere")[0]
-    w = sphere.size["width"]
-
     def click_sphere(fx, fy, old):
+        # click the sphere once its current image is on screen (a click while it loads has no pixel to point at)
+        _wait(lambda: _loaded(drv, "light-sphere"), what="the sphere's image")
+        sphere = drv.find_element(By.CSS_SELECTOR, "#light-sphere img")
+        w = sphere.size["width"]
         dx, dy = int((fx - 0.5) * w), int((fy - 0.5) * w)  # offsets from the sphere's centre
         ActionChains(drv).move_to_element_with_offset(sphere, dx, dy).click().perform()
         return _new_image(drv, "relit", old, f"the relit image after a click at {fx:.2f}")
@@ -150,3 +159,16 @@ def test_video_tab_relights_into_the_apps_folder(predictor, person_photo, tmp_pa
     assert out.is_relative_to(work) and out.suffix == ".mp4"
     frames = list(read_video(out))
     assert len(frames) == 3 and np.abs(frames[0].astype(float) - frame).max() > 10  # the person was relit
+
+
+def test_a_click_on_the_sphere_points_the_light():
+    """A click left of the sphere's centre is a light from the left; a click the browser sent without a
+    pixel (the sphere's image still loading) leaves the sliders unchanged instead of failing."""
+    import gradio as gr
+
+    from relightnet.app.ui import SPHERE_SIZE, _pointed
+
+    az, el, source = _pointed((SPHERE_SIZE // 10, SPHERE_SIZE // 2))
+    assert az < -45 and abs(el) <= 1 and source == "direction"
+    kept = _pointed(None)
+    assert len(kept) == 3 and all(isinstance(v, type(gr.skip())) for v in kept)
