@@ -275,8 +275,9 @@ def average_checkpoints(srcs, dst, weights=None) -> Path:
     def shapes(st):
         return {k: tuple(v.shape) for k, v in st["model"].items()}
 
+    first_cfg = _net_config(first, srcs[0])
     for p, st in zip(srcs[1:], states[1:], strict=True):
-        if st["net_config"] != first["net_config"]:
+        if _net_config(st, p) != first_cfg:  # parsed: a key added since, at its default, is the same network
             raise InputError(f"{p}: another network than {srcs[0]} (net_config differs); only one network's "
                              "checkpoints are averaged")
         if shapes(st) != shapes(first):

@@ -127,6 +127,10 @@ def test_average_checkpoints_is_the_weighted_mean(tmp_path):
         if v.is_floating_point():
             torch.testing.assert_close(v, a["model"][k] + 0.25, rtol=0, atol=1e-6)
     load_model(out)
+    # a checkpoint written before a configuration key existed (the key at its default) is the same network
+    older = _state(net_config={k: v for k, v in dataclasses.asdict(CFG).items() if k != "work_scale"})
+    torch.save(older, tmp_path / "older.pt")
+    average_checkpoints([tmp_path / "older.pt", tmp_path / "b.pt"], tmp_path / "m2.pt")
     other = _state(net_config={**dataclasses.asdict(CFG), "width": 8})
     torch.save(other, tmp_path / "o.pt")
     for srcs, w, text in (([tmp_path / "a.pt", tmp_path / "o.pt"], None, "another network"),
