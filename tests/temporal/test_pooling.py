@@ -102,7 +102,7 @@ def test_causal_pool_equals_the_offline_pool_on_a_constant_shot():
 
 def test_a_window_follows_a_turning_light():
     from relightnet.sh import rotate_sh_up
-    from relightnet.temporal import pool_window
+    from relightnet.temporal import POOL_SECONDS, pool_window
 
     base = _light(8)
     lights = [rotate_sh_up(base, 0.05 * t) for t in range(40)]  # ~90° over the shot, no switch
@@ -112,7 +112,7 @@ def test_a_window_follows_a_turning_light():
     shot = pool_shot_lights(ev, None, 1e-6, switches=None)[0]
     rel = lambda x: float((light_distance(x, truth) / light_norm(truth)).mean())  # noqa: E731
     assert rel(win) < 0.5 * rel(shot)
-    assert pool_window(30.0) == 30 and pool_window(0.5) == 1
+    assert pool_window(30.0) == round(30 * POOL_SECONDS) and pool_window(0.5, 1.0) == 1
 
 
 def test_a_switch_half_way_through_a_short_shot_is_found():
