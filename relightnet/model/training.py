@@ -30,6 +30,7 @@ from ..io.documents import clip, short
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
+from .photo_input import photo_input
 
 logger = logging.getLogger(__name__)
 
@@ -72,6 +73,7 @@ class TrainConfig:
     channels_last: bool = False
     data_dtype: str = "float32"
     train_items: int | None = None
+    photo: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -95,6 +97,7 @@ class TrainConfig:
                 f"train config render_target: expected 'image' or 'model', got {short(self.render_target)}")
         NetConfig(**self.net)
         LossWeights(**self.loss)
+        photo_input(self.photo)
         cs = self.augment.get("crop_scale") if self.augment else None
         if cs is not None and cs[0] != cs[1] and self.augment.get("size") is None:
             raise InputError(
@@ -140,14 +143,14 @@ class TrainData:
     FIELDS = ("image", "mask", "albedo", "light")
 
     def __init__(self, root, split: str = "train", target: str = "transport", dtype=torch.float32,
-                 limit: int | None = None) -> None:
+                 limit: int | None = None, extra: tuple = ()) -> None:
         from ..data.dataset import SynthDataset
 
-        ds = SynthDataset(root, split, fields=(*self.FIELDS, target), cache_shards=1)
+        ds = SynthDataset(root, split, fields=(*self.FIELDS, target, *extra), cache_shards=1)
         if len(ds) == 0:
             raise InputError(f"{root}: the {split} split is empty")
         self.target = target
-        keys = (*self.FIELDS, target)
+        keys = (*self.FIELDS, target, *extra)
         first = ds[0]
         n = len(ds) if limit is None else min(limit, len(ds))
         self.tensors = {k: torch.empty((n, *first[k].shape), dtype=torch.float32 if k == "light" else dtype)
@@ -175,7 +178,11 @@ class TrainData:
 
 
 def batch_to_input(batch: dict) -> torch.Tensor:
-    """Network input of a batch: the camera's view (sRGB of the linear image) and the mask."""
+    """Network input of a batch: ``input`` when the items were framed as photos
+    (:class:`~relightnet.model.photo_input.PhotoInput`), else the camera's view (sRGB of the
+    linear image) and the mask."""
+    if "input" in batch:
+        return batch["input"]
     srgb = linear_to_srgb(batch["image"].clamp(0, 1))
     return normalize_input(srgb, batch["mask"])
 
@@ -281,8 +288,6 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     Returns:
         The last logged metrics.
     """
-    from ..data.augment import Augment
-
     rank, world = _dist_env()
     if world > 1 and not torch.distributed.is_initialized():
         torch.distributed.init_process_group("nccl" if device.startswith("cuda") else "gloo")
@@ -291,7 +296,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     out = Path(out_dir)
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
-    data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items)
+    data, aug = _data_and_augment(cfg, data_dir)
     model, net_cfg = _new_model(cfg, data, device, resume or resume_from is not None)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(cfg))
@@ -299,7 +304,6 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     source = ckpt if resume or (resume_from is not None and ckpt.exists()) else resume_from
     step = _resume(Path(source), cfg, model, opt, sched, device) if source is not None else 0
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
-    aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
     weights = LossWeights(**cfg.loss)
     log_path = out / "metrics.jsonl"
     last: dict = {}
@@ -342,6 +346,17 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         check_ranks_in_sync(model)
         torch.distributed.barrier()
     return last
+
+
+def _data_and_augment(cfg: TrainConfig, data_dir):
+    """The training split in memory and the per-item transform (augmentation, then the photo framing)."""
+    from ..data.augment import Augment
+
+    photo = photo_input(cfg.photo)
+    extra = ("image_composite",) if photo is not None and photo.composite > 0 else ()
+    data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items, extra)
+    aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
+    return data, (photo.after(aug) if photo is not None else aug)
 
 
 def check_ranks_in_sync(model: torch.nn.Module) -> None:

@@ -1,0 +1,182 @@
+"""Training inputs made the way a user's photo reaches the network.
+
+A generated item is a person rendered alone, already framed: every pixel inside its mask is
+the person's own radiance, and the silhouette's last pixels show the grazing shading exactly.
+A photo or a video frame is not like that: the person stands over a background that the
+silhouette's pixels blend into, :func:`~relightnet.model.inference.frame_person` cuts a box
+around a mask (the segmentation's, a pixel or two off) and resamples it to the working size,
+and in a video the person may cover few pixels. A network trained on the renders alone learns
+to read the light from those exact silhouette pixels: on the test items its light error is
+0.17 through the renders, 0.47 through the same items' composites and 0.41 when the render is
+only re-framed (issue 23, session 13, README "The light of a photo as the package sees it").
+
+:class:`PhotoInput` turns an item into what the package's own path gives the network: the
+composite instead of the render (probability ``composite``), the item shrunk first
+(``source_scale``: a person covering fewer pixels), the mask thresholded at that size and grown
+or shrunk by up to ``mask_px`` pixels, and :func:`~relightnet.model.inference.frame_person`
+with a padding drawn from ``pad``. The targets (every spatial field) are resampled onto the
+same box from the item's full resolution, so the losses compare like with like; the network
+input goes in ``sample["input"]`` (4, S, S), which :func:`~relightnet.model.training.batch_to_input`
+uses when present.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+import torch.nn.functional as F
+
+from ..checks import InputError
+from ..color import linear_to_srgb
+from ..data.augment import SPATIAL_FIELDS
+from .inference import frame_person
+from .network import normalize_input
+
+__all__ = ["PhotoInput", "as_photo", "morph_mask", "photo_input"]
+
+#: Fields resampled as labels (then thresholded at 0.5), not as values.
+_MASKS = ("mask",)
+
+
+def morph_mask(mask: torch.Tensor, pixels: int) -> torch.Tensor:
+    """Grow (``pixels`` > 0) or shrink (< 0) a binary mask by ``|pixels|`` pixels (square element).
+
+    Args:
+        mask: (H, W) in {0, 1}.
+
+    Returns:
+        (H, W) float in {0, 1}.
+    """
+    if pixels == 0:
+        return mask.float()
+    k = 2 * abs(int(pixels)) + 1
+    m = mask.float()[None, None]
+    out = F.max_pool2d(m, k, 1, k // 2) if pixels > 0 else -F.max_pool2d(-m, k, 1, k // 2)
+    return out[0, 0]
+
+
+def _box_grid(box, scale: float, size: int, full: int, dtype) -> torch.Tensor:
+    """(1, S, S, 2) ``grid_sample`` positions in a (full × full) item of the output pixels of a
+    :class:`~relightnet.model.inference.CropBox` drawn at ``scale`` × the item's size."""
+    i = (torch.arange(size, dtype=torch.float64) + 0.5) * (box.size / size)  # crop-continuous
+    ys = ((box.top + i) / scale) * (2.0 / full) - 1.0
+    xs = ((box.left + i) / scale) * (2.0 / full) - 1.0
+    gy, gx = torch.meshgrid(ys, xs, indexing="ij")
+    return torch.stack([gx, gy], -1)[None].to(dtype)
+
+
+def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: float) -> dict:
+    """One item framed as the package frames a photo (module docstring).
+
+    Args:
+        sample: a training item: ``image`` (3, H, W) linear (H = W), ``mask`` (1, H, W), the other
+            spatial fields (C, H, W); ``image_composite`` (3, H, W) sRGB in [0, 255] when ``composite``.
+        composite: the input is the composite (person over background) rather than the render.
+        scale: the item is shrunk to ``scale`` × its size (≤ 1) before it is framed.
+        mask_px: the mask at that size grown (> 0) or shrunk (< 0) by so many pixels.
+        pad: the framing's padding (fraction of the mask box's larger side).
+
+    Returns:
+        The item on the framed box at the same size: every spatial field resampled (``mask``
+        thresholded), ``input`` (4, H, W) the network input (:func:`~relightnet.model.normalize_input`
+        of the framed photo and its framed mask).
+    """
+    h, w = sample["image"].shape[-2:]
+    if h != w:
+        raise InputError(f"as_photo: expected a square item, got {h}x{w}")
+    if not 0.0 < scale <= 1.0:
+        raise InputError(f"as_photo: scale must be in (0, 1], got {scale}")
+    if composite and "image_composite" not in sample:
+        raise InputError("as_photo: composite input asked for, but the item has no image_composite")
+    srgb = sample["image_composite"] / 255.0 if composite else linear_to_srgb(sample["image"].clamp(0, 1))
+    mask = sample["mask"][:1]
+    hs = max(16, round(scale * h))
+    if hs < h:
+        srgb = F.interpolate(srgb[None], size=(hs, hs), mode="bilinear", align_corners=False, antialias=True)[0]
+        mask = F.interpolate(mask[None], size=(hs, hs), mode="bilinear", align_corners=False, antialias=True)[0]
+    seen = morph_mask(mask[0] > 0.5, mask_px)
+    if not bool((seen > 0.5).any()):  # shrunk away: the thresholded mask as it is
+        seen = (mask[0] > 0.5).float()
+    if not bool((seen > 0.5).any()):
+        raise InputError("as_photo: the item's mask is empty at the drawn scale")
+    x, mk, box = frame_person(srgb.clamp(0, 1), seen, h, pad)
+    grid = _box_grid(box, hs / h, h, h, sample["image"].dtype)
+    out = dict(sample)
+    for name, v in sample.items():
+        if name not in SPATIAL_FIELDS or name == "image_composite":
+            continue
+        y = F.grid_sample(v[None].float(), grid, mode="bilinear", padding_mode="zeros", align_corners=False)[0]
+        out[name] = (y > 0.5).to(v.dtype) if name in _MASKS else y.to(v.dtype)
+    out.pop("image_composite", None)
+    out["input"] = normalize_input(x, mk)[0]
+    return out
+
+
+@dataclass(frozen=True)
+class PhotoInput:
+    """Draws of :func:`as_photo` per item (``train`` config key ``photo``).
+
+    Args:
+        composite: probability that the input is the composite rather than the render.
+        source_scale: (lo, hi) ⊂ (0, 1]: the item is shrunk to a log-uniform draw of this range.
+        mask_px: the mask is grown or shrunk by a uniform draw of −mask_px … mask_px pixels.
+        pad: (lo, hi) range of the framing's padding.
+        prob: probability that an item is framed as a photo at all (else it stays the render).
+    """
+
+    composite: float = 0.5
+    source_scale: tuple = (0.5, 1.0)
+    mask_px: int = 1
+    pad: tuple = (0.03, 0.08)
+    prob: float = 1.0
+
+    def __post_init__(self) -> None:
+        lo, hi = (float(v) for v in self.source_scale)
+        if not (0.0 <= self.composite <= 1.0 and 0.0 <= self.prob <= 1.0):
+            raise InputError(f"photo: composite and prob are probabilities, got {self.composite}, {self.prob}")
+        if not 0.0 < lo <= hi <= 1.0:
+            raise InputError(f"photo.source_scale: expected 0 < lo <= hi <= 1, got {list(self.source_scale)}")
+        if isinstance(self.mask_px, bool) or not isinstance(self.mask_px, int) or not 0 <= self.mask_px <= 4:
+            raise InputError(f"photo.mask_px: expected an integer in 0..4, got {self.mask_px!r}")
+        if not 0.0 <= float(self.pad[0]) <= float(self.pad[1]) <= 0.5:
+            raise InputError(f"photo.pad: expected 0 <= lo <= hi <= 0.5, got {list(self.pad)}")
+
+    def __call__(self, sample: dict, generator: torch.Generator | None = None) -> dict:
+        u = torch.rand(5, generator=generator, dtype=torch.float64).tolist()
+        if u[0] >= self.prob:  # the render as it is (every item of a batch carries an input)
+            out = {k: v for k, v in sample.items() if k != "image_composite"}
+            out["input"] = normalize_input(linear_to_srgb(sample["image"].clamp(0, 1))[None], sample["mask"][None])[0]
+            return out
+        lo, hi = (math.log(float(v)) for v in self.source_scale)
+        px = min(self.mask_px, int(u[3] * (2 * self.mask_px + 1)) - self.mask_px)
+        pad = float(self.pad[0]) + u[4] * (float(self.pad[1]) - float(self.pad[0]))
+        return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
+                        math.exp(lo + u[2] * (hi - lo)), px, pad)
+
+    def after(self, first):
+        """This framing after another per-item transform ``first(sample, generator)`` (None: alone)."""
+        if first is None:
+            return self
+        return lambda sample, generator=None: self(first(sample, generator), generator)
+
+
+def photo_input(settings) -> PhotoInput | None:
+    """The :class:`PhotoInput` of a training config's ``photo`` mapping (lists as tuples), or None
+    for an empty one (the renders as they are).
+
+    Raises:
+        InputError: not a mapping, an unknown key or a value out of range.
+    """
+    if not isinstance(settings, dict):
+        raise InputError(f"train config photo: expected a mapping, got {type(settings).__name__}")
+    if not settings:
+        return None
+    unknown = set(settings) - set(PhotoInput.__dataclass_fields__)
+    if unknown:
+        raise InputError(f"train config photo: unknown keys {sorted(map(str, unknown))}")
+    try:
+        return PhotoInput(**{k: tuple(v) if isinstance(v, list) else v for k, v in settings.items()})
+    except (TypeError, ValueError) as e:
+        raise InputError(f"train config photo: a value has the wrong type ({str(e)[:160]})") from None

@@ -1,0 +1,90 @@
+"""Training items framed as the package frames a photo (relightnet.model.photo_input), on generated people."""
+
+import pytest
+import torch
+
+from relightnet.checks import InputError
+from relightnet.color import linear_to_srgb
+from relightnet.model.inference import frame_person
+from relightnet.model.network import normalize_input
+from relightnet.model.photo_input import PhotoInput, as_photo, morph_mask
+from relightnet.model.training import TrainConfig, TrainData, batch_to_input, train
+
+pytestmark = pytest.mark.slow  # a generated dataset
+
+
+@pytest.fixture(scope="module")
+def items(tiny_dataset):
+    return TrainData(tiny_dataset, "train", extra=("image_composite",))
+
+
+def _item(items, i=0):
+    return {k: v[i].float() for k, v in items.tensors.items()}
+
+
+def test_morph_mask_grows_and_shrinks_by_whole_pixels():
+    m = torch.zeros(12, 12)
+    m[4:8, 4:8] = 1
+    assert int(morph_mask(m, 1).sum()) == 36 and int(morph_mask(m, -1).sum()) == 4
+    assert torch.equal(morph_mask(m, 0), m)
+
+
+def test_the_render_framed_at_full_size_is_what_frame_person_gives(items):
+    s = _item(items)
+    out = as_photo(s, composite=False, scale=1.0, mask_px=0, pad=0.05)
+    srgb = linear_to_srgb(s["image"].clamp(0, 1))
+    x, mk, _ = frame_person(srgb, s["mask"][0], srgb.shape[-1], 0.05)
+    assert torch.allclose(out["input"], normalize_input(x, mk)[0])
+    # the targets sit on the same box: the framed mask is the input's, the framed image matches it
+    assert torch.equal(out["mask"][0] > 0.5, out["input"][3] > 0.5)
+    inside = out["mask"][0] > 0.5
+    seen = (out["input"][:3] + 1) / 2
+    assert float((seen - linear_to_srgb(out["image"].clamp(0, 1))).abs().mean(0)[inside].mean()) < 0.03
+    assert torch.equal(out["light"], s["light"]) and "image_composite" not in out
+    assert out["transport"].shape == s["transport"].shape
+
+
+def test_a_shrunk_composite_keeps_the_targets_at_full_detail(items):
+    s = _item(items, 1)
+    out = as_photo(s, composite=True, scale=0.5, mask_px=0, pad=0.05)
+    assert out["input"].shape == (4, *s["image"].shape[-2:])
+    seen, true = out["input"][3] > 0.5, out["mask"][0] > 0.5
+
+    def centre(m):
+        ys, xs = torch.nonzero(m, as_tuple=True)
+        return torch.stack([ys.float().mean(), xs.float().mean()])
+
+    # the coarse mask and the full-detail targets frame the same person at the same place
+    assert float((centre(seen) - centre(true)).abs().max()) < 1.5
+    grown = as_photo(s, composite=True, scale=0.5, mask_px=1, pad=0.05)
+    seen, true = grown["input"][3] > 0.5, grown["mask"][0] > 0.5
+    assert float((seen & true).sum() / true.sum()) > 0.9  # a grown mask covers the person
+    assert bool((grown["input"][:3][:, seen] != 0).any())
+
+
+def test_photo_input_draws_are_seeded_and_a_batch_stacks(items):
+    p = PhotoInput(composite=0.5, source_scale=(0.5, 1.0), mask_px=1, prob=0.5)
+    a = p(_item(items), torch.Generator().manual_seed(3))
+    b = p(_item(items), torch.Generator().manual_seed(3))
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    batch = items.batch(torch.arange(4), p, [torch.Generator().manual_seed(i) for i in range(4)])
+    assert batch_to_input(batch).shape == (4, 4, *items.tensors["image"].shape[-2:])
+
+
+@pytest.mark.parametrize("bad", [{"composite": 1.5}, {"source_scale": (0.0, 1.0)}, {"source_scale": (0.8, 0.5)},
+                                 {"mask_px": -1}, {"mask_px": 1.5}, {"pad": (0.1, 0.05)}, {"prob": -0.1}])
+def test_bad_photo_settings_fail_clearly(bad):
+    with pytest.raises(InputError, match="photo"):
+        PhotoInput(**bad)
+    with pytest.raises(InputError, match="photo"):
+        TrainConfig(photo={k: list(v) if isinstance(v, tuple) else v for k, v in bad.items()})
+    with pytest.raises(InputError, match="photo"):
+        TrainConfig(photo={"shrink": 0.5})
+
+
+def test_training_on_photo_framed_items_runs(tiny_dataset, tmp_path):
+    cfg = TrainConfig(steps=2, batch_size=2, warmup=1, log_every=1, checkpoint_every=2, threads=1,
+                      net={"width": 8, "max_width": 32, "light_hidden": 32},
+                      photo={"composite": 1.0, "source_scale": [0.5, 1.0], "mask_px": 1})
+    last = train(cfg, tiny_dataset, tmp_path / "run")
+    assert last["step"] == 2 and torch.isfinite(torch.tensor(last["total"]))
