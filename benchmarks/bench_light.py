@@ -3,7 +3,8 @@
 Run: ``.venv/bin/python benchmarks/bench_light.py --data data/large --clips data/seq_constant data/seq_switch
 --checkpoints shipped runs/large_hybrid/last.pt [--out reports/light_bench.md]``
 
-For every model: the still metrics of ``relightnet evaluate --light`` per light family (median and p90 of the
+For every model: the still metrics of ``relightnet evaluate --light`` per light family, of the test items as
+rendered and as photos (their composites framed around their masks by the package's own path): median and p90 of the
 scale-invariant irradiance error over the sphere and the camera hemisphere, dominant-direction angle,
 chromaticity error) and, with ``--clips``, drift p50/p90 of constant lights and the lag after a switch, per
 frame and after the video pooling/smoothing the jobs use (``auto``).
@@ -39,11 +40,13 @@ def main() -> None:
         results[c] = evaluate_light(model, args.data, clips=args.clips)
     rows = []
     for c, res in results.items():
-        for g, m in res["stills"].items():
-            rows.append([c, g, m["n"], m["error"]["median"], m["error"]["p90"], m["error_hemisphere"]["median"],
-                         m["direction_deg"]["median"], m["chromaticity"]["median"], m["ambient_error"]["median"]])
-    text = table(["model", "lights", "n", "error median", "error p90", "hemisphere median", "direction ° median",
-                  "chromaticity median", "ambient error median"], rows)
+        for key, how in (("stills", "render"), ("stills_photo", "photo")):
+            for g, m in res[key].items():
+                rows.append([c, how, g, m["n"], m["error"]["median"], m["error"]["p90"],
+                             m["error_hemisphere"]["median"], m["direction_deg"]["median"], m["chromaticity"]["median"],
+                             m["ambient_error"]["median"]])
+    text = table(["model", "input", "lights", "n", "error median", "error p90", "hemisphere median",
+                  "direction ° median", "chromaticity median", "ambient error median"], rows)
     if args.clips:
         crow = []
         for c, res in results.items():

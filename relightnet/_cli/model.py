@@ -44,7 +44,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
         return _evaluate_photos(args, out)
     if args.clips and not args.light:
         raise InputError("--clips: only with --light (the light report)")
-    unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline)) if given]
+    unused = [o for o, given in (("--ablation", args.ablation), ("--no-baseline", args.no_baseline),
+                                 ("--as-photo", args.as_photo)) if given]
     if args.light and unused:
         raise InputError(f"{', '.join(unused)}: not used with --light (the light report has no baseline or twin)")
     model = load_model(args.checkpoint, device=args.device)
@@ -54,7 +55,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     base = baseline_from_train(args.data) if not args.no_baseline else None
     result = evaluate(model, args.data, split=args.split, baseline=base, sheet=out / "contact_sheet.png", twin=twin,
-                      floor=twin is not None)
+                      floor=twin is not None, photo=args.as_photo)
     extra = ""
     if twin is not None:
         extra = ("\n\nOcclusion ablation (KE18): --ablation " + str(args.ablation) + " against this model\n\n"
@@ -87,7 +88,8 @@ def _evaluate_fit(args: argparse.Namespace, out: Path) -> int:
 
     unused = [o for o, given in (("--data", args.data), ("--photos", args.photos), ("--checkpoint", args.checkpoint),
                                  ("--light", args.light), ("--clips", args.clips), ("--ablation", args.ablation),
-                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test")) if given]
+                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test"),
+                                 ("--as-photo", args.as_photo)) if given]
     if unused:
         raise InputError(f"{', '.join(unused)}: not used with --fit (it generates its own test clips)")
     result = evaluate_fit(args.fit_clips, args.fit_frames, args.fit_res,
@@ -109,7 +111,8 @@ def _evaluate_photos(args: argparse.Namespace, out: Path) -> int:
     from ..pipeline.photo_checks import format_photo_report, list_photos, photo_checks, write_photo_report
 
     unused = [o for o, given in (("--light", args.light), ("--clips", args.clips), ("--ablation", args.ablation),
-                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test")) if given]
+                                 ("--no-baseline", args.no_baseline), ("--split", args.split != "test"),
+                                 ("--as-photo", args.as_photo)) if given]
     if unused:
         raise InputError(f"{', '.join(unused)}: not used with --photos (the real-photo checks)")
     list_photos(args.photos)  # a missing folder, or one without photos, fails before the model loads
@@ -170,44 +173,7 @@ def register(sub) -> None:
     p.set_defaults(func=run_train, interrupt_hint=lambda a: f"run the same command with --resume to continue "
                    f"from {a.out}/last.pt")
 
-    p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines, or on real "
-                    "photos of people (--photos); or the motion-capture fit on generated clips (--fit).",
-                    "  relightnet evaluate --data data/synth --out reports/shipped\n"
-                    "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
-                    "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
-                    "--data data/medium --out reports/ablation\n"
-                    "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
-                    "--out reports/light\n"
-                    "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
-                    "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n"
-                    "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n")
-    add_model_args(p, backend=False)
-    p.add_argument("--data", help="dataset folder made by 'relightnet synth' (or --photos)")
-    p.add_argument("--photos", metavar="DIR",
-                   help="the real-photo checks instead, on a folder of photos of people (no masks: the person "
-                        "segmentation finds them): side contrast under a light from the left and from the right, "
-                        "and the light's round trip through relighting and estimation (photo_checks.md, "
-                        "photo_checks.json)")
-    p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
-    p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png "
-                   "(default: out/evaluate)")
-    p.add_argument("--no-baseline", action="store_true", help="skip the mean-albedo/transport/light baseline")
-    p.add_argument("--ablation", metavar="CHECKPOINT",
-                   help="KE18's occlusion ablation: a twin trained on transport that ignores occlusion "
-                        "(target: transport_unoccluded); adds relit RMSE overall and on concave pixels of both")
-    p.add_argument("--light", action="store_true",
-                   help="the light report instead: irradiance error by light family, direction and colour errors "
-                        "(light_report.md, light_metrics.json)")
-    p.add_argument("--clips", nargs="+", metavar="DATA",
-                   help="with --light: clip datasets (clip_lights constant/switch) for drift and lag")
-    p.add_argument("--fit", action="store_true",
-                   help="the motion-capture report instead: 'relightnet fit' on generated test clips whose true "
-                        "body is known (MPJPE, PA-MPJPE, 2D error, silhouette IoU, acceleration, foot skating, "
-                        "time; fit_report.md, fit_metrics.json)")
-    p.add_argument("--fit-clips", type=pos_int, default=3, help="with --fit: clips (default: 3)")
-    p.add_argument("--fit-frames", type=pos_int, default=12, help="with --fit: frames per clip (default: 12)")
-    p.add_argument("--fit-res", type=work_size, default=256, help="with --fit: clip size (default: 256)")
-    p.set_defaults(func=run_evaluate)
+    _register_evaluate(sub)
 
     p = add_command(sub, "estimate-light", "Estimate the SH light of a photo of a person (the CNN), of a "
                     "background plate (an environment map made from the photo itself), or of both combined.",
@@ -230,3 +196,48 @@ def register(sub) -> None:
                    help="working resolution, a multiple of 16 (default: the size the model was trained at)")
     add_model_args(p)
     p.set_defaults(func=run_estimate_light)
+
+
+def _register_evaluate(sub) -> None:
+    """The ``evaluate`` command's parser."""
+    p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines, or on real "
+                    "photos of people (--photos); or the motion-capture fit on generated clips (--fit).",
+                    "  relightnet evaluate --data data/synth --out reports/shipped\n"
+                    "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
+                    "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
+                    "--data data/medium --out reports/ablation\n"
+                    "  relightnet evaluate --light --data data/large --clips data/seq_constant data/seq_switch "
+                    "--out reports/light\n"
+                    "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
+                    "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n"
+                    "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n")
+    add_model_args(p, backend=False)
+    p.add_argument("--data", help="dataset folder made by 'relightnet synth' (or --photos)")
+    p.add_argument("--photos", metavar="DIR",
+                   help="the real-photo checks instead, on a folder of photos of people (no masks: the person "
+                        "segmentation finds them): side contrast under a light from the left and from the right, "
+                        "and the light's round trip through relighting and estimation (photo_checks.md, "
+                        "photo_checks.json)")
+    p.add_argument("--split", default="test", help="split (default: test: unseen bodies and unseen HDRIs)")
+    p.add_argument("--out", default="out/evaluate", help="report folder: report.md, metrics.json, contact_sheet.png "
+                   "(default: out/evaluate)")
+    p.add_argument("--no-baseline", action="store_true", help="skip the mean-albedo/transport/light baseline")
+    p.add_argument("--as-photo", action="store_true", help="score the items as photos: each composite framed "
+                   "around its mask as relight-image frames a photo, the truth on the same box (default: the renders)")
+    p.add_argument("--ablation", metavar="CHECKPOINT",
+                   help="KE18's occlusion ablation: a twin trained on transport that ignores occlusion "
+                        "(target: transport_unoccluded); adds relit RMSE overall and on concave pixels of both")
+    p.add_argument("--light", action="store_true",
+                   help="the light report instead: irradiance error by light family, direction and colour errors, "
+                        "of the stills as rendered and as photos (each composite framed around its mask, as "
+                        "relight-image frames a photo) (light_report.md, light_metrics.json)")
+    p.add_argument("--clips", nargs="+", metavar="DATA",
+                   help="with --light: clip datasets (clip_lights constant/switch) for drift and lag")
+    p.add_argument("--fit", action="store_true",
+                   help="the motion-capture report instead: 'relightnet fit' on generated test clips whose true "
+                        "body is known (MPJPE, PA-MPJPE, 2D error, silhouette IoU, acceleration, foot skating, "
+                        "time; fit_report.md, fit_metrics.json)")
+    p.add_argument("--fit-clips", type=pos_int, default=3, help="with --fit: clips (default: 3)")
+    p.add_argument("--fit-frames", type=pos_int, default=12, help="with --fit: frames per clip (default: 12)")
+    p.add_argument("--fit-res", type=work_size, default=256, help="with --fit: clip size (default: 256)")
+    p.set_defaults(func=run_evaluate)

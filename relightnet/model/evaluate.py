@@ -95,9 +95,24 @@ def _score(add, A: torch.Tensor, T: torch.Tensor, L: torch.Tensor, novel: torch.
     return relit, S_pred
 
 
+def _items(data_dir, split: str, photo: bool) -> tuple[list, tuple]:
+    """A split's items in memory (framed as photos when ``photo``) and the fields a batch stacks."""
+    from ..data.dataset import SynthDataset
+    from .photo_input import as_photo
+
+    fields = ("image", "mask", "albedo", "light", "transport", "transport_unoccluded")
+    ds = SynthDataset(data_dir, split, fields=(*fields, "image_composite") if photo else fields, cache_shards=1)
+    if len(ds) < 2:
+        raise InputError(f"{data_dir}: the {split} split needs at least 2 items to evaluate relighting")
+    items = [ds[i] for i in range(len(ds))]
+    if not photo:
+        return items, fields
+    return [as_photo({k: v.float() for k, v in it.items()}, True, 1.0, 0, 0.05) for it in items], (*fields, "input")
+
+
 def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "transport", batch: int = 4,
              baseline: dict | None = None, sheet: str | Path | None = None, concave_threshold: float = 0.1,
-             twin: RelightNet | None = None, floor: bool = False) -> dict:
+             twin: RelightNet | None = None, floor: bool = False, photo: bool = False) -> dict:
     """Masked RMSEs, PSNR and SSIM of the model (and of the baseline, when given) on a split.
 
     Args:
@@ -113,19 +128,16 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
             scored on the same items, as ``"ablation"``.
         floor: also score what ignoring occlusion costs at best — the true albedo with the true
             *unoccluded* transport — as ``"occlusion_floor"``.
+        photo: score the items as photos: each item's composite (over its background) framed
+            around its mask as ``relight-image`` frames a photo, the truth resampled onto the same
+            box (:func:`~relightnet.model.photo_input.as_photo`); else the renders at their own framing.
 
     Returns:
         ``{"model": {metric: value}, "baseline": {...}, "ablation": {...}, "occlusion_floor": {...}}``
         (the last three when asked for).
     """
-    from ..data.dataset import SynthDataset
-
-    fields = ("image", "mask", "albedo", "light", "transport", "transport_unoccluded")
-    ds = SynthDataset(data_dir, split, fields=fields, cache_shards=1)
-    n = len(ds)
-    if n < 2:
-        raise InputError(f"{data_dir}: the {split} split needs at least 2 items to evaluate relighting")
-    items = [ds[i] for i in range(n)]
+    items, fields = _items(data_dir, split, photo)
+    n = len(items)
     dev = next(model.parameters()).device
     sums: dict = {"model": {}, "baseline": {}, "ablation": {}, "occlusion_floor": {}}
     rows = []
@@ -166,6 +178,7 @@ def evaluate(model: RelightNet, data_dir, split: str = "test", target: str = "tr
                                  relit[j] * mj, gt_relit[j]])
     result = {who: {k: float(np.mean(v)) for k, v in d.items()} for who, d in sums.items() if d}
     result["n"] = n
+    result["as_photo"] = bool(photo)
     if sheet is not None and rows:
         _contact_sheet(rows, sheet)
     return result
@@ -208,4 +221,5 @@ def format_table(result: dict) -> str:
 
 def write_report(result: dict, path, extra: str = "") -> None:
     with atomic_write(path, "w") as f:
-        f.write(f"Evaluated on {result['n']} items.\n\n" + format_table(result) + extra + "\n")
+        how = " as photos (composites framed around their masks)" if result.get("as_photo") else ""
+        f.write(f"Evaluated on {result['n']} items{how}.\n\n" + format_table(result) + extra + "\n")

@@ -3,7 +3,10 @@
 ``relightnet evaluate --light`` runs :func:`evaluate_light`:
 
 - **stills** — every item of a split (the test split: unseen bodies, the held-out env maps
-  rotated and new procedural lights), grouped by the light's source (:data:`LIGHT_SOURCES`):
+  rotated and new procedural lights), seen two ways: as rendered (the person alone at the
+  generator's own framing, what training sees) and **as a photo** (the item's composite over its
+  background, framed around its mask by :func:`~relightnet.model.inference.estimate_light`, the
+  path of ``relight-image`` and the video jobs); grouped by the light's source (:data:`LIGHT_SOURCES`):
   the scale-invariant irradiance error over the whole sphere and over the camera-facing
   hemisphere, the angle between the dominant directions and the chromaticity error
   (:mod:`relightnet.sh.metrics`), medians and 90th percentiles, beside a direction-less
@@ -37,7 +40,7 @@ def _sources(ds) -> list[str]:
 
 
 @torch.no_grad()
-def split_lights(model, data_dir, split: str = "test", batch: int = 16):
+def split_lights(model, data_dir, split: str = "test", batch: int = 16, photo: bool = False):
     """Estimated and true lights of a split's stills.
 
     Args:
@@ -45,20 +48,31 @@ def split_lights(model, data_dir, split: str = "test", batch: int = 16):
         data_dir: a dataset folder (``relightnet synth``) of stills.
         split: which split.
         batch: items per forward pass.
+        photo: estimate from each item's composite framed as a photo
+            (:func:`~relightnet.model.inference.estimate_light` with the item's mask), one item
+            at a time; else from the render at its own framing.
 
     Returns:
         ``(est (N, K, 3), true (N, K, 3), sources: list of N source names)``.
     """
     from ..data.dataset import SynthDataset
+    from ..model.inference import estimate_light
     from ..model.training import batch_to_input
 
-    ds = SynthDataset(data_dir, split, fields=("image", "mask", "light"), cache_shards=1)
+    fields = ("image_composite", "mask", "light") if photo else ("image", "mask", "light")
+    ds = SynthDataset(data_dir, split, fields=fields, cache_shards=1)
     if ds.sequence:
         raise InputError(f"{data_dir}: a dataset of clips; give one of stills (the clips go to --clips)")
     if len(ds) == 0:
         raise InputError(f"{data_dir}: the {split} split is empty")
     dev = next(model.parameters()).device
     est, true = [], []
+    if photo:
+        for i in range(len(ds)):
+            it = ds[i]
+            est.append(estimate_light(model, it["image_composite"].to(dev), it["mask"][0].to(dev)).float().cpu()[None])
+            true.append(it["light"][None])
+        return torch.cat(est), torch.cat(true), _sources(ds)
     for s in range(0, len(ds), batch):
         items = [ds[i] for i in range(s, min(s + batch, len(ds)))]
         b = {k: torch.stack([it[k] for it in items]).to(dev) for k in ("image", "mask", "light")}
@@ -179,6 +193,8 @@ def evaluate_light(model, data_dir=None, clips=(), split: str = "test", smoothin
     if data_dir is not None:
         est, true, sources = split_lights(model, data_dir, split)
         result["stills"] = still_metrics(est, true, sources)
+        est, true, sources = split_lights(model, data_dir, split, photo=True)
+        result["stills_photo"] = still_metrics(est, true, sources)
     if clips:
         every = [c for d in clips for c in clip_lights(model, d, split, smoothing)]
         result["clips"] = clip_metrics(every)
@@ -190,12 +206,16 @@ def evaluate_light(model, data_dir=None, clips=(), split: str = "test", smoothin
 def format_light_report(result: dict, name: str = "model") -> str:
     """Markdown tables of :func:`evaluate_light`'s result."""
     lines = []
-    if "stills" in result:
-        lines += [f"Stills ({name}): scale-invariant irradiance error (sphere / camera hemisphere), dominant-direction "
-                  "angle, chromaticity error; median (p90). Ambient: a direction-less light of the true colour.", "",
+    for key, how in (("stills", "as rendered"), ("stills_photo", "as photos: the composite, framed around its mask")):
+        if key not in result:
+            continue
+        lines += [""] if lines else []
+        lines += [f"Stills {how} ({name}): scale-invariant irradiance error (sphere / camera "
+                  "hemisphere), dominant-direction angle, chromaticity error; median (p90). Ambient: a direction-less "
+                  "light of the true colour.", "",
                   "| lights | n | error | error, hemisphere | direction ° | chromaticity | ambient error |",
                   "|---|---|---|---|---|---|---|"]
-        for g, m in result["stills"].items():
+        for g, m in result[key].items():
             cells = [f"{m[k]['median']:.3f} ({m[k]['p90']:.3f})" for k in ("error", "error_hemisphere")]
             cells += [f"{m['direction_deg']['median']:.1f} ({m['direction_deg']['p90']:.1f})",
                       f"{m['chromaticity']['median']:.3f} ({m['chromaticity']['p90']:.3f})",

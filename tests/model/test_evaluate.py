@@ -70,3 +70,26 @@ def test_occlusion_floor_is_the_oracle_that_ignores_occlusion(tiny_dataset):
     aware = {"relit_rmse": 0.08, "relit_rmse_concave": 0.06}
     table = format_ablation(aware, {"relit_rmse": 0.1, "relit_rmse_concave": 0.1}, floor)
     assert "| occlusion-aware lower by | 20.0% | 40.0% |" in table
+
+
+def test_items_scored_as_photos_sit_on_the_framed_box(tiny_dataset, tmp_path):
+    from relightnet.cli import main
+    from relightnet.data import SynthDataset
+    from relightnet.model.checkpoint import save_checkpoint
+    from relightnet.model.photo_input import as_photo
+
+    # An oracle of the framed truth scores zero: the truth is resampled onto the box the input shows.
+    ds = SynthDataset(tiny_dataset, "test", fields=("image", "image_composite", "mask", "albedo", "transport", "light"))
+    framed = [as_photo({k: v.float() for k, v in ds[i].items()}, True, 1.0, 0, 0.05)
+              for i in range(len(ds))]
+    items = {k: torch.stack([f[k] for f in framed]) for k in ("albedo", "transport", "light")}
+    r = evaluate(Oracle(items), tiny_dataset, "test", batch=8, photo=True)
+    assert r["as_photo"] and r["model"]["transport_rmse"] == 0 and r["model"]["relit_rmse"] == 0
+    torch.manual_seed(0)
+    net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32)).eval()
+    ckpt = save_checkpoint(tmp_path / "m.pt", net, net.config, step=0, input_size=32)
+    out = tmp_path / "rep"
+    assert main(["evaluate", "--checkpoint", str(ckpt), "--data", str(tiny_dataset), "--no-baseline", "--as-photo",
+                 "--out", str(out)]) == 0
+    assert "as photos" in (out / "report.md").read_text()
+    assert main(["evaluate", "--light", "--as-photo", "--data", str(tiny_dataset), "--out", str(out)]) != 0

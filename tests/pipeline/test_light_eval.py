@@ -53,11 +53,14 @@ def test_evaluate_light_end_to_end(tiny_dataset, tiny_clips):
     res = evaluate_light(_net("hybrid"), tiny_dataset, clips=tiny_clips)
     assert res["stills"]["all"]["n"] == 3
     assert 0 <= res["stills"]["all"]["error"]["median"] <= 1
+    # the same items as photos: their composites framed around their masks by the package's own path
+    assert res["stills_photo"]["all"]["n"] == 3 and 0 <= res["stills_photo"]["all"]["error"]["median"] <= 1
+    assert res["stills_photo"]["all"]["error"]["median"] != res["stills"]["all"]["error"]["median"]
     assert res["clips"]["raw"]["clips_constant"] == 1 and res["clips"]["raw"]["clips_switch"] == 1
     # pooled over a second of frames, a constant light drifts much less than the per-frame estimate
     assert res["clips"]["smoothed"]["drift_p90"] < 0.5 * res["clips"]["raw"]["drift_p90"]
     text = format_light_report(res)
-    assert "| all | 3 |" in text and "drift" in text
+    assert text.count("| all | 3 |") == 2 and "as photos" in text and "drift" in text
     json.dumps(res)
 
 
