@@ -91,7 +91,8 @@ def main() -> None:
     turning = _clips(predict, args.turning)
     rows = []
     for s in args.seconds:
-        m = clip_metrics([{k: c[k] for k in ("raw", "smoothed", "switch")} for c in _pooled(fixed, s, predict.solve_reg)])
+        pooled = _pooled(fixed, s, predict.solve_reg)
+        m = clip_metrics([{k: c[k] for k in ("raw", "smoothed", "switch")} for c in pooled])
         m = m["smoothed"]
         err = torch.cat([scale_invariant_light_error(c["smoothed"].double(), c["true"])
                          for c in _pooled(turning, s, predict.solve_reg)])
