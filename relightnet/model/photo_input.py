@@ -145,15 +145,19 @@ class PhotoInput:
 
     def __call__(self, sample: dict, generator: torch.Generator | None = None) -> dict:
         u = torch.rand(5, generator=generator, dtype=torch.float64).tolist()
-        if u[0] >= self.prob:  # the render as it is (every item of a batch carries an input)
-            out = {k: v for k, v in sample.items() if k != "image_composite"}
-            out["input"] = normalize_input(linear_to_srgb(sample["image"].clamp(0, 1))[None], sample["mask"][None])[0]
-            return out
         lo, hi = (math.log(float(v)) for v in self.source_scale)
         px = min(self.mask_px, int(u[3] * (2 * self.mask_px + 1)) - self.mask_px)
         pad = float(self.pad[0]) + u[4] * (float(self.pad[1]) - float(self.pad[0]))
-        return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
-                        math.exp(lo + u[2] * (hi - lo)), px, pad)
+        if u[0] < self.prob and bool((sample["mask"] > 0.5).any()):
+            try:
+                return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
+                                math.exp(lo + u[2] * (hi - lo)), px, pad)
+            except InputError:  # a sliver of a person that the shrinking lost: the render, as below
+                pass
+        # the render as it is (every item of a batch carries an input)
+        out = {k: v for k, v in sample.items() if k != "image_composite"}
+        out["input"] = normalize_input(linear_to_srgb(sample["image"].clamp(0, 1))[None], sample["mask"][None])[0]
+        return out
 
     def after(self, first):
         """This framing after another per-item transform ``first(sample, generator)`` (None: alone)."""

@@ -71,6 +71,16 @@ def test_photo_input_draws_are_seeded_and_a_batch_stacks(items):
     assert batch_to_input(batch).shape == (4, 4, *items.tensors["image"].shape[-2:])
 
 
+def test_a_person_the_shrinking_loses_stays_the_render(items):
+    s = _item(items)
+    s["mask"] = torch.zeros_like(s["mask"])
+    s["mask"][0, 3, 3] = 1  # one pixel: gone once the item is shrunk to a fifth
+    out = PhotoInput(source_scale=(0.2, 0.2), prob=1.0)(s, torch.Generator().manual_seed(0))
+    assert torch.equal(out["mask"], s["mask"]) and out["input"].shape == (4, *s["image"].shape[-2:])
+    with pytest.raises(InputError, match="empty"):
+        as_photo(s, composite=False, scale=0.2, mask_px=0, pad=0.05)
+
+
 @pytest.mark.parametrize("bad", [{"composite": 1.5}, {"source_scale": (0.0, 1.0)}, {"source_scale": (0.8, 0.5)},
                                  {"mask_px": -1}, {"mask_px": 1.5}, {"pad": (0.1, 0.05)}, {"prob": -0.1}])
 def test_bad_photo_settings_fail_clearly(bad):
