@@ -29,7 +29,7 @@ from relightnet.color import linear_to_srgb  # noqa: E402
 from relightnet.data.dataset import SynthDataset  # noqa: E402
 from relightnet.model import normalize_input  # noqa: E402
 from relightnet.model.checkpoint import load_model  # noqa: E402
-from relightnet.model.inference import frame_person  # noqa: E402
+from relightnet.model.inference import crop_to_box, frame_person  # noqa: E402
 from relightnet.sh.metrics import scale_invariant_light_error  # noqa: E402
 
 
@@ -51,11 +51,17 @@ def _framed_down(it: dict, size: int, antialias: bool) -> torch.Tensor:
     comp = it["image_composite"].float() / 255
     x, mk, box = frame_person(comp, m, size)
     if antialias and box.size > size:
-        from relightnet.model.inference import crop_to_box
-
         x = torch.nn.functional.interpolate(crop_to_box(comp[None], box), size=(size, size), mode="bilinear",
                                             align_corners=False, antialias=True)
     return normalize_input(x, mk)
+
+
+def _score(errs: dict, name: str, p, light: torch.Tensor) -> None:
+    """Add a prediction's light error (and its light head's) to ``errs[name]``."""
+    light_errs, head_errs = errs.setdefault(name, ([], []))
+    light_errs.append(float(scale_invariant_light_error(p.light[0], light)))
+    if p.light_head is not None:
+        head_errs.append(float(scale_invariant_light_error(p.light_head[0], light)))
 
 
 def _stats(errors: list[float]) -> str:
@@ -84,21 +90,12 @@ def main() -> None:
         for i in range(min(args.n, len(ds))):
             it = ds[i]
             for name, x in _inputs(it, size).items():
-                p = model(x)
-                errs.setdefault(name, ([], []))
-                errs[name][0].append(float(scale_invariant_light_error(p.light[0], it["light"])))
-                if p.light_head is not None:
-                    errs[name][1].append(float(scale_invariant_light_error(p.light_head[0], it["light"])))
-        if hires is not None:
-            for i in range(min(args.n, len(hires))):
-                it = hires[i]
-                for aa in (False, True):
-                    name = f"composite at {it['image'].shape[-1]}², framed down{', antialiased' if aa else ''}"
-                    p = model(_framed_down(it, size, aa))
-                    errs.setdefault(name, ([], []))
-                    errs[name][0].append(float(scale_invariant_light_error(p.light[0], it["light"])))
-                    if p.light_head is not None:
-                        errs[name][1].append(float(scale_invariant_light_error(p.light_head[0], it["light"])))
+                _score(errs, name, model(x), it["light"])
+        for i in range(min(args.n, len(hires))) if hires is not None else ():
+            it = hires[i]
+            for aa in (False, True):
+                name = f"composite at {it['image'].shape[-1]}², framed down{', antialiased' if aa else ''}"
+                _score(errs, name, model(_framed_down(it, size, aa)), it["light"])
         for name, (light, head) in errs.items():
             rows.append([c, name, len(light), _stats(light), _stats(head) if head else "–"])
     print(table(["model", "input", "n", "light error median (p90)", "light head alone"], rows))

@@ -57,12 +57,12 @@ def morph_mask(mask: torch.Tensor, pixels: int) -> torch.Tensor:
     return out[0, 0]
 
 
-def _box_grid(box, scale: float, size: int, full: int, dtype) -> torch.Tensor:
-    """(1, S, S, 2) ``grid_sample`` positions in a (full × full) item of the output pixels of a
-    :class:`~relightnet.model.inference.CropBox` drawn at ``scale`` × the item's size."""
+def _box_grid(box, scale: float, size: int, dtype) -> torch.Tensor:
+    """(1, S, S, 2) ``grid_sample`` positions, in an S × S item, of the S × S output pixels of a
+    :class:`~relightnet.model.inference.CropBox` drawn on the item shrunk to ``scale`` × its size."""
     i = (torch.arange(size, dtype=torch.float64) + 0.5) * (box.size / size)  # crop-continuous
-    ys = ((box.top + i) / scale) * (2.0 / full) - 1.0
-    xs = ((box.left + i) / scale) * (2.0 / full) - 1.0
+    ys = ((box.top + i) / scale) * (2.0 / size) - 1.0
+    xs = ((box.left + i) / scale) * (2.0 / size) - 1.0
     gy, gx = torch.meshgrid(ys, xs, indexing="ij")
     return torch.stack([gx, gy], -1)[None].to(dtype)
 
@@ -102,7 +102,7 @@ def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: flo
     if not bool((seen > 0.5).any()):
         raise InputError("as_photo: the item's mask is empty at the drawn scale")
     x, mk, box = frame_person(srgb.clamp(0, 1), seen, h, pad)
-    grid = _box_grid(box, hs / h, h, h, sample["image"].dtype)
+    grid = _box_grid(box, hs / h, h, sample["image"].dtype)
     out = dict(sample)
     for name, v in sample.items():
         if name not in SPATIAL_FIELDS or name == "image_composite":
