@@ -57,17 +57,18 @@ def morph_mask(mask: torch.Tensor, pixels: int) -> torch.Tensor:
     return out[0, 0]
 
 
-def _box_grid(box, scale: float, size: int, dtype) -> torch.Tensor:
-    """(1, S, S, 2) ``grid_sample`` positions, in an S × S item, of the S × S output pixels of a
-    :class:`~relightnet.model.inference.CropBox` drawn on the item shrunk to ``scale`` × its size."""
-    i = (torch.arange(size, dtype=torch.float64) + 0.5) * (box.size / size)  # crop-continuous
+def _box_grid(box, scale: float, size: int, out: int, dtype) -> torch.Tensor:
+    """(1, S, S, 2) ``grid_sample`` positions, in an item of ``size`` × ``size``, of the S × S
+    (S = ``out``) output pixels of a :class:`~relightnet.model.inference.CropBox` drawn on the item
+    shrunk to ``scale`` × its size."""
+    i = (torch.arange(out, dtype=torch.float64) + 0.5) * (box.size / out)  # crop-continuous
     ys = ((box.top + i) / scale) * (2.0 / size) - 1.0
     xs = ((box.left + i) / scale) * (2.0 / size) - 1.0
     gy, gx = torch.meshgrid(ys, xs, indexing="ij")
     return torch.stack([gx, gy], -1)[None].to(dtype)
 
 
-def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: float) -> dict:
+def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: float, size: int | None = None) -> dict:
     """One item framed as the package frames a photo (module docstring).
 
     Args:
@@ -77,11 +78,13 @@ def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: flo
         scale: the item is shrunk to ``scale`` × its size (≤ 1) before it is framed.
         mask_px: the mask at that size grown (> 0) or shrunk (< 0) by so many pixels.
         pad: the framing's padding (fraction of the mask box's larger side).
+        size: the side S of the framed item (None: the item's own, H). An item made larger than
+            the network's working size is framed *down* to it, as a photo is.
 
     Returns:
-        The item on the framed box at the same size: every spatial field resampled (``mask``
-        thresholded), ``input`` (4, H, W) the network input (:func:`~relightnet.model.normalize_input`
-        of the framed photo and its framed mask).
+        The item on the framed box at S × S: every spatial field resampled (``mask`` thresholded),
+        ``input`` (4, S, S) the network input (:func:`~relightnet.model.normalize_input` of the
+        framed photo and its framed mask).
     """
     h, w = sample["image"].shape[-2:]
     if h != w:
@@ -101,8 +104,9 @@ def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: flo
         seen = (mask[0] > 0.5).float()
     if not bool((seen > 0.5).any()):
         raise InputError("as_photo: the item's mask is empty at the drawn scale")
-    x, mk, box = frame_person(srgb.clamp(0, 1), seen, h, pad)
-    grid = _box_grid(box, hs / h, h, sample["image"].dtype)
+    out_size = h if size is None else int(size)
+    x, mk, box = frame_person(srgb.clamp(0, 1), seen, out_size, pad)
+    grid = _box_grid(box, hs / h, h, out_size, sample["image"].dtype)
     out = dict(sample)
     for name, v in sample.items():
         if name not in SPATIAL_FIELDS or name == "image_composite":
@@ -124,6 +128,9 @@ class PhotoInput:
         mask_px: the mask is grown or shrunk by a uniform draw of −mask_px … mask_px pixels.
         pad: (lo, hi) range of the framing's padding.
         prob: probability that an item is framed as a photo at all (else it stays the render).
+        size: the network's working size S when the items are larger (None: the items' own size).
+            An item is then always framed down to S × S; one that is not drawn as a photo is its
+            render framed the same way, unshrunk, its mask as it is.
     """
 
     composite: float = 0.5
@@ -131,6 +138,7 @@ class PhotoInput:
     mask_px: int = 1
     pad: tuple = (0.03, 0.08)
     prob: float = 1.0
+    size: int | None = None
 
     def __post_init__(self) -> None:
         lo, hi = (float(v) for v in self.source_scale)
@@ -142,6 +150,9 @@ class PhotoInput:
             raise InputError(f"photo.mask_px: expected an integer in 0..4, got {self.mask_px!r}")
         if not 0.0 <= float(self.pad[0]) <= float(self.pad[1]) <= 0.5:
             raise InputError(f"photo.pad: expected 0 <= lo <= hi <= 0.5, got {list(self.pad)}")
+        if self.size is not None and (isinstance(self.size, bool) or not isinstance(self.size, int)
+                                      or self.size < 16 or self.size % 16):
+            raise InputError(f"photo.size: expected a multiple of 16 (>= 16), got {self.size!r}")
 
     def __call__(self, sample: dict, generator: torch.Generator | None = None) -> dict:
         u = torch.rand(5, generator=generator, dtype=torch.float64).tolist()
@@ -151,9 +162,11 @@ class PhotoInput:
         if u[0] < self.prob and bool((sample["mask"] > 0.5).any()):
             try:
                 return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
-                                math.exp(lo + u[2] * (hi - lo)), px, pad)
+                                math.exp(lo + u[2] * (hi - lo)), px, pad, self.size)
             except InputError:  # a sliver of a person that the shrinking lost: the render, as below
                 pass
+        if self.size is not None and self.size != sample["image"].shape[-1]:
+            return as_photo(sample, False, 1.0, 0, pad, self.size)
         # the render as it is (every item of a batch carries an input)
         out = {k: v for k, v in sample.items() if k != "image_composite"}
         out["input"] = normalize_input(linear_to_srgb(sample["image"].clamp(0, 1))[None], sample["mask"][None])[0]

@@ -212,8 +212,10 @@ def _dist_env() -> tuple[int, int]:
 
 
 def _new_model(cfg: TrainConfig, data: TrainData, device: str, resume: bool) -> tuple[RelightNet, NetConfig]:
-    """The network to train (seeded), its working size the data's; weights from ``cfg.init`` for a new run."""
-    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1, "input_size": data.size})
+    """The network to train (seeded), its working size ``photo.size`` or the data's; ``cfg.init``'s weights if new."""
+    photo = photo_input(cfg.photo)
+    size = data.size if photo is None or photo.size is None else photo.size  # items framed down to it
+    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1, "input_size": size})
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
     if cfg.channels_last:

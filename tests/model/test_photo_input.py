@@ -81,8 +81,24 @@ def test_a_person_the_shrinking_loses_stays_the_render(items):
         as_photo(s, composite=False, scale=0.2, mask_px=0, pad=0.05)
 
 
+def test_an_item_larger_than_the_working_size_is_framed_down_as_a_photo(items):
+    s = _item(items, 2)
+    h = s["image"].shape[-1]
+    out = as_photo(s, composite=True, scale=1.0, mask_px=0, pad=0.05, size=h // 2)
+    x, mk, _ = frame_person(s["image_composite"] / 255.0, s["mask"][0], h // 2, 0.05)
+    assert torch.allclose(out["input"], normalize_input(x, mk)[0])
+    assert all(out[k].shape[-2:] == (h // 2, h // 2) for k in ("image", "mask", "albedo", "transport"))
+    seen, true = out["input"][3] > 0.5, out["mask"][0] > 0.5
+    assert float((seen & true).sum() / (seen | true).sum()) > 0.8  # the truth on the same box
+    # an item drawn as a render is framed down too (every item of a batch has the working size)
+    render = PhotoInput(prob=0.0, pad=(0.05, 0.05), size=h // 2)(s, torch.Generator().manual_seed(0))
+    x, mk, _ = frame_person(linear_to_srgb(s["image"].clamp(0, 1)), s["mask"][0], h // 2, 0.05)
+    assert render["input"].shape == (4, h // 2, h // 2) and torch.allclose(render["input"], normalize_input(x, mk)[0])
+
+
 @pytest.mark.parametrize("bad", [{"composite": 1.5}, {"source_scale": (0.0, 1.0)}, {"source_scale": (0.8, 0.5)},
-                                 {"mask_px": -1}, {"mask_px": 1.5}, {"pad": (0.1, 0.05)}, {"prob": -0.1}])
+                                 {"mask_px": -1}, {"mask_px": 1.5}, {"pad": (0.1, 0.05)}, {"prob": -0.1},
+                                 {"size": 40}, {"size": True}])
 def test_bad_photo_settings_fail_clearly(bad):
     with pytest.raises(InputError, match="photo"):
         PhotoInput(**bad)
@@ -98,3 +114,13 @@ def test_training_on_photo_framed_items_runs(tiny_dataset, tmp_path):
                       photo={"composite": 1.0, "source_scale": [0.5, 1.0], "mask_px": 1})
     last = train(cfg, tiny_dataset, tmp_path / "run")
     assert last["step"] == 2 and torch.isfinite(torch.tensor(last["total"]))
+
+
+def test_a_run_on_larger_items_has_the_photo_size_as_its_working_size(tiny_dataset, tmp_path):
+    from relightnet.model.checkpoint import load_checkpoint
+
+    cfg = TrainConfig(steps=1, batch_size=2, warmup=1, log_every=1, checkpoint_every=1, threads=1,
+                      net={"width": 8, "max_width": 32, "light_hidden": 32}, augment={},
+                      photo={"composite": 0.5, "source_scale": [0.5, 1.0], "prob": 0.5, "size": 16})
+    train(cfg, tiny_dataset, tmp_path / "run")
+    assert load_checkpoint(tmp_path / "run" / "last.pt")["net_config"]["input_size"] == 16
