@@ -30,7 +30,7 @@ import torch.nn.functional as F
 
 from ..checks import InputError
 from ..color import linear_to_srgb
-from ..data.augment import SPATIAL_FIELDS
+from ..data.augment import SPATIAL_FIELDS, resize
 from .inference import frame_person
 from .network import normalize_input
 
@@ -166,7 +166,9 @@ class PhotoInput:
             except InputError:  # a sliver of a person that the shrinking lost: the render, as below
                 pass
         if self.size is not None and self.size != sample["image"].shape[-1]:
-            return as_photo(sample, False, 1.0, 0, pad, self.size)
+            if bool((sample["mask"] > 0.5).any()):
+                return as_photo(sample, False, 1.0, 0, pad, self.size)
+            sample = resize(sample, self.size, "bilinear")  # no person to frame: the whole item, resampled
         # the render as it is (every item of a batch carries an input)
         out = {k: v for k, v in sample.items() if k != "image_composite"}
         out["input"] = normalize_input(linear_to_srgb(sample["image"].clamp(0, 1))[None], sample["mask"][None])[0]

@@ -94,6 +94,9 @@ def test_an_item_larger_than_the_working_size_is_framed_down_as_a_photo(items):
     render = PhotoInput(prob=0.0, pad=(0.05, 0.05), size=h // 2)(s, torch.Generator().manual_seed(0))
     x, mk, _ = frame_person(linear_to_srgb(s["image"].clamp(0, 1)), s["mask"][0], h // 2, 0.05)
     assert render["input"].shape == (4, h // 2, h // 2) and torch.allclose(render["input"], normalize_input(x, mk)[0])
+    s["mask"] = torch.zeros_like(s["mask"])  # no person left to frame (a crop that cut them out): resampled whole
+    empty = PhotoInput(prob=1.0, size=h // 2)(s, torch.Generator().manual_seed(0))
+    assert empty["input"].shape == (4, h // 2, h // 2) and empty["transport"].shape[-1] == h // 2
 
 
 @pytest.mark.parametrize("bad", [{"composite": 1.5}, {"source_scale": (0.0, 1.0)}, {"source_scale": (0.8, 0.5)},
