@@ -159,14 +159,15 @@ class PhotoInput:
         lo, hi = (math.log(float(v)) for v in self.source_scale)
         px = min(self.mask_px, int(u[3] * (2 * self.mask_px + 1)) - self.mask_px)
         pad = float(self.pad[0]) + u[4] * (float(self.pad[1]) - float(self.pad[0]))
-        if u[0] < self.prob and bool((sample["mask"] > 0.5).any()):
+        person = bool((sample["mask"] > 0.5).any())
+        if u[0] < self.prob and person:
             try:
                 return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
                                 math.exp(lo + u[2] * (hi - lo)), px, pad, self.size)
             except InputError:  # a sliver of a person that the shrinking lost: the render, as below
                 pass
         if self.size is not None and self.size != sample["image"].shape[-1]:
-            if bool((sample["mask"] > 0.5).any()):
+            if person:
                 return as_photo(sample, False, 1.0, 0, pad, self.size)
             sample = resize(sample, self.size, "bilinear")  # no person to frame: the whole item, resampled
         # the render as it is (every item of a batch carries an input)
