@@ -8,7 +8,8 @@ masked by the person mask M and averaged over masked pixels:
 - rendering: |Â ⊙ S(T̂, L̂) − I|, |Â ⊙ S(T, L) − I|, |A ⊙ S(T̂, L̂) − I|. KE18's released
   code computed one rendering term with the shading of a different term (a copy-paste of
   the wrong shading variable); here every term uses its own shading;
-- relighting (off by default): |Â ⊙ S(T̂, L′) − A ⊙ S(T, L′)| with L′ the light of another
+- relighting (off by default): |Â ⊙ S(T̂, L′) − A ⊙ S(T, L′)| with L′ the batch's ``novel_light``
+  when it has one (:func:`relightnet.model.round_trip.novel_lights`), else the light of another
   item of the batch (rolled by one), what the model is used for: a new light;
 - total variation of T̂ and Â inside the eroded mask;
 - mask: binary cross-entropy of the mask head against M (when present);
@@ -36,7 +37,8 @@ __all__ = ["LossWeights", "masked_l1", "total_variation", "relight_losses"]
 class LossWeights:
     """Weights of the loss terms of the module docstring, in its order (0 turns a term off): the direct
     terms, the shading terms ``shading_t/_l/_tl``, the rendering terms ``render_al/_a/_tl``,
-    ``relit_novel``, ``tv``, ``mask``, ``light_head`` and ``light_si`` (the scale-invariant light shape)."""
+    ``relit_novel``, ``tv``, ``mask``, ``light_head``, ``light_si`` (the scale-invariant light shape) and
+    ``round_trip`` (the training loop's second pass, :func:`relightnet.model.round_trip.round_trip_loss`)."""
 
     transport: float = 1.0
     albedo: float = 1.0
@@ -52,6 +54,7 @@ class LossWeights:
     mask: float = 0.5
     light_head: float = 0.0
     light_si: float = 0.0
+    round_trip: float = 0.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -77,7 +80,8 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
         pred: network output.
         batch: ``image`` (B, 3, H, W) linear, ``mask`` (B, 1, H, W), ``albedo`` (B, 3, H, W),
             ``transport`` (B, K, H, W), ``light`` (B, K, 3); optional ``render`` (B, 3, H, W): the
-            image the rendering terms aim at (default ``image``).
+            image the rendering terms aim at (default ``image``); optional ``novel_light`` (B, K, 3):
+            the lights of ``relit_novel`` (default the batch's lights rolled by one item).
         weights: per-term weights (0 disables a term).
 
     Returns:
@@ -100,7 +104,7 @@ def relight_losses(pred: Prediction, batch: dict, weights: LossWeights = LossWei
         "render_tl": masked_l1(A * S_tl, I, M),
     }
     if weights.relit_novel:
-        L_new = L.roll(1, 0)  # another item's light (its own when the batch has one item)
+        L_new = batch["novel_light"] if "novel_light" in batch else L.roll(1, 0)  # another item's light
         terms["relit_novel"] = masked_l1(Ah * shading_map(Th, L_new), A * shading_map(T, L_new), M)
     inner = erode(M)
     terms["tv"] = total_variation(Th, inner) + total_variation(Ah, inner)

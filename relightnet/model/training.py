@@ -20,17 +20,17 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from ..checks import InputError
 from ..color import linear_to_srgb
-from ..io import atomic_write
 from ..io.documents import clip, short
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
 from .photo_input import photo_input
+from .round_trip import NOVEL_LIGHTS, novel_lights, round_trip_loss
+from .train_log import check_ranks_in_sync, plot_losses
 
 logger = logging.getLogger(__name__)
 
@@ -51,7 +51,8 @@ class TrainConfig:
     memory format) are speed settings (BENCHMARKS.md measures them); ``data_dtype`` ``float16``
     halves the memory of the training split held in RAM (10,000 people at 128²: 5 GB instead of
     10 GB; images and maps keep 11 bits of mantissa); ``train_items`` trains on the first N items of
-    the split only (a smaller run on the same dataset)."""
+    the split only (a smaller run on the same dataset); ``novel_light`` draws the lights of the
+    ``relit_novel`` and ``round_trip`` loss terms (:func:`~relightnet.model.round_trip.novel_lights`)."""
 
     steps: int = 1000
     batch_size: int = 8
@@ -74,6 +75,7 @@ class TrainConfig:
     data_dtype: str = "float32"
     train_items: int | None = None
     photo: dict = field(default_factory=dict)
+    novel_light: str = "batch"
 
     def __post_init__(self) -> None:
         for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
@@ -92,6 +94,9 @@ class TrainConfig:
             raise InputError(f"train config train_items: expected an integer >= 1, got {short(self.train_items)}")
         if self.data_dtype not in ("float32", "float16"):
             raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {short(self.data_dtype)}")
+        if self.novel_light not in NOVEL_LIGHTS:
+            raise InputError(f"train config novel_light: expected one of {', '.join(NOVEL_LIGHTS)}, "
+                             f"got {short(self.novel_light)}")
         if self.render_target not in ("image", "model"):
             raise InputError(
                 f"train config render_target: expected 'image' or 'model', got {short(self.render_target)}")
@@ -272,6 +277,26 @@ def save_candidate(path, model: RelightNet, net_cfg: NetConfig, step: int, sched
     return path
 
 
+def _step_terms(cfg: TrainConfig, model, batch: dict, weights: LossWeights, step: int, device: str) -> dict:
+    """The loss terms of one step (``batch``, on ``device``, gets ``render`` and ``novel_light`` as the config asks)."""
+    if cfg.render_target == "model":
+        batch["render"] = shade_map(batch["albedo"], batch["transport"], batch["light"])
+    if cfg.novel_light != "batch" or weights.round_trip:
+        draws = torch.Generator().manual_seed(cfg.seed * 1000003 + step)
+        batch["novel_light"] = novel_lights(batch["light"], cfg.novel_light, draws).to(device)
+    x = batch_to_input(batch)
+    if cfg.channels_last:
+        x = x.contiguous(memory_format=torch.channels_last)
+    with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+        pred = model(x)
+    terms = relight_losses(pred, batch, weights)
+    if weights.round_trip:
+        with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+            terms["round_trip"] = round_trip_loss(model, x, pred, batch["novel_light"])
+        terms["total"] = terms["total"] + weights.round_trip * terms["round_trip"]
+    return terms
+
+
 def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str = "cpu",
           stop_after: int | None = None, resume_from=None, candidate=None) -> dict:
     """Train (or continue training) a :class:`RelightNet`.
@@ -314,14 +339,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         idx, epoch = _indices(len(data), step, cfg.batch_size, cfg.seed, world, rank)
         gens = [torch.Generator().manual_seed(cfg.seed * 7919 + epoch * 104729 + int(i)) for i in idx]
         batch = {k: v.to(device) for k, v in data.batch(idx, aug, gens).items()}
-        if cfg.render_target == "model":
-            batch["render"] = shade_map(batch["albedo"], batch["transport"], batch["light"])
-        x = batch_to_input(batch)
-        if cfg.channels_last:
-            x = x.contiguous(memory_format=torch.channels_last)
-        with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
-            pred = ddp(x)
-        terms = relight_losses(pred, batch, weights)
+        terms = _step_terms(cfg, ddp, batch, weights, step, device)
         opt.zero_grad(set_to_none=True)
         terms["total"].backward()
         opt.step()
@@ -359,40 +377,3 @@ def _data_and_augment(cfg: TrainConfig, data_dir):
     data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items, extra)
     aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
     return data, (photo.after(aug) if photo is not None else aug)
-
-
-def check_ranks_in_sync(model: torch.nn.Module) -> None:
-    """Raise if the replicas' parameters differ across ranks (DDP must keep them equal)."""
-    flat = torch.cat([p.detach().reshape(-1).double() for p in model.parameters()])
-    mine = torch.stack([flat.sum(), (flat * torch.arange(flat.numel(), dtype=flat.dtype) % 9973).sum()])
-    gathered = [torch.zeros_like(mine) for _ in range(torch.distributed.get_world_size())]
-    torch.distributed.all_gather(gathered, mine)
-    if any(not torch.equal(g, gathered[0]) for g in gathered):
-        raise RuntimeError(f"DDP ranks diverged: parameter checksums {[g.tolist() for g in gathered]}")
-    logger.info("ranks in sync: %d replicas, parameter checksum %.6e", len(gathered), float(mine[0]))
-
-
-def plot_losses(log_path, png_path) -> None:
-    """Loss curves (total and terms) from a metrics JSONL, as a PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    rows = [json.loads(line) for line in Path(log_path).read_text().splitlines() if line.strip()]
-    if not rows:
-        return
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    steps = np.array([r["step"] for r in rows])
-    for key in ("total", "transport", "albedo", "light", "shading_tl", "render_al"):
-        if key in rows[0]:
-            ax.plot(steps, [r[key] for r in rows], label=key, lw=2 if key == "total" else 1)
-    ax.set_yscale("log")
-    ax.set_xlabel("step")
-    ax.set_ylabel("loss")
-    ax.legend()
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    with atomic_write(png_path) as f:
-        fig.savefig(f, format="png", dpi=100)
-    plt.close(fig)

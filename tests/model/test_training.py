@@ -168,6 +168,25 @@ def test_novel_light_relighting_term():
     assert float(terms["relit_novel"]) > 0.01
 
 
+def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_dataset, tmp_path):
+    """novel_light "side" feeds relit_novel the drawn lights (seeded by the step); round_trip adds a
+    second pass, logged as its own term and counted in the total."""
+    from relightnet.model.losses import LossWeights
+
+    cfg = TrainConfig(steps=3, batch_size=2, warmup=1, log_every=1, checkpoint_every=10, net=NET, threads=1,
+                      novel_light="side", loss={"relit_novel": 1.0, "round_trip": 1.0})
+    train(cfg, tiny_dataset, tmp_path / "full")
+    train(cfg, tiny_dataset, tmp_path / "cut", stop_after=1)
+    train(cfg, tiny_dataset, tmp_path / "cut", resume=True)
+    full, cut = _losses(tmp_path / "full"), _losses(tmp_path / "cut")
+    assert [(r["total"], r["round_trip"]) for r in full] == [(r["total"], r["round_trip"]) for r in cut]
+    assert all(0 < r["round_trip"] <= 1 for r in full)  # a scale-invariant light error
+    w = LossWeights(**cfg.loss).to_dict()
+    assert full[0]["total"] == pytest.approx(sum(w[k] * v for k, v in full[0].items() if w.get(k)), rel=1e-5)
+    with pytest.raises(InputError, match="novel_light"):
+        TrainConfig(novel_light="sun")
+
+
 def test_training_with_render_target_model_runs_on_unoccluded_transport(tiny_dataset, tmp_path):
     cfg = TrainConfig(steps=2, batch_size=2, warmup=1, log_every=1, net=NET, threads=1,
                       target="transport_unoccluded", render_target="model")
