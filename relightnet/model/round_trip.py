@@ -21,7 +21,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from ..color import linear_to_srgb, luminance, srgb_to_linear
-from ..sh import directional_light, scale_invariant_light_error
+from ..sh import scale_invariant_light_error, side_light
 from .network import Prediction, normalize_input, photo_albedo, shading_map
 
 __all__ = ["NOVEL_LIGHTS", "novel_lights", "relit_input", "round_trip_loss"]
@@ -44,7 +44,7 @@ def novel_lights(light: torch.Tensor, kind: str, generator: torch.Generator | No
 
     Returns:
         (B, K, 3) float32: ``light`` rolled by one item (``batch``), or per item either that or
-        ``power · Y(d) + ambient`` (:func:`relightnet.sh.directional_light`).
+        ``power · Y(d) + ambient`` (:func:`relightnet.sh.side_light`).
     """
     dims = check_shape(light, ["B", "K", 3], name="light")
     if kind not in NOVEL_LIGHTS:
@@ -61,9 +61,7 @@ def novel_lights(light: torch.Tensor, kind: str, generator: torch.Generator | No
         if u[i, 0] < 0.5:
             p = power[0] + (power[1] - power[0]) * float(u[i, 1])
             a = ambient[0] + (ambient[1] - ambient[0]) * float(u[i, 2])
-            side = directional_light(d[i], p, lmax)
-            side[0] += a
-            out[i] = side.to(out)
+            out[i] = side_light(d[i], p, a, lmax).to(out)
     return out
 
 

@@ -9,7 +9,7 @@ bounded image reader (:func:`relightnet.io.read_image`: the ``--max-pixels`` lim
 **Side contrast** (does a light from one side light that side?). The photo is relit
 (:func:`relightnet.pipeline.relight_image` with its defaults, as ``relightnet relight-image``
 does: the photo's own albedo, the exposure kept) under L_left = 3·Y(d_left) + 0.3 on the l = 0
-coefficient (white; :func:`side_light`), d_left = (0.5, −0.85, 0.2) normalised, and under
+coefficient (white; :func:`relightnet.sh.side_light`), d_left = (0.5, −0.85, 0.2) normalised, and under
 L_right, the same with d_right = (0.5, +0.85, 0.2). In the camera-relative light frame
 (docs/design.md, "Frames"; :mod:`relightnet.sh.frames`) x points to the camera, y to the
 image's right and z up, so d_left (y < 0) comes from the image's left, a little in front and
@@ -46,7 +46,7 @@ import torch.nn.functional as F
 
 from ..checks import InputError, check_shape, sh_order_from_count
 from ..color import luminance, srgb_to_linear
-from ..sh import directional_light, preset_light, resize_sh, scale_invariant_light_error
+from ..sh import preset_light, resize_sh, scale_invariant_light_error, side_light
 from .backends import as_predictor, make_predictor
 from .relight_image import relight_image
 
@@ -71,22 +71,6 @@ PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
 Relighter = Callable[[torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]
 #: ``estimate(image (3, H, W) sRGB, mask (H, W)) -> (K, 3) light``
 Estimator = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
-
-
-def side_light(direction, power: float = 3.0, ambient: float = 0.3, lmax: int = 2) -> torch.Tensor:
-    """White light ``power · Y(d) + ambient`` on the l = 0 coefficient (``d`` normalised).
-
-    ``power · Y(d)`` is :func:`relightnet.sh.directional_light` (a band-limited delta).
-
-    Args:
-        direction: (3,) toward the light, camera-relative light frame (x camera, y image right, z up).
-
-    Returns:
-        (K, 3) float32.
-    """
-    light = directional_light(direction, power, lmax)
-    light[0] += ambient
-    return light
 
 
 def check_lights(lmax: int = 2) -> dict[str, torch.Tensor]:

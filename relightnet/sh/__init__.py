@@ -50,6 +50,7 @@ from .presets import (
     preset_light,
     preset_names,
     preset_path,
+    side_light,
 )
 from .projection import project, project_envmap, radiance, sh_to_envmap
 from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
@@ -76,7 +77,7 @@ __all__ = [
     "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",
     "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
     "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light", "load_light_sequence", "save_light_sequence",
-    "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path",
+    "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path", "side_light",
     "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
     "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
     "parse_light_words", "words_envmap",

@@ -31,6 +31,7 @@ __all__ = [
     "preset_light",
     "ambient_light",
     "directional_light",
+    "side_light",
 ]
 
 
@@ -153,3 +154,22 @@ def directional_light(direction, color=1.0, lmax: int = 2, sharpness: float | No
             raise InputError(f"sharpness: expected a positive finite concentration, got {sharpness!r}")
         y = y * _vmf_band_factors(lmax, float(sharpness))[sh_degrees(lmax)]
     return (y[:, None] * _color(color).double()[None, :]).float()
+
+
+def side_light(direction, power: float = 3.0, ambient: float = 0.3, lmax: int = 2) -> torch.Tensor:
+    """White light ``power · Y(d) + ambient`` on the l = 0 coefficient (``d`` normalised): a strong light
+    from one direction over a little of everywhere, the lights of the real-photo side contrast
+    (:mod:`relightnet.pipeline.photo_checks`) and of the training's novel lights
+    (:func:`relightnet.model.round_trip.novel_lights`).
+
+    ``power · Y(d)`` is :func:`directional_light` (a band-limited delta).
+
+    Args:
+        direction: (3,) toward the light, camera-relative light frame (x camera, y image right, z up).
+
+    Returns:
+        (K, 3) float32.
+    """
+    light = directional_light(direction, power, lmax)
+    light[0] += ambient
+    return light
