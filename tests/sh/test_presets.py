@@ -107,3 +107,13 @@ def test_analytic_errors():
         ambient_light([1.0, 2.0])
     with pytest.raises(InputError, match="color"):
         ambient_light(float("nan"))
+
+
+def test_side_light_is_power_times_the_basis_plus_ambient():
+    from relightnet.sh import sh_basis, side_light
+
+    d = torch.tensor((0.5, -0.85, 0.2), dtype=torch.float64)
+    expected = 3 * sh_basis(d / d.norm(), 2)[:, None].expand(9, 3).clone()
+    expected[0] += 0.3
+    torch.testing.assert_close(side_light((0.5, -0.85, 0.2)), expected.float())
+    torch.testing.assert_close(side_light(d, 2.0, 0.1, lmax=1)[0], torch.full((3,), 2 * 0.28209479 + 0.1))
