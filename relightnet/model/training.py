@@ -316,6 +316,8 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         The last logged metrics.
     """
     rank, world = _dist_env()
+    if world > 1 and LossWeights(**cfg.loss).round_trip:  # DDP marks a parameter ready once per backward
+        raise InputError("train config loss.round_trip: a second pass per step is not supported under torchrun")
     if world > 1 and not torch.distributed.is_initialized():
         torch.distributed.init_process_group("nccl" if device.startswith("cuda") else "gloo")
     if cfg.threads:

@@ -168,7 +168,7 @@ def test_novel_light_relighting_term():
     assert float(terms["relit_novel"]) > 0.01
 
 
-def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_dataset, tmp_path):
+def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_dataset, tmp_path, monkeypatch):
     """novel_light "side" feeds relit_novel the drawn lights (seeded by the step); round_trip adds a
     second pass, logged as its own term and counted in the total."""
     from relightnet.model.losses import LossWeights
@@ -185,6 +185,10 @@ def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_da
     assert full[0]["total"] == pytest.approx(sum(w[k] * v for k, v in full[0].items() if w.get(k)), rel=1e-5)
     with pytest.raises(InputError, match="novel_light"):
         TrainConfig(novel_light="sun")
+    monkeypatch.setenv("WORLD_SIZE", "2")  # under torchrun: refused before any process group starts
+    with pytest.raises(InputError, match="round_trip"):
+        train(cfg, tiny_dataset, tmp_path / "ddp")
+    assert not (tmp_path / "ddp").exists()
 
 
 def test_training_with_render_target_model_runs_on_unoccluded_transport(tiny_dataset, tmp_path):
