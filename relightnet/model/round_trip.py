@@ -53,7 +53,7 @@ def novel_lights(light: torch.Tensor, kind: str, generator: torch.Generator | No
     if kind == "batch":
         return rolled
     lmax = round(dims["K"] ** 0.5) - 1
-    u = torch.rand(dims["B"], 4, generator=generator, dtype=torch.float64)
+    u = torch.rand(dims["B"], 4, generator=generator, dtype=torch.float64)  # column 3 unused; kept so draws repeat
     d = torch.randn(dims["B"], 3, generator=generator, dtype=torch.float64)
     d[:, 0] = d[:, 0].abs()
     out = rolled.clone()

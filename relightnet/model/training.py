@@ -12,6 +12,7 @@ rank 0 writes files.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import logging
 import math
@@ -287,11 +288,13 @@ def _step_terms(cfg: TrainConfig, model, batch: dict, weights: LossWeights, step
     x = batch_to_input(batch)
     if cfg.channels_last:
         x = x.contiguous(memory_format=torch.channels_last)
-    with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+    amp = functools.partial(torch.autocast, torch.device(device).type, dtype=torch.bfloat16,
+                            enabled=cfg.precision == "bf16")
+    with amp():  # the network's passes only: the losses stay float32
         pred = model(x)
     terms = relight_losses(pred, batch, weights)
     if weights.round_trip:
-        with torch.autocast(torch.device(device).type, dtype=torch.bfloat16, enabled=cfg.precision == "bf16"):
+        with amp():
             terms["round_trip"] = round_trip_loss(model, x, pred, batch["novel_light"])
         terms["total"] = terms["total"] + weights.round_trip * terms["round_trip"]
     return terms
@@ -316,7 +319,8 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
         The last logged metrics.
     """
     rank, world = _dist_env()
-    if world > 1 and LossWeights(**cfg.loss).round_trip:  # DDP marks a parameter ready once per backward
+    weights = LossWeights(**cfg.loss)
+    if world > 1 and weights.round_trip:  # DDP marks a parameter ready once per backward
         raise InputError("train config loss.round_trip: a second pass per step is not supported under torchrun")
     if world > 1 and not torch.distributed.is_initialized():
         torch.distributed.init_process_group("nccl" if device.startswith("cuda") else "gloo")
@@ -333,7 +337,6 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
     source = ckpt if resume or (resume_from is not None and ckpt.exists()) else resume_from
     step = _resume(Path(source), cfg, model, opt, sched, device) if source is not None else 0
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
-    weights = LossWeights(**cfg.loss)
     log_path = out / "metrics.jsonl"
     last: dict = {}
     t0, done_here = time.perf_counter(), 0
