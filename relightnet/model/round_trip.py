@@ -17,12 +17,15 @@ build it inside a training step, from the network input and its prediction:
 
 from __future__ import annotations
 
+import dataclasses
+
 import torch
 
 from ..checks import InputError, check_shape
-from ..color import linear_to_srgb, luminance, srgb_to_linear
+from ..color import linear_to_srgb, srgb_to_linear
 from ..sh import scale_invariant_light_error, side_light
-from .network import Prediction, normalize_input, photo_albedo, shading_map
+from .exposure import match_exposure
+from .network import Prediction, normalize_input, photo_albedo, relight
 
 __all__ = ["NOVEL_LIGHTS", "novel_lights", "relit_input", "round_trip_loss"]
 
@@ -65,20 +68,14 @@ def novel_lights(light: torch.Tensor, kind: str, generator: torch.Generator | No
     return out
 
 
-def _level(shading: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    """(B,) mean luminance of (B, 3, H, W) shading over (B, 1, H, W) mask."""
-    lum = luminance(shading.movedim(1, -1))[:, None]
-    return (lum * mask).sum((1, 2, 3)) / mask.sum((1, 2, 3)).clamp_min(1.0)
-
-
 @torch.no_grad()
 def relit_input(x: torch.Tensor, pred: Prediction, light: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """The network input ``x`` relit to ``light`` with the network's own maps, as ``relight-image`` relights.
 
     Inside the input's mask the photo's albedo (photo ÷ predicted shading,
     :func:`~relightnet.model.photo_albedo`) is shaded by ``T̂ · light``, each item's light scaled so that
-    its mean shading over the mask equals that of the predicted light (the exposure kept, as
-    :func:`relightnet.pipeline.relight_image.match_exposure` does).
+    its mean shading over the mask equals that of the predicted light (the exposure kept:
+    :func:`~relightnet.model.exposure.match_exposure` per item).
 
     Args:
         x: (B, 4, S, S) network input (:func:`~relightnet.model.normalize_input`: sRGB·2 − 1 inside the mask, mask).
@@ -92,14 +89,11 @@ def relit_input(x: torch.Tensor, pred: Prediction, light: torch.Tensor) -> tuple
     check_shape(light, [dims["B"], pred.transport.shape[1], 3], name="light")
     mask = x[:, 3:].float()
     srgb = ((x[:, :3].float() / mask.clamp_min(1e-6) + 1) / 2).clamp(0, 1)
-    transport = pred.transport.float()
-    before = shading_map(transport, pred.light.float())
-    old, new = _level(before, mask), _level(shading_map(transport, light.float()), mask)
-    ok = (new > 1e-8) & (old > 0)
-    scaled = light.float() * torch.where(ok, old / new.clamp_min(1e-8), torch.ones_like(old))[:, None, None]
-    ref = Prediction(pred.albedo.float(), transport, pred.light.float(), mask)
+    ref = Prediction(pred.albedo.float(), pred.transport.float(), pred.light.float(), mask)
+    before = ref.shading()
+    scaled = match_exposure(light.float(), ref, before, per_item=True)
     albedo = photo_albedo(srgb_to_linear(srgb), ref, shading=before)
-    relit = linear_to_srgb((albedo * shading_map(transport, scaled)).clamp(0, 1))
+    relit = linear_to_srgb(relight(dataclasses.replace(ref, albedo=albedo), scaled).clamp(0, 1))
     return normalize_input(relit, mask).to(x.dtype), scaled
 
 

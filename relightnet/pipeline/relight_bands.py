@@ -21,6 +21,7 @@ import torch
 
 from ..checks import check_finite, check_shape
 from ..color import LUMA, linear_to_srgb, srgb_to_linear
+from ..model.exposure import exposure_scale
 from ..model.inference import CropMaps
 from ..model.network import ROW_BAND, photo_albedo_rows, shading_map
 from ..raster.interpolate import to_channels_last
@@ -80,7 +81,8 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
         detail: relight the photo's own albedo (photo / predicted shading,
             :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
         keep_exposure: scale the light so the person keeps the photo's exposure
-            (:func:`~relightnet.pipeline.relight_image.match_exposure`).
+            (:func:`~relightnet.model.exposure.match_exposure`'s
+            level, here from :func:`transport_sum`).
         reference: (K, 3) the light taken as the photo's own (exposure reference, divisor of the
             photo albedo); default the predicted light (a video passes its smoothed estimate).
         dtype: ``torch.float32`` (values in [0, 1]) or ``torch.uint8`` (rounded, what a video frame is).
@@ -96,8 +98,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     total, mass = transport_sum(maps)
     new = light.to(maps.transport)
     if keep_exposure:
-        old, lvl = _level(total, mass, ref), _level(total, mass, new)
-        new = new * (old / lvl) if lvl > 1e-8 and old > 0 else new
+        new = new * exposure_scale(_level(total, mass, ref), _level(total, mass, new))
     tau = (ALBEDO_FLOOR * (total @ ref.double()) / max(mass, 1e-8)).clamp_min(1e-6).to(new).view(1, 3, 1, 1)
     out = torch.empty(h, w, 3, dtype=dtype)
     albedo_out = torch.empty(3, h, w) if keep_albedo else None

@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import torch
 
 from ..checks import check_finite, check_shape, sh_order_from_count
-from ..color import linear_to_srgb, luminance, srgb_to_linear
-from ..model.network import ROW_BAND, Prediction, photo_albedo, shading_map
+from ..color import linear_to_srgb, srgb_to_linear
+from ..model.exposure import match_exposure
+from ..model.network import ROW_BAND, Prediction, photo_albedo
 from ..raster.interpolate import to_channels_first, to_channels_last
 from ..render.shading import composite, shade
 from ..sh.io import resize_sh
@@ -65,23 +66,6 @@ class Relit:
     shading: torch.Tensor
 
 
-def match_exposure(new_light: torch.Tensor, pred: Prediction, shading: torch.Tensor | None = None) -> torch.Tensor:
-    """Scale ``new_light`` (K, 3) so the person's mean shading luminance stays what it was.
-
-    Lights come at any scale (a projected HDRI's sun reaches 1e4); matching the exposure keeps
-    the relit person as bright as in the photo while the direction and colour of light change.
-    ``shading``: ``pred.shading()`` (B, 3, H, W) when the caller has it already.
-    """
-    m = pred.mask
-
-    def level(s):
-        return float((luminance(to_channels_last(s))[:, None] * m).sum() / m.sum().clamp_min(1))
-
-    old = level(pred.shading() if shading is None else shading)
-    new = level(shading_map(pred.transport, new_light.to(pred.transport)))
-    return new_light * (old / new) if new > 1e-8 and old > 0 else new_light
-
-
 def to_model_order(light: torch.Tensor, lmax: int) -> torch.Tensor:
     """(K, 3) light at the model's SH order ``lmax`` (zero-padded, or truncated with a warning)."""
     order = sh_order_from_count(light.shape[0], "light")
@@ -101,7 +85,7 @@ def relight_prediction(pred: Prediction, image: torch.Tensor, light: torch.Tenso
         detail: relight the photo's own albedo (photo / predicted shading,
             :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
         keep_exposure: scale the light so the person keeps the photo's exposure
-            (:func:`match_exposure`; a (K, 3) light).
+            (:func:`~relightnet.model.exposure.match_exposure`, one factor for the batch).
         reference: (B, K, 3) the light taken as the photo's own (the exposure reference and the
             divisor of the photo albedo); default ``pred.light`` (a video passes its smoothed estimate).
 
