@@ -25,8 +25,9 @@ setup: $(CACHE_DIR)/.sysdeps $(CACHE_DIR)/.sysdeps-browser $(VENV)/.installed $(
 demo: setup
 	$(VENV)/bin/relightnet demo --out out/demo
 
+# The whole suite, naming its 25 slowest tests at the end (the CI log shows where the time goes).
 test: setup
-	$(PY) -m pytest -q tests $(PYTEST_ARGS); rc=$$?; \
+	$(PY) -m pytest -q tests --durations=25 $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 # The quick loop: everything but the tests marked slow, ray, browser or blender (a few minutes on 2 cores).
