@@ -18,8 +18,8 @@ import torch
 
 from ..checks import InputError, check_finite, check_shape
 from ..color import linear_to_srgb, luminance, srgb_to_linear
+from ..model.exposure import exposure_level, exposure_scale
 from ..model.network import Prediction, photo_albedo
-from ..raster.interpolate import to_channels_last
 from ..sh.io import resize_sh
 
 __all__ = ["Photo", "load_photo", "RelightSession"]
@@ -102,7 +102,7 @@ class RelightSession:
         self._alpha, self._bg = box(pred.mask), box(image)
         mask_sum = m.sum().clamp_min(1)
         self._weights = (self._transport.double() * self._alpha.double()).sum(1) / mask_sum  # (K,)
-        self._level = float((luminance(to_channels_last(before))[:, None] * pred.mask).sum() / mask_sum)
+        self._level = float(exposure_level(before, pred.mask))
         self._photo_hwc = image[0].permute(1, 2, 0).contiguous()
         self._photo_u8 = (self._photo_hwc * 255).round().to(torch.uint8)
         self._lut = linear_to_srgb(torch.linspace(0, 1, _LUT_SIZE, dtype=image.dtype))
@@ -119,9 +119,8 @@ class RelightSession:
         light = resize_sh(light.float(), self.lmax).to(self._albedo)
         s = light.T @ self._transport  # (3, N) = T · L′
         if keep_exposure:
-            new = float(luminance((self._weights @ light.double()).float()))
-            if new > 1e-8 and self._level > 0:
-                s.mul_(self._level / new)
+            new = float(luminance((self._weights @ light.double()).float()))  # the level under L′, in closed form
+            s.mul_(float(exposure_scale(self._level, new)))
         lin = s.mul_(self._albedo).clamp_(0, 1)  # in place: one buffer for the whole chain
         fg = linear_to_srgb(lin) if exact else self._lut[lin.mul_(_LUT_SIZE - 1).round_().to(torch.int32)]
         return fg.sub_(self._bg).mul_(self._alpha).add_(self._bg)  # lerp(bg, fg, α)
