@@ -17,8 +17,8 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError, check_finite, check_shape
-from ..color import linear_to_srgb, luminance, srgb_to_linear
-from ..model.exposure import exposure_level, exposure_scale
+from ..color import linear_to_srgb, srgb_to_linear
+from ..model.exposure import exposure_level, exposure_scale, transport_level
 from ..model.network import Prediction, photo_albedo
 from ..sh.io import resize_sh
 
@@ -119,8 +119,7 @@ class RelightSession:
         light = resize_sh(light.float(), self.lmax).to(self._albedo)
         s = light.T @ self._transport  # (3, N) = T · L′
         if keep_exposure:
-            new = float(luminance((self._weights @ light.double()).float()))  # the level under L′, in closed form
-            s.mul_(float(exposure_scale(self._level, new)))
+            s.mul_(float(exposure_scale(self._level, transport_level(self._weights, light))))
         lin = s.mul_(self._albedo).clamp_(0, 1)  # in place: one buffer for the whole chain
         fg = linear_to_srgb(lin) if exact else self._lut[lin.mul_(_LUT_SIZE - 1).round_().to(torch.int32)]
         return fg.sub_(self._bg).mul_(self._alpha).add_(self._bg)  # lerp(bg, fg, α)

@@ -1,7 +1,7 @@
 """The 2D path's CNN: network, losses, checkpoints, training loop, inference on real images."""
 
 from .checkpoint import SHIPPED, load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
-from .exposure import exposure_level, exposure_scale, match_exposure
+from .exposure import exposure_level, exposure_scale, match_exposure, transport_level
 from .inference import (
     CropBox,
     CropMaps,
@@ -36,7 +36,7 @@ from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx
 
 __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
-    "exposure_level", "exposure_scale", "match_exposure",
+    "exposure_level", "exposure_scale", "match_exposure", "transport_level",
     "CropBox", "CropMaps", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person",
     "mask_crop_box", "paste_from_box", "paste_rows", "predict_crop", "predict_image",
     "LossWeights", "masked_l1", "relight_losses", "total_variation",

@@ -8,6 +8,8 @@ the mean shading luminance over the person's mask, T · L′, equals that of the
 (:func:`relightnet.model.round_trip.relit_input`) matches each item on its own.
 
 - :func:`exposure_level`: the mean shading luminance over a mask (pooled, or per item);
+- :func:`transport_level`: the same level in closed form from the mask-weighted transport (shading is
+  linear in the light: a level under any light costs one (K,) · (K, 3) product);
 - :func:`exposure_scale`: the factor between two levels, 1 where there is nothing to match;
 - :func:`match_exposure`: a new light scaled to a prediction's own level.
 """
@@ -17,11 +19,11 @@ from __future__ import annotations
 import torch
 
 from ..checks import check_shape
-from ..color import luminance
+from ..color import LUMA, luminance
 from ..raster.interpolate import to_channels_last
 from .network import Prediction, shading_map
 
-__all__ = ["exposure_level", "exposure_scale", "match_exposure"]
+__all__ = ["exposure_level", "transport_level", "exposure_scale", "match_exposure"]
 
 
 def exposure_level(shading: torch.Tensor, mask: torch.Tensor, per_item: bool = False) -> torch.Tensor:
@@ -41,6 +43,22 @@ def exposure_level(shading: torch.Tensor, mask: torch.Tensor, per_item: bool = F
     if per_item:
         return lum.sum((1, 2, 3)) / mask.sum((1, 2, 3)).clamp_min(1)
     return lum.sum() / mask.sum().clamp_min(1)
+
+
+def transport_level(transport_sum: torch.Tensor, light: torch.Tensor, mass: float = 1.0) -> float:
+    """:func:`exposure_level` of one photo in closed form: ``luminance(Σ T · L) / mass``, in float64.
+
+    Args:
+        transport_sum: (K,) the transport summed over the person, each pixel weighted by its mask
+            (or already divided by the mask's sum, with ``mass`` 1).
+        light: (K, 3) the light.
+        mass: the mask's sum (floored at 1, as :func:`exposure_level` does).
+
+    Returns:
+        The mean shading luminance over the mask under ``light``.
+    """
+    luma = torch.tensor(LUMA, dtype=torch.float64)
+    return float(transport_sum.double() @ light.double() @ luma) / max(mass, 1.0)
 
 
 def exposure_scale(old: torch.Tensor | float, new: torch.Tensor | float) -> torch.Tensor:

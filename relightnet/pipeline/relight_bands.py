@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import torch
 
 from ..checks import check_finite, check_shape
-from ..color import LUMA, linear_to_srgb, srgb_to_linear
-from ..model.exposure import exposure_scale
+from ..color import linear_to_srgb, srgb_to_linear
+from ..model.exposure import exposure_scale, transport_level
 from ..model.inference import CropMaps
 from ..model.network import ROW_BAND, photo_albedo_rows, shading_map
 from ..raster.interpolate import to_channels_last
@@ -63,11 +63,6 @@ def transport_sum(maps: CropMaps) -> tuple[torch.Tensor, float]:
     return total, mass
 
 
-def _level(total: torch.Tensor, mass: float, light: torch.Tensor) -> float:
-    """The person's mean shading luminance under ``light`` (K, 3) from :func:`transport_sum`."""
-    return float(total @ light.double() @ torch.tensor(LUMA, dtype=torch.float64)) / max(mass, 1.0)
-
-
 @torch.no_grad()
 def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor, detail: bool = True,
                        keep_exposure: bool = True, reference: torch.Tensor | None = None,
@@ -98,7 +93,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     total, mass = transport_sum(maps)
     new = light.to(maps.transport)
     if keep_exposure:
-        new = new * exposure_scale(_level(total, mass, ref), _level(total, mass, new))
+        new = new * exposure_scale(transport_level(total, ref, mass), transport_level(total, new, mass))
     tau = (ALBEDO_FLOOR * (total @ ref.double()) / max(mass, 1e-8)).clamp_min(1e-6).to(new).view(1, 3, 1, 1)
     out = torch.empty(h, w, 3, dtype=dtype)
     albedo_out = torch.empty(3, h, w) if keep_albedo else None

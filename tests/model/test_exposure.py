@@ -3,7 +3,7 @@ import torch
 
 from relightnet.checks import ShapeError
 from relightnet.color import luminance
-from relightnet.model.exposure import exposure_level, exposure_scale, match_exposure
+from relightnet.model.exposure import exposure_level, exposure_scale, match_exposure, transport_level
 from relightnet.model.network import Prediction, shading_map
 from relightnet.pipeline import match_exposure as pipeline_match_exposure
 
@@ -61,3 +61,15 @@ def test_pipeline_matches_exposure_with_the_models_primitive():
     torch.testing.assert_close(match_exposure(2 * torch.ones(4, 3), pred), torch.ones(4, 3))  # no mask: whole map
     with pytest.raises(ShapeError, match="shading"):
         exposure_level(torch.ones(1, 2, 4, 4), torch.ones(1, 1, 4, 4))
+
+
+def test_closed_form_level_from_the_weighted_transport_equals_the_level_of_the_shading():
+    full = _prediction()
+    pred = Prediction(full.albedo[:1], full.transport[:1], full.light[:1], full.mask[:1])
+    light = 0.2 * torch.randn(9, 3, generator=torch.Generator().manual_seed(2))
+    light[0] = 1.5
+    total = (pred.transport * pred.mask).sum((0, 2, 3), dtype=torch.float64)
+    mass = float(pred.mask.sum())
+    expected = float(exposure_level(shading_map(pred.transport, light), pred.mask))
+    assert transport_level(total, light, mass) == pytest.approx(expected, rel=1e-5)  # float32 sums vs float64
+    assert transport_level(total / mass, light) == pytest.approx(expected, rel=1e-5)  # a mean transport: mass 1
