@@ -19,7 +19,8 @@ import torch
 from ..checks import InputError, check_finite, check_shape
 from ..color import linear_to_srgb, srgb_to_linear
 from ..model.exposure import exposure_level, exposure_scale, transport_level
-from ..model.network import Prediction, photo_albedo
+from ..model.network import Prediction
+from ..model.photo_albedo import photo_albedo
 from ..sh.io import resize_sh
 
 __all__ = ["Photo", "load_photo", "RelightSession"]

@@ -26,13 +26,12 @@ from .network import (
     cone_maps,
     normalize_input,
     pad_to_multiple,
-    photo_albedo,
-    photo_albedo_rows,
     relight,
     shade_map,
     shading_map,
 )
 from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx, pose_encoder
+from .photo_albedo import photo_albedo, photo_albedo_rows
 
 __all__ = [
     "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",

@@ -18,7 +18,8 @@ import torch
 from ..checks import InputError
 from ..color import linear_to_srgb
 from ..io import atomic_write, write_image
-from .network import Prediction, RelightNet, photo_albedo, shade_map, shading_map
+from .network import Prediction, RelightNet, shade_map, shading_map
+from .photo_albedo import photo_albedo
 from .training import batch_to_input
 
 __all__ = ["evaluate", "baseline_from_train", "format_table", "format_ablation", "write_report"]

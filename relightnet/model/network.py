@@ -46,7 +46,7 @@ from .guided import FastGuidedUpsample, double_to, pool_input
 
 __all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
            "RelightNet", "normalize_input", "relight",
-           "photo_albedo", "photo_albedo_rows", "pad_to_multiple", "shade_map", "shading_map", "ROW_BAND"]
+           "pad_to_multiple", "shade_map", "shading_map"]
 
 
 #: How the network gets its light (see the module docstring).
@@ -57,8 +57,6 @@ TRANSPORT_HEADS = ("free", "cone")
 ENCODERS = ("own", "pose")
 #: Working size of a network whose checkpoint does not say what it was trained at.
 DEFAULT_INPUT_SIZE = 256
-#: Rows per band where full-resolution maps are combined elementwise (bounded temporaries on large photos).
-ROW_BAND = 256
 
 
 @dataclass(frozen=True)
@@ -188,52 +186,6 @@ def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
         (B, 3, H, W).
     """
     return shade_map(pred.albedo, pred.transport, new_light)
-
-
-def photo_albedo(image: torch.Tensor, pred: Prediction, floor: float = 0.05,
-                 shading: torch.Tensor | None = None) -> torch.Tensor:
-    """Albedo at the photo's own resolution: the photo divided by the predicted shading T · L̂.
-
-    The CNN works at a small size (128² for the shipped model), so its albedo pasted back on a
-    large photo is blurred; dividing the photo by the (smooth) predicted shading keeps every
-    detail of the photo in the albedo — relighting then changes the shading only, as with ratio
-    images (Wen, Liu & Huang, "Face relighting with radiance environment maps", CVPR 2003).
-    Where the shading is darker than ``floor`` × its mean over the person (deep shadow, or
-    negative SH ringing) there is nothing to divide by and the CNN's albedo is blended in.
-
-    Args:
-        image: (B, 3, H, W) the photo, *linear* RGB, at the prediction's size.
-        pred: :class:`Prediction` at the same size (its mask, when present, sets the mean).
-        floor: fraction of the mean shading below which the CNN's albedo takes over.
-        shading: ``pred.shading()`` when the caller has it already, (B, 3, H, W).
-
-    Returns:
-        (B, 3, H, W) albedo (non-negative; above 1 where the photo has highlights).
-    """
-    dims = check_shape(image, ["B", 3, "H", "W"], name="image")
-    check_shape(pred.albedo, [dims["B"], 3, dims["H"], dims["W"]], name="prediction albedo")
-    if shading is None:
-        shading = pred.shading()
-    check_shape(shading, [dims["B"], 3, dims["H"], dims["W"]], name="shading")
-    m = pred.mask if pred.mask is not None else torch.ones_like(shading[:, :1])
-    mean = (shading * m).sum((2, 3), keepdim=True) / m.sum((2, 3), keepdim=True).clamp_min(1e-8)
-    tau = (floor * mean).clamp_min(1e-6)
-
-    if torch.is_grad_enabled() and (shading.requires_grad or pred.albedo.requires_grad):
-        return photo_albedo_rows(image, shading, pred.albedo, tau)
-    out = torch.empty_like(shading)  # in bands of rows: a large photo's temporaries stay small (same values)
-    for r in range(0, dims["H"], ROW_BAND):
-        band = slice(r, r + ROW_BAND)
-        out[:, :, band] = photo_albedo_rows(image[:, :, band], shading[:, :, band], pred.albedo[:, :, band], tau)
-    return out
-
-
-def photo_albedo_rows(image: torch.Tensor, shading: torch.Tensor, albedo: torch.Tensor,
-                      tau: torch.Tensor) -> torch.Tensor:
-    """:func:`photo_albedo` of some rows, its threshold ``tau`` (B, 3, 1, 1) found over the whole photo:
-    image / shading where the shading is above ``tau``, blended into the CNN's ``albedo`` below."""
-    w = (shading / tau).clamp(0, 1)
-    return (w * image.to(shading).clamp_min(0) / torch.maximum(shading, tau) + (1 - w) * albedo).clamp_min(0)
 
 
 def cone_maps(raw: torch.Tensor, lmax: int) -> torch.Tensor:

@@ -2,10 +2,10 @@
 
 The CNN's maps are predicted at its working size; a large photo needs them at its own size,
 where a 12.5 MP frame's albedo and K = 9 transport alone take 600 MB. :func:`relight_over_photo`
-never holds them whole: the maps of a band of :data:`~relightnet.model.network.ROW_BAND` rows are
+never holds them whole: the maps of a band of :data:`~relightnet.model.photo_albedo.ROW_BAND` rows are
 pasted (:meth:`~relightnet.model.inference.CropMaps.rows`), relit and composited over the photo,
 and the band's result is written into the output before the next band is pasted. The two numbers
-the whole person decides (the exposure of the light and the photo albedo's shadow threshold)
+the whole person decides (the exposure of the light and the person's mean shading, which bounds the photo albedo)
 come from a first pass that sums the person's transport, Σ m·T_k: the mean shading under any
 light L is that sum times L (shading is linear in the light), so both are found without a full
 shading map. The result is :func:`~relightnet.pipeline.relight_image.relight_prediction` and
@@ -23,14 +23,12 @@ from ..checks import check_finite, check_shape
 from ..color import linear_to_srgb, srgb_to_linear
 from ..model.exposure import exposure_scale, transport_level
 from ..model.inference import CropMaps
-from ..model.network import ROW_BAND, photo_albedo_rows, shading_map
+from ..model.network import shading_map
+from ..model.photo_albedo import ROW_BAND, photo_albedo_rows
 from ..raster.interpolate import to_channels_last
 from ..render.shading import composite, shade
 
 __all__ = ["BandRelit", "relight_over_photo", "transport_sum"]
-
-#: Below this fraction of the person's mean shading the photo albedo takes the CNN's (:func:`photo_albedo`).
-ALBEDO_FLOOR = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,7 +92,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     new = light.to(maps.transport)
     if keep_exposure:
         new = new * exposure_scale(transport_level(total, ref, mass), transport_level(total, new, mass))
-    tau = (ALBEDO_FLOOR * (total @ ref.double()) / max(mass, 1e-8)).clamp_min(1e-6).to(new).view(1, 3, 1, 1)
+    mean = ((total @ ref.double()) / max(mass, 1e-8)).to(new).view(1, 3, 1, 1)  # the person's mean shading
     out = torch.empty(h, w, 3, dtype=dtype)
     albedo_out = torch.empty(3, h, w) if keep_albedo else None
     lit = 0.0
@@ -104,7 +102,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
         photo = image[None, :, r:r1]
         photo = photo.float() / 255 if photo.dtype == torch.uint8 else photo.to(t)
         if detail:
-            a = photo_albedo_rows(srgb_to_linear(photo), shading_map(t, ref), a, tau)
+            a = photo_albedo_rows(srgb_to_linear(photo), shading_map(t, ref), a, mean)
         linear, shading = shade(to_channels_last(a), to_channels_last(t), new, check=False, with_shading=True)
         lit += float(((shading.mean(-1) > 0) * m[:, 0]).sum(dtype=torch.float64))
         fg = linear_to_srgb(linear.clamp_(0, 1))

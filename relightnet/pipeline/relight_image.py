@@ -23,7 +23,8 @@ import torch
 from ..checks import check_finite, check_shape, sh_order_from_count
 from ..color import linear_to_srgb, srgb_to_linear
 from ..model.exposure import match_exposure
-from ..model.network import ROW_BAND, Prediction, photo_albedo
+from ..model.network import Prediction
+from ..model.photo_albedo import ROW_BAND, photo_albedo
 from ..raster.interpolate import to_channels_first, to_channels_last
 from ..render.shading import composite, shade
 from ..sh.io import resize_sh

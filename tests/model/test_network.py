@@ -8,7 +8,6 @@ from relightnet.model import (
     RelightNet,
     normalize_input,
     pad_to_multiple,
-    photo_albedo,
     relight,
     shading_map,
 )
@@ -72,24 +71,6 @@ def test_sizes_not_multiple_of_16_are_rejected_or_padded():
     assert net(xp).albedo.shape[-2:] == (32, 48)
     with pytest.raises(ShapeError):
         net(torch.rand(1, 3, 32, 32))
-
-
-def test_photo_albedo_divides_the_photo_by_the_shading():
-    g = torch.Generator().manual_seed(0)
-    transport = torch.rand(2, 9, 16, 16, generator=g)
-    transport[:, 0] += 0.5  # a positive DC term: positive shading under a positive light
-    light = torch.zeros(2, 9, 3)
-    light[:, 0] = 1.0
-    albedo = torch.rand(2, 3, 16, 16, generator=g) * 0.8 + 0.1
-    photo = albedo * shading_map(transport, light)
-    cnn = torch.full_like(albedo, 0.5)  # the CNN's (wrong) albedo is not used where there is shading
-    pred = Prediction(albedo=cnn, transport=transport, light=light, mask=torch.ones(2, 1, 16, 16))
-    torch.testing.assert_close(photo_albedo(photo, pred), albedo)
-    # No shading to divide by (dark or negative): the CNN's albedo.
-    dark = Prediction(albedo=cnn, transport=transport * 0 - 1, light=light, mask=torch.ones(2, 1, 16, 16))
-    torch.testing.assert_close(photo_albedo(photo, dark), cnn)
-    with pytest.raises(ShapeError):
-        photo_albedo(photo[:, :, :8], pred)
 
 
 def test_cone_head_predicts_the_transport_of_a_cone():
