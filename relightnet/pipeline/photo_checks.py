@@ -31,6 +31,10 @@ has not moved); the estimate is scored against the light with the scale-invarian
 error of ``evaluate --light`` (:func:`relightnet.sh.scale_invariant_light_error`, whole sphere;
 0 is perfect, 1 no better than a zero light). The "changes nothing" baseline scores the light
 estimated from the original photo against each light. Medians are over photos × lights.
+
+**Colour** (does relighting invent colour?): the photo relit under a white key light from either
+side, its chroma shift p99 and fine-scale chroma energy ratio against the photo
+(:mod:`relightnet.pipeline.photo_colour`), the worse of the two lights per photo.
 """
 
 from __future__ import annotations
@@ -46,8 +50,10 @@ import torch.nn.functional as F
 
 from ..checks import InputError, check_shape, sh_order_from_count
 from ..color import luminance, srgb_to_linear
-from ..sh import preset_light, resize_sh, scale_invariant_light_error, side_light
+from ..io import PHOTO_SUFFIXES
+from ..sh import light_from_words, preset_light, resize_sh, scale_invariant_light_error, side_light
 from .backends import as_predictor, make_predictor
+from .photo_colour import COLOUR_LIGHTS, colour_figures
 from .relight_image import relight_image
 
 __all__ = ["SIDE_LEFT", "SIDE_RIGHT", "FROM_ABOVE", "ROUND_TRIP_PRESETS", "MAX_HEIGHT", "side_light", "check_lights",
@@ -65,7 +71,6 @@ ROUND_TRIP_PRESETS = ("studio", "sunset", "forest")
 #: Photos taller than this are shrunk to this height first.
 MAX_HEIGHT = 1024
 #: Photo files read from the folder.
-PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 #: ``relight(image (3, H, W) sRGB, mask (H, W), light (K, 3)) -> (3, H, W) sRGB in [0, 1]``
 Relighter = Callable[[torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]
@@ -213,7 +218,10 @@ def check_photo(image: torch.Tensor, mask: torch.Tensor, relight: Relighter, est
 
     Returns:
         :func:`side_contrast`'s dict plus ``round_trip`` and ``baseline`` (light name → error)
-        and their medians over the lights, ``round_trip_median`` and ``baseline_median``.
+        and their medians over the lights, ``round_trip_median`` and ``baseline_median``; and
+        ``colour`` (white side light name → :func:`~relightnet.pipeline.photo_colour.colour_figures`
+        under :data:`~relightnet.pipeline.photo_colour.COLOUR_LIGHTS`) with the worse of the two,
+        ``chroma_shift_p99`` and ``fine_chroma_ratio``.
     """
     lights = check_lights() if lights is None else lights
     missing = [n for n in ("left", "right") if n not in lights]
@@ -227,9 +235,13 @@ def check_photo(image: torch.Tensor, mask: torch.Tensor, relight: Relighter, est
             relit[name] = out
         trip[name] = _light_error(estimate(out, mask), light)
         base[name] = _light_error(source, light)
+    lmax = sh_order_from_count(lights["left"].shape[0], "light")
+    colour = {name: colour_figures(image, relight(image, mask, light_from_words(words, lmax)), mask)
+              for name, words in COLOUR_LIGHTS.items()}
     row = side_contrast(relit["left"], relit["right"], mask)
     return row | {"round_trip": trip, "baseline": base, "round_trip_median": statistics.median(trip.values()),
-                  "baseline_median": statistics.median(base.values())}
+                  "baseline_median": statistics.median(base.values()), "colour": colour,
+                  **{k: max(c[k] for c in colour.values()) for k in ("chroma_shift_p99", "fine_chroma_ratio")}}
 
 
 def _photo_row(path: Path, max_height: int, person_models, functions, lights) -> dict:
@@ -259,7 +271,8 @@ def _medians(rows: list[dict], names: list[str]) -> dict:
     per_light = {n: {"round_trip": med(r["round_trip"][n] for r in ok), "baseline": med(r["baseline"][n] for r in ok)}
                  for n in names}
     return {"n_photos": len(rows), "n_checked": len(ok),
-            **{k: med(r[k] for r in ok) for k in ("ratio_under_left", "ratio_under_right", "side_contrast")},
+            **{k: med(r[k] for r in ok) for k in ("ratio_under_left", "ratio_under_right", "side_contrast",
+                                                  "chroma_shift_p99", "fine_chroma_ratio")},
             "round_trip": med(r["round_trip"][n] for r in ok for n in names),
             "baseline": med(r["baseline"][n] for r in ok for n in names), "per_light": per_light}
 
@@ -324,23 +337,26 @@ def format_photo_report(result: dict, name: str = "model") -> str:
              "left light ÷ under the right light (target ≥ 4; 1: the light changes nothing); round trip = "
              "scale-invariant error of the light estimated back from the photo relit to each light "
              f"({', '.join(result['lights'])}), median over the lights; baseline = the light estimated from the "
-             "original photo against the same lights.", "",
+             "original photo against the same lights; chroma shift p99 and fine chroma (relit ÷ photo) under white "
+             "side lights, the worse of the two (photo_colour; targets ≤ 0.15 and ≤ 1.15).", "",
              "| photo | size | person | L/R, left light | L/R, right light | side contrast | round trip | baseline "
-             "| note |", "|---|---|---|---|---|---|---|---|---|"]
+             "| chroma shift p99 | fine chroma | note |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in result["photos"]:
         if r["status"] != "ok":
             lines.append(f"| {r['photo']} | {'×'.join(map(str, r.get('size', []))) or '–'} | – | – | – | – | – | – "
-                         f"| {r['status']}: {r['note']} |")
+                         f"| – | – | {r['status']}: {r['note']} |")
             continue
         note = "" if r["size"] == r["original_size"] else "shrunk from " + "×".join(map(str, r["original_size"]))
         lines.append(f"| {r['photo']} | {r['size'][0]}×{r['size'][1]} | {100 * r['person']:.1f}% | "
                      f"{_cell(r['ratio_under_left'])} | {_cell(r['ratio_under_right'])} | "
                      f"{_cell(r['side_contrast'])} | {_cell(r['round_trip_median'], 3)} | "
-                     f"{_cell(r['baseline_median'], 3)} | {note} |")
+                     f"{_cell(r['baseline_median'], 3)} | {_cell(r['chroma_shift_p99'], 3)} | "
+                     f"{_cell(r['fine_chroma_ratio'])} | {note} |")
     m = result["median"]
     lines += [f"| **median** ({m['n_checked']} of {m['n_photos']} photos; round trip and baseline over photos × "
               f"lights) | | | {_cell(m['ratio_under_left'])} | {_cell(m['ratio_under_right'])} | "
-              f"**{_cell(m['side_contrast'])}** | **{_cell(m['round_trip'], 3)}** | **{_cell(m['baseline'], 3)}** | |",
+              f"**{_cell(m['side_contrast'])}** | **{_cell(m['round_trip'], 3)}** | **{_cell(m['baseline'], 3)}** | "
+              f"**{_cell(m['chroma_shift_p99'], 3)}** | **{_cell(m['fine_chroma_ratio'])}** | |",
               "", "Round trip per light (median over photos):", "",
               "| light | round trip | baseline |", "|---|---|---|"]
     lines += [f"| {n} | {_cell(v['round_trip'], 3)} | {_cell(v['baseline'], 3)} |" for n, v in m["per_light"].items()]
