@@ -37,6 +37,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     if args.fit:
         return _evaluate_fit(args, out)
+    if args.ship:
+        return _evaluate_ship(args, out)
     if (args.data is None) == (args.photos is None):
         raise InputError("--data, --photos: give one, not both" if args.data else
                          "give --data (a dataset folder made by 'relightnet synth') or --photos (a folder of photos)")
@@ -103,6 +105,39 @@ def _evaluate_fit(args: argparse.Namespace, out: Path) -> int:
     with atomic_write(out / "fit_metrics.json", "w") as f:
         json.dump(result, f, indent=2)
     print(text)  # the command's own output (stdout), not a log message
+    return 0
+
+
+def _evaluate_ship(args: argparse.Namespace, out: Path) -> int:
+    from ..io import atomic_write
+    from ..pipeline.photo_checks import list_photos
+    from ..pipeline.ship_rule import format_ship_report, ship_decision, ship_figures
+
+    missing = [o for o, given in (("--data", args.data), ("--clips", args.clips), ("--photos", args.photos))
+               if not given]
+    if missing:
+        raise InputError(f"--ship: needs {', '.join(missing)} (stills, clips and photos to judge the models on)")
+    unused = [o for o, given in (("--checkpoint", args.checkpoint), ("--light", args.light),
+                                 ("--ablation", args.ablation), ("--as-photo", args.as_photo),
+                                 ("--split", args.split != "test")) if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used with --ship (it scores both models its own way)")
+    if len(args.clips) != 1:
+        raise InputError("--clips: --ship takes one clip dataset")
+    list_photos(args.photos)
+    models = [None if m == "shipped" else m for m in args.ship]
+    for m in models:
+        if m is not None and not Path(m).is_file():
+            raise InputError(f"{m}: no such checkpoint (expected a .pt file or the word 'shipped')")
+    figures = [ship_figures(m, args.data, args.clips[0], args.photos, device=args.device) for m in models]
+    text = format_ship_report(*figures, names=tuple(args.ship))
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / "ship.md", "w") as f:
+        f.write(f"# Ship rule: {args.ship[1]} against {args.ship[0]}\n\n{text}")
+    with atomic_write(out / "ship.json", "w") as f:
+        json.dump({"incumbent": args.ship[0], "candidate": args.ship[1], "figures": figures,
+                   "decision": ship_decision(*figures)}, f, indent=2)
+    logger.info("ship rule (%s):\n%s", out / "ship.md", text)
     return 0
 
 
@@ -210,7 +245,9 @@ def _register_evaluate(sub) -> None:
                     "--out reports/light\n"
                     "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
                     "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n"
-                    "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n")
+                    "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n"
+                    "  relightnet evaluate --ship shipped runs/next/last.pt --data data/clothed --clips data/seq_small "
+                    "--photos photos/ --out reports/ship\n")
     add_model_args(p, backend=False)
     p.add_argument("--data", help="dataset folder made by 'relightnet synth' (or --photos)")
     p.add_argument("--photos", metavar="DIR",
@@ -237,6 +274,10 @@ def _register_evaluate(sub) -> None:
                    help="the motion-capture report instead: 'relightnet fit' on generated test clips whose true "
                         "body is known (MPJPE, PA-MPJPE, 2D error, silhouette IoU, acceleration, foot skating, "
                         "time; fit_report.md, fit_metrics.json)")
+    p.add_argument("--ship", nargs=2, metavar=("INCUMBENT", "CANDIDATE"),
+                   help="the ship rule instead: both models (checkpoints, or 'shipped') scored on --data (as photos "
+                        "and as rendered), --clips (compare) and --photos; the candidate ships when it keeps the "
+                        "floors and lowers the mean relative light error (ship.md, ship.json)")
     p.add_argument("--fit-clips", type=pos_int, default=3, help="with --fit: clips (default: 3)")
     p.add_argument("--fit-frames", type=pos_int, default=12, help="with --fit: frames per clip (default: 12)")
     p.add_argument("--fit-res", type=work_size, default=256, help="with --fit: clip size (default: 256)")
