@@ -118,16 +118,22 @@ def open_limited(path: str | os.PathLike, what: str):
 def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     """Decode the first video frame of ``path``; :class:`InputError` naming the file on failure.
 
-    The size in the file's header is checked against the pixel limit before decoding.
+    The size in the file's header is checked against the pixel limit before decoding; a damaged or
+    truncated file is refused (the decoder's ``err_detect=explode``), never decoded in part.
     """
     path = Path(path)
     size = check_image_file(path, what)
     try:
         with open_limited(path, what) as container:
+            # A truncated JPEG decodes without an error by default (its missing part flat green).
+            container.streams.video[0].codec_context.options = {**decode_options(), "err_detect": "explode"}
             for frame in container.decode(video=0):
                 return frame
     except InputError:
         raise
+    except av.InvalidDataError:
+        hint = "" if size else limit_hint()
+        raise InputError(f"{path}: cannot read {what}: the file is damaged or truncated{hint}") from None
     except (av.FFmpegError, OSError, ValueError) as e:
         hint = "" if size else limit_hint()
         raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e}{hint})") from None
@@ -224,17 +230,51 @@ def _orient(arr: np.ndarray, orientation: int) -> np.ndarray:
     return np.ascontiguousarray(turn)
 
 
-def _read_rgba(path: str | os.PathLike) -> torch.Tensor:
-    """(H, W, 4) float32 RGBA in [0, 1], upright; alpha is 1 for images without one."""
+def _has_alpha(fmt: av.VideoFormat) -> bool:
+    """True when a decoded pixel format can hold transparency: an alpha component (``rgba``,
+    ``ya8``, ``yuva420p``, ...) or a palette (``pal8``, whose entries may be transparent)."""
+    return fmt.name == "pal8" or any(c.is_alpha for c in fmt.components)
+
+
+def _decode_pixels(path: str | os.PathLike, gray: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
+    """Decode an image, upright: its colour and its alpha where the file has transparency.
+
+    Only a file whose own pixel format has transparency (:func:`_has_alpha`) is converted to
+    RGBA; every other one goes to RGB (or gray) directly, never through RGBA: FFmpeg's YUV to
+    RGBA conversion fills the right-hand columns of some 4:2:0 and 4:2:2 JPEGs (widths 1 to 4
+    past a multiple of 16) with alpha 0 and wrong colours.
+
+    Args:
+        path: image file.
+        gray: return one channel (the decoder's gray conversion) instead of RGB.
+
+    Returns:
+        ((H, W, 3) or, with ``gray``, (H, W, 1) float32 in [0, 1],
+        (H, W) float32 alpha in [0, 1] or None when the file has no alpha or is fully opaque).
+    """
     frame = _decode_frame(path, "an image")
     fmt = frame.format
     if _is_float_format(fmt.name):
         raise InputError(f"{path}: is a floating-point (HDR) image; read it with read_envmap")
     deep = max(c.bits for c in fmt.components) > 8
-    arr = frame.to_ndarray(format="rgba64le" if deep else "rgba")
+    scale = 65535.0 if deep else 255.0
+    color, alpha = None, None
+    if _has_alpha(fmt):
+        rgba = frame.to_ndarray(format="rgba64le" if deep else "rgba")
+        if bool((rgba[..., 3] < scale).any()):
+            alpha = rgba[..., 3]
+        if not gray:
+            color = rgba[..., :3]
+    if color is None:
+        color = frame.to_ndarray(format=("gray16le" if deep else "gray") if gray else ("rgb48le" if deep else "rgb24"))
+        color = color[..., None] if color.ndim == 2 else color
     exif = _exif_orientation(path)
-    arr = _orient(arr, exif) if exif is not None else upright(arr, frame.rotation)
-    return torch.from_numpy(arr.astype(np.float32) / (65535.0 if deep else 255.0))
+
+    def turn(arr: np.ndarray) -> torch.Tensor:
+        arr = _orient(arr, exif) if exif is not None else upright(arr, frame.rotation)
+        return torch.from_numpy(arr.astype(np.float32) / scale)
+
+    return turn(color), (None if alpha is None else turn(alpha))
 
 
 def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
@@ -264,9 +304,8 @@ def read_image_alpha(path: str | os.PathLike, linear: bool = False) -> tuple[tor
         ((H, W, 3) float32 RGB, (H, W) float32 alpha in [0, 1] or None when the image has no
         alpha or is fully opaque).
     """
-    rgba = _read_rgba(path)
-    x, a = rgba[..., :3].contiguous(), rgba[..., 3]
-    return (srgb_to_linear(x) if linear else x), (a.contiguous() if bool((a < 1).any()) else None)
+    x, a = _decode_pixels(path)
+    return (srgb_to_linear(x) if linear else x), a
 
 
 def read_alpha(path: str | os.PathLike) -> torch.Tensor | None:
@@ -281,8 +320,10 @@ def read_alpha(path: str | os.PathLike) -> torch.Tensor | None:
 def read_mask(path: str | os.PathLike) -> torch.Tensor:
     """A person mask from an image file: its alpha where it has transparency, else white = person.
 
+    A file without an alpha channel (a JPEG, an RGB or gray PNG) is read as one gray channel.
+
     Returns:
         (H, W) float32 in {0, 1} (alpha or gray level above 0.5).
     """
-    rgb, alpha = read_image_alpha(path)
-    return ((alpha if alpha is not None else rgb.mean(-1)) > 0.5).float()
+    gray, alpha = _decode_pixels(path, gray=True)
+    return ((alpha if alpha is not None else gray[..., 0]) > 0.5).float()

@@ -1,12 +1,13 @@
-"""sRGB transfer functions, PNG writing and reading."""
+"""sRGB transfer functions, PNG writing and reading; alpha only from files that have it."""
 
+import av
 import numpy as np
 import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb, srgb_to_linear
-from relightnet.io import read_image, to_uint8, write_image
+from relightnet.io import read_alpha, read_image, read_image_alpha, read_mask, to_uint8, write_image
 
 
 def test_srgb_known_values_and_inverse():
@@ -66,3 +67,97 @@ def test_write_and_read_errors(tmp_path):
     bad.write_bytes(b"\x89PNG but not really")
     with pytest.raises(InputError, match="bad.png"):
         read_image(bad)
+
+
+def _jpeg(path, img, pix_fmt):
+    """Write (H, W, 3) uint8 ``img`` as a JPEG with the chroma layout of ``pix_fmt`` (FFmpeg's mjpeg)."""
+    from relightnet.io.image import _encode
+
+    frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(img), format="rgb24").reformat(format=pix_fmt)
+    path.write_bytes(_encode("mjpeg", frame))
+    return path
+
+
+def _gradient(h, w):
+    yy, xx = np.mgrid[0:h, 0:w]
+    return np.stack([xx * 200 // w + 20, yy * 200 // h + 30, 230 - xx * 150 // w], -1).astype(np.uint8)
+
+
+@pytest.mark.parametrize("pix_fmt", ["yuvj444p", "yuvj422p", "yuvj420p"])
+def test_jpeg_is_never_read_as_a_cut_out(tmp_path, pix_fmt):
+    # Widths 17..49 cover every residue mod 16 (1..4 past a multiple of 16 broke FFmpeg's
+    # YUV -> RGBA conversion: alpha-0 columns at the right edge, with wrong colours).
+    for h in (16, 17):
+        for w in range(17, 50):
+            img = _gradient(h, w)
+            path = _jpeg(tmp_path / f"p{w}x{h}.jpg", img, pix_fmt)
+            rgb, alpha = read_image_alpha(path)
+            assert alpha is None, (pix_fmt, w, h)
+            assert read_alpha(path) is None
+            assert rgb.shape == (h, w, 3)
+            # JPEG's own loss is the same everywhere; the bug's columns were 6-47x worse than the rest.
+            err = (rgb * 255 - torch.from_numpy(img).float()).abs()
+            edge, rest = float(err[:, -4:].mean()), float(err[:, :-4].mean())
+            assert err.max() < 40 and edge <= 2 * (rest + 1), (pix_fmt, w, h, edge, rest)
+
+
+def test_rgba_and_gray_alpha_pngs_keep_their_alpha_exactly(tmp_path):
+    from PIL import Image
+
+    g = torch.Generator().manual_seed(1)
+    rgb = torch.randint(0, 256, (16, 17, 3), generator=g, dtype=torch.uint8)
+    a8 = torch.randint(0, 256, (16, 17), generator=g, dtype=torch.uint8)
+    a8[0, 0] = 255
+    path = write_image(tmp_path / "rgba.png", rgb, alpha=a8.float() / 255)
+    back, alpha = read_image_alpha(path)
+    torch.testing.assert_close((alpha * 255).round().to(torch.uint8), a8, rtol=0, atol=0)
+    torch.testing.assert_close((back * 255).round().to(torch.uint8), rgb, rtol=0, atol=0)
+    la = np.stack([np.full((16, 17), 90, np.uint8), a8.numpy()], -1)
+    Image.fromarray(la, "LA").save(tmp_path / "la.png")
+    back, alpha = read_image_alpha(tmp_path / "la.png")
+    torch.testing.assert_close((alpha * 255).round().to(torch.uint8), a8, rtol=0, atol=0)
+    assert ((back * 255).round() == 90).all()
+    torch.testing.assert_close(read_mask(tmp_path / "la.png"), (a8.float() / 255 > 0.5).float())
+    # A fully opaque RGBA file has no transparency to report; its mask is its gray level.
+    opaque = write_image(tmp_path / "opaque.png", rgb, alpha=torch.ones(16, 17))
+    assert read_alpha(opaque) is None
+    assert read_mask(opaque).shape == (16, 17)
+
+
+def test_rgb_jpeg_mask_reads_its_luminance(tmp_path):
+    img = np.zeros((64, 97, 3), np.uint8)
+    img[:, :18] = 255  # 18 of 97 columns white (18.6 %)
+    for pix_fmt in ("yuvj444p", "yuvj422p", "yuvj420p"):
+        mask = read_mask(_jpeg(tmp_path / f"m_{pix_fmt}.jpg", img, pix_fmt))
+        assert mask.shape == (64, 97)
+        assert abs(float(mask.mean()) - 18 / 97) < 0.01, pix_fmt
+        assert mask[:, :16].all() and not mask[:, 20:].any()
+
+
+def test_read_photo_of_a_phone_sized_jpeg_has_no_alpha(tmp_path):
+    from relightnet._cli.inputs import read_photo
+
+    path = _jpeg(tmp_path / "phone.jpg", _gradient(1000, 1203), "yuvj420p")
+    img, mask, alpha = read_photo(str(path), None, mask_source="head")
+    assert img.shape == (3, 1000, 1203)
+    assert alpha is None and mask is None
+
+
+@pytest.mark.parametrize("suffix", [".jpg", ".png", ".webp"])
+def test_truncated_image_is_refused_in_one_line(tmp_path, suffix):
+    from PIL import Image
+
+    g = np.random.default_rng(3)
+    img = g.integers(0, 256, (96, 131, 3), dtype=np.uint8)
+    full = tmp_path / f"full{suffix}"
+    Image.fromarray(img).save(full)
+    data = full.read_bytes()
+    cut = tmp_path / f"cut{suffix}"
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InputError, match=r"cut\..*damaged or truncated") as e:
+        read_image(cut)
+    assert "\n" not in str(e.value)
+    # Bytes after the end of the image (a phone's embedded video) are not damage.
+    tail = tmp_path / f"tail{suffix}"
+    tail.write_bytes(data + bytes(4096))
+    assert read_image(tail).shape == (96, 131, 3)
