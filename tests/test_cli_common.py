@@ -24,6 +24,21 @@ def test_out_file_makes_missing_parents_and_checks_the_type(tmp_path):
         paths.out_file(tmp_path / "f" / "x.png")
 
 
+def test_out_file_never_names_an_input(tmp_path):
+    photo = tmp_path / "p.png"
+    photo.write_bytes(b"x")
+    for same in (photo, tmp_path / "." / "p.png"):
+        with pytest.raises(InputError, match=r"--out .*p.png: is the input .*p.png; write the result to another"):
+            paths.out_file(same, inputs=(None, photo))
+    (tmp_path / "link.png").symlink_to(photo)
+    with pytest.raises(InputError, match="is the input"):
+        paths.out_file(tmp_path / "link.png", inputs=(photo,))
+    (tmp_path / "hard.png").hardlink_to(photo)
+    with pytest.raises(InputError, match="is the input"):
+        paths.out_file(tmp_path / "hard.png", inputs=(photo,))
+    assert paths.out_file(tmp_path / "q.png", inputs=(photo, "sunset", tmp_path)) == tmp_path / "q.png"
+
+
 def test_out_dir_and_the_removal_of_folders_a_failed_command_made(tmp_path):
     with pytest.raises(RuntimeError), paths.made_folders() as made:  # a command that fails
         d = paths.out_dir(tmp_path / "n1" / "n2" / "run", "--out-dir")

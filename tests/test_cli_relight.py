@@ -1,6 +1,8 @@
 """`relightnet relight-image` / `relight-video` at the command line: the output rule and input checks
 before any work (runs: tests/pipeline/test_relight_image.py, test_relight_video.py)."""
 
+import torch
+
 from relightnet.cli import main
 
 
@@ -54,3 +56,20 @@ def test_a_light_sequence_for_one_light_is_an_input_error(tmp_path, capsys):
                                    "--light", str(tmp_path / "seq.npz"), "--out", str(tmp_path / "r.png")]))
     assert "InputError: --light" in line and "expected one light (K, 3), got a sequence (4, 9, 3)" in line
     assert not (tmp_path / "r.png").exists()
+
+
+def test_an_output_equal_to_the_input_is_refused_and_the_original_kept(tmp_path, capsys):
+    from relightnet.io import write_image
+
+    photo = write_image(tmp_path / "p.png", torch.full((20, 24, 3), 0.5))
+    before = photo.read_bytes()
+    for cmd in (["relight-image", str(photo), "--light", "studio", "--out", str(photo)],
+                ["relight-video", str(photo), "--light", "studio", "--out", str(tmp_path / "p.mp4")],
+                ["segment", str(photo), "--out", str(photo)]):
+        if cmd[0] == "relight-video":
+            (tmp_path / "p.mp4").write_bytes(b"not a video")
+            cmd[1] = str(tmp_path / "p.mp4")
+            before_video = (tmp_path / "p.mp4").read_bytes()
+        line = _one_line(capsys, main(cmd))
+        assert "is the input" in line, (cmd, line)
+    assert photo.read_bytes() == before and (tmp_path / "p.mp4").read_bytes() == before_video

@@ -21,7 +21,9 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.scene import load_camera
     from ..sh import load_light
 
-    out = out_file(args.out, suffixes=(".mp4", ".mkv"))
+    out = out_file(args.out, suffixes=(".mp4", ".mkv"),
+                   inputs=(args.target, args.target_masks, args.plate, args.camera, args.albedo, args.motion_from,
+                           args.light, args.checkpoint))
     for option, value in (("--target-masks", args.target_masks), ("--plate", args.plate),
                           ("--camera", args.camera), ("--albedo", None if args.albedo == "default" else args.albedo)):
         if value:

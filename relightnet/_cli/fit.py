@@ -6,18 +6,18 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..io.probe import PHOTO_SUFFIXES
 from .argtypes import pos_float, pos_int
 from .options import add_command
 from .paths import in_path, out_file
 
 logger = logging.getLogger("relightnet.fit")
 
-_PHOTO = (".png", ".jpg", ".jpeg")
 _VIDEO = (".mp4", ".mkv")
 
 
 def _outputs(args, photo: bool):
-    out = out_file(args.out, "--out", (".npz",))
+    out = out_file(args.out, "--out", (".npz",), inputs=(args.input,))
     kinds = (".png",) if photo else _VIDEO
     what = "a .png for a photo" if photo else "a video (.mp4/.mkv) for a video"
     extra = {}
@@ -25,13 +25,13 @@ def _outputs(args, photo: bool):
         if val:
             if Path(val).suffix.lower() not in kinds:
                 raise ValueError(f"{opt} {val}: expected {what}")
-            extra[opt] = out_file(val, opt, kinds)
+            extra[opt] = out_file(val, opt, kinds, inputs=(args.input,))
     return out, extra
 
 
 def run(args: argparse.Namespace) -> int:
-    src = in_path(args.input, "INPUT", "a photo (.png/.jpg) or a video")
-    photo = src.suffix.lower() in _PHOTO
+    src = in_path(args.input, "INPUT", "a photo (.png, .jpg, .webp, ...) or a video")
+    photo = src.suffix.lower() in PHOTO_SUFFIXES
     out, extra = _outputs(args, photo)
     import torch
 

@@ -46,7 +46,7 @@ def run_show(args: argparse.Namespace) -> int:
 def run_convert(args: argparse.Namespace) -> int:
     from ..sh.io import LIGHT_SUFFIXES, load_light, save_light
 
-    out = out_file(args.output, "OUT", LIGHT_SUFFIXES)
+    out = out_file(args.output, "OUT", LIGHT_SUFFIXES, inputs=(args.input,))
     sh = load_light(args.input, lmax=args.lmax)
     save_light(out, sh)
     logger.info("wrote %s: %s light from %s", out, tuple(sh.shape), args.input)

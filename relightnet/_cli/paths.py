@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-from collections.abc import Iterator
+import os
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ..errors import InputError
@@ -67,24 +68,44 @@ def in_path(path: str | Path, option: str, expected: str = "an existing file or 
     return p
 
 
-def out_file(path: str | Path, option: str = "--out", suffixes: tuple[str, ...] | None = None) -> Path:
+def _same_file(a: Path, b: Path) -> bool:
+    """True when two paths name one file (the same path, a link to it, or a hard link)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet)
+        return a.resolve() == b.resolve()
+
+
+def out_file(path: str | Path, option: str = "--out", suffixes: tuple[str, ...] | None = None,
+             inputs: Iterable[str | Path | None] = ()) -> Path:
     """The output-file rule of every command, applied before any work.
 
     The file's type must be one of ``suffixes`` (case-insensitive; any if None), the path must
-    not be an existing folder, and its missing parent folders are made. The file itself is
+    not be an existing folder nor one of the command's ``inputs`` (an original is never
+    overwritten by its result), and its missing parent folders are made. The file itself is
     written later, atomically, by the command.
+
+    Args:
+        path: the output file.
+        option: the option that named it, for messages.
+        suffixes: the file types allowed (lower case, with the dot); None: any.
+        inputs: the command's input paths (None entries ignored).
 
     Returns:
         ``path`` as a Path.
 
     Raises:
-        InputError: a wrong suffix, a folder at ``path``, or a parent folder that cannot be made.
+        InputError: a wrong suffix, a folder at ``path``, an input at ``path``, or a parent
+        folder that cannot be made.
     """
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise InputError(f"{option} {p}: expected a file ending in {', '.join(suffixes)}")
     if p.is_dir():
         raise InputError(f"{option} {p}: is a folder; expected a file path")
+    for src in inputs:
+        if src is not None and Path(src).is_file() and _same_file(p, Path(src)):
+            raise InputError(f"{option} {p}: is the input {src}; write the result to another file")
     _check_writable_parent(p, option)
     return p
 

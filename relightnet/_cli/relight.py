@@ -15,7 +15,7 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = out_file(args.out)
+    out = out_file(args.out, inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
@@ -69,7 +69,7 @@ def run_video(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..pipeline.relight_video import relight_video
 
-    out = out_file(args.out, suffixes=(".mp4", ".mkv"))
+    out = out_file(args.out, suffixes=(".mp4", ".mkv"), inputs=(args.video, args.masks, args.light, args.checkpoint))
     in_path(args.video, "VIDEO", "a video file")
     if args.masks:
         in_path(args.masks, "--masks", "a folder of mask images or a mask video")

@@ -19,9 +19,9 @@ def run(args: argparse.Namespace) -> int:
     from ..segment.jobs import segment_files
 
     src = in_path(args.input, "INPUT", "a photo, a folder of photos or a video")
-    out = out_file(args.out) if Path(args.out).suffix else out_dir(args.out)
+    out = out_file(args.out, inputs=(src,)) if Path(args.out).suffix else out_dir(args.out)
     if args.landmarks:
-        out_file(args.landmarks, "--landmarks", (".npz",))
+        out_file(args.landmarks, "--landmarks", (".npz",), inputs=(src,))
     if not 0 <= args.steady < 0.5:  # refused before the models load
         raise InputError(f"--steady: expected a probability margin in [0, 0.5), got {args.steady}")
     segment_files(src, out, PersonModels(threads=args.threads), args.landmarks, args.allow_empty, args.smoothing,

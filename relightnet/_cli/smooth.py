@@ -55,8 +55,8 @@ def run_smooth(args: argparse.Namespace) -> int:
 
     check_method_options(args, args.smoothing)
     parse_eps(args.outlier_eps)
-    out = out_file(args.output, "OUT", (".npz", ".json"))
-    plot = out_file(args.plot, "--plot", (".png",)) if args.plot else None
+    out = out_file(args.output, "OUT", (".npz", ".json"), inputs=(args.input,))
+    plot = out_file(args.plot, "--plot", (".png",), inputs=(args.input,)) if args.plot else None
     sh, side = load_light_sequence(args.input, ("raw",))
     if "raw" in side:  # a smoothed file (avatar's OUT.lights.npz, our own output): start again from its estimates
         sh = load_light(side["raw"])
