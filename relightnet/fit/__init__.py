@@ -27,7 +27,6 @@ from .init import (
                    relative_turn,
 )
 from .job import (
-                  PHOTO_SUFFIXES,
                   FitOptions,
                   FitOutput,
                   fit_file,
@@ -66,7 +65,7 @@ __all__ = [
     "DEFAULT_FOV_DEG", "default_intrinsics", "exif_intrinsics", "project_points",
     "CORE_SLOTS", "MAX_TURN_DEG", "TORSO_SLOTS", "initial_orientation", "initial_translation", "kabsch",
     "relative_turn",
-    "PHOTO_SUFFIXES", "FitOptions", "FitOutput", "fit_file", "media_frames", "motion_for_avatar", "write_fit_masks",
+    "FitOptions", "FitOutput", "fit_file", "media_frames", "motion_for_avatar", "write_fit_masks",
     "write_preview",
     "LANDMARK_SOURCES", "AnnyLandmarks", "landmark_weights",
     "acceleration_error", "foot_skating", "landmark_error", "mask_iou", "mpjpe", "pa_mpjpe",

@@ -14,6 +14,7 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
+from ..io.probe import PHOTO_SUFFIXES
 from .body_model import FitBody
 from .camera import DEFAULT_FOV_DEG, default_intrinsics, exif_intrinsics
 from .observe import observe_frames
@@ -22,14 +23,13 @@ from .solve import MAX_FIT_FRAMES, FitResult, FitWeights, fit_observations
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["PHOTO_SUFFIXES", "FitOptions", "FitOutput", "media_frames", "fit_file", "motion_for_avatar",
+__all__ = ["FitOptions", "FitOutput", "media_frames", "fit_file", "motion_for_avatar",
            "write_preview", "write_fit_masks"]
 
 #: Frames of the whole posed mesh made together (a video's foot skating is measured on its landmarks).
 _BODY_CHUNK = 16
 
 #: Inputs read as a photo; anything else is read as a video.
-PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from importlib import import_module
 
 #: Where each public name lives (loaded on first access).
 _WHERE = {
-    "atomic_write": "atomic",
+    "atomic_write": "atomic", "PHOTO_SUFFIXES": "probe",
     "ENVMAP_SUFFIXES": "envmap", "read_envmap": "envmap", "write_envmap": "envmap",
     "to_uint8": "image", "read_image": "image",
     "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",

@@ -277,14 +277,15 @@ def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
         no frame count (mkv, webm) is counted by decoding it.
     """
     from .image import read_mask
+    from .probe import PHOTO_SUFFIXES
 
     p = Path(masks)
-    if p.is_file() and p.suffix.lower() in (".png", ".jpg", ".jpeg"):
+    if p.is_file() and p.suffix.lower() in PHOTO_SUFFIXES:
         raise InputError(f"{p}: a single image; expected a folder of per-frame mask images or a mask video")
     if p.is_dir():
-        files = sorted(f for f in p.iterdir() if f.suffix.lower() in (".png", ".jpg", ".jpeg"))
+        files = sorted(f for f in p.iterdir() if f.suffix.lower() in PHOTO_SUFFIXES and not f.name.startswith("."))
         if not files:
-            raise InputError(f"{p}: no mask images (.png/.jpg) in the folder")
+            raise InputError(f"{p}: no mask images ({', '.join(PHOTO_SUFFIXES)}) in the folder")
         return len(files), (read_mask(f) for f in files)
     # white = person: the mean of R, G, B above 127, i.e. their sum above 381 (no float copy of the frame)
     return count_frames(p), ((torch.from_numpy(f).sum(-1, dtype=torch.int16) > 381).float() for f in read_video(p))

@@ -34,7 +34,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import VideoWriter, count_frames, read_video, video_info
+from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, read_video, video_info
 from ..names import VIDEO_SMOOTHING
 from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
@@ -89,7 +89,7 @@ def _plate_frames(plate, target, size):
     if plate is None:
         return read_video(target)
     p = Path(plate)
-    if p.suffix.lower() in (".png", ".jpg", ".jpeg"):
+    if p.suffix.lower() in PHOTO_SUFFIXES:
         from ..io import read_image
 
         if not p.is_file():

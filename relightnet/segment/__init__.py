@@ -14,7 +14,7 @@ Example:
     >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)
 """
 
-from .jobs import IMAGE_SUFFIXES, MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
+from .jobs import MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
 from .models import INPUT_SIZE, LANDMARK_NAMES, POSE_FILE, SELFIE_FILE, PersonModels, PoseOutput
 from .person import (
     CROP_SCALE,
@@ -32,7 +32,7 @@ from .steady import STEADY_MARGIN
 from .video import PersonTracker, track_person
 
 __all__ = [
-    "IMAGE_SUFFIXES", "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
+    "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
     "INPUT_SIZE", "LANDMARK_NAMES", "POSE_FILE", "SELFIE_FILE", "PersonModels", "PoseOutput",
     "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
     "segment_crop", "segment_person",

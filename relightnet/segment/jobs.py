@@ -18,14 +18,13 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
+from ..io.probe import PHOTO_SUFFIXES
 from .steady import STEADY_MARGIN
 
-__all__ = ["IMAGE_SUFFIXES", "MASK_VIDEO_SUFFIXES", "segment_files", "save_landmarks"]
+__all__ = ["MASK_VIDEO_SUFFIXES", "segment_files", "save_landmarks"]
 
 logger = logging.getLogger("relightnet.segment")
 
-#: Photo files the job reads.
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 #: Mask videos the job writes.
 MASK_VIDEO_SUFFIXES = (".mp4", ".mkv")
 
@@ -152,13 +151,17 @@ def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, s
     src, out = Path(src), Path(out)
     names = None
     if src.is_dir():
-        paths = sorted(f for f in src.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+        files = sorted(f for f in src.iterdir() if f.is_file() and not f.name.startswith("."))
+        paths = [f for f in files if f.suffix.lower() in PHOTO_SUFFIXES]
         if not paths:
-            raise InputError(f"{src}: no photos (.png/.jpg) in the folder")
+            raise InputError(f"{src}: no photos ({', '.join(PHOTO_SUFFIXES)}) in the folder")
+        if len(paths) < len(files):
+            logger.warning("%s: %d file(s) that are not photos skipped (%s)", src, len(files) - len(paths),
+                           ", ".join(f.name for f in files if f not in paths)[:200])
         if out.suffix:
             raise InputError(f"--out {out}: a folder of photos gives a folder of masks; expected a folder path")
         results, names = _photos(paths, out, models, allow_empty), [p.name for p in paths]
-    elif src.suffix.lower() in IMAGE_SUFFIXES:
+    elif src.suffix.lower() in PHOTO_SUFFIXES:
         if out.suffix.lower() != ".png":
             raise InputError(f"--out {out}: expected a .png path for the mask of a photo")
         results = _photos([src], out, models, allow_empty=False)

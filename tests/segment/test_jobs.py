@@ -29,3 +29,19 @@ def test_segment_files_refuses_outputs_of_the_wrong_kind(astronaut, person_model
     with pytest.raises(InputError, match=match):
         segment_files(tmp_path / src, tmp_path / out, person_models)
     assert not (tmp_path / out).exists()
+
+
+def test_segment_files_reads_every_photo_type_and_names_what_it_skips(astronaut, person_models, tmp_path, caplog):
+    from PIL import Image
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    img = (astronaut.permute(1, 2, 0).clamp(0, 1) * 255).round().byte().numpy()
+    Image.fromarray(img).save(photos / "a.webp", quality=95)
+    (photos / "notes.txt").write_text("not a photo")
+    res = segment_files(photos / "a.webp", tmp_path / "m.png", person_models)
+    assert len(res) == 1 and read_mask(tmp_path / "m.png").any()
+    with caplog.at_level("WARNING", logger="relightnet.segment"):
+        res = segment_files(photos, tmp_path / "masks", person_models)
+    assert len(res) == 1 and (tmp_path / "masks").is_dir()
+    assert "1 file(s) that are not photos skipped (notes.txt)" in caplog.text
