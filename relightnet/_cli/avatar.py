@@ -20,6 +20,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..pipeline.scene import load_camera
     from ..sh import load_light
+    from ..sh.io import check_light_physics
 
     out = out_file(args.out, suffixes=(".mp4", ".mkv"),
                    inputs=(args.target, args.target_masks, args.plate, args.camera, args.albedo, args.motion_from,
@@ -39,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         motion = motion_for_avatar(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
     if args.light and args.light_from != "person":
         raise InputError(f"--light-from {args.light_from}: give --light or --light-from, not both")
-    light = load_light(args.light) if args.light else None
+    light = check_light_physics(load_light(args.light), args.light) if args.light else None
     plate_light = None
     if args.light_from in ("plate", "both"):  # the plate given, else the target's first frame
         from ..sh.plate import load_plate

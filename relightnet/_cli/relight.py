@@ -17,13 +17,13 @@ logger = logging.getLogger("relightnet.relight")
 def run(args: argparse.Namespace) -> int:
     out = out_file(args.out, inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
+    light = load_single_light(args.light)  # a bad light fails before the photo is read and segmented
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
     from ..io import write_image
     from ..pipeline.backends import make_predictor
     from ..pipeline.relight_image import relight_image
 
-    light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
     # without --save-maps the CNN's maps are never held at the photo's size (memory budget)
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo,

@@ -111,10 +111,11 @@ def run_render_body(args: argparse.Namespace) -> int:
     from ..io import VideoWriter, write_image
     from ..render.jobs import render_body_frames
     from ..sh import load_light
+    from ..sh.io import check_light_physics
 
     out, mask_out, maps = _body_outputs(args)
     is_video = out.suffix.lower() in _VIDEO
-    light = load_light(args.light, lmax=args.lmax)
+    light = check_light_physics(load_light(args.light, lmax=args.lmax), args.light)
     body, params = _body_and_params(args)
     albedo, vertex_albedo = _albedo(body)
     if args.outfit:

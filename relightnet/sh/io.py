@@ -18,7 +18,10 @@ Formats, chosen by the file extension:
 - a light in words (``key:az=-40,el=30 + ambient:0.2``; :mod:`relightnet.sh.words`).
 
 Every loaded light is validated (finite values, K = (lmax+1)²) and returned as a
-float32 RGB tensor; errors name the file.
+float32 RGB tensor; errors name the file. The commands also check a light the user gives against
+physics (:func:`check_light_physics`): a light adds light, so its irradiance may dip below zero
+only a little (SH ringing) and stays within what float32 shading carries; arbitrary coefficients
+(research, tests) load as they are.
 """
 
 from __future__ import annotations
@@ -35,9 +38,56 @@ from ..checks import InputError, ShapeError, sh_order_from_count
 from .basis import sh_count
 from .presets import preset_light, preset_names
 
-__all__ = ["LIGHT_SUFFIXES", "save_light", "load_light", "resize_sh", "save_light_sequence", "load_light_sequence"]
+__all__ = ["LIGHT_SUFFIXES", "MAX_IRRADIANCE", "save_light", "load_light", "check_light_physics", "resize_sh",
+           "save_light_sequence", "load_light_sequence"]
 
 logger = logging.getLogger(__name__)
+
+#: Largest irradiance (linear units; the presets' is about 1 to 3) a light may have anywhere: past
+#: it, shading a photo in float32 overflows or saturates every pixel. Physical HDR units stay below.
+MAX_IRRADIANCE = 1e6
+#: Irradiance counts as negative below this fraction of the light's peak: the order-2 ringing of one
+#: directional source dips to about -3.7% of its peak behind it, which is not an error.
+NEGATIVE_DEPTH = 0.05
+#: Share of the sphere whose irradiance may be negative in some channel before a warning and before
+#: a refusal (most of it: no scene has that).
+NEGATIVE_WARN, NEGATIVE_REFUSE = 0.05, 0.5
+
+
+def check_light_physics(sh: torch.Tensor, name: str = "light") -> torch.Tensor:
+    """Refuse a light no scene has: irradiance above :data:`MAX_IRRADIANCE`, or negative (below
+    :data:`NEGATIVE_DEPTH` of its peak) over more than half of the sphere in some channel; warn when
+    more than a few percent of it is.
+
+    Args:
+        sh: (K, 3) light or (T, K, 3) light sequence (linear RGB, light frame).
+        name: what to call it in messages (the file or the words).
+
+    Returns:
+        ``sh``, unchanged.
+
+    Raises:
+        InputError: naming ``name`` (and the frame of a sequence) and what was found.
+    """
+    from .metrics import irradiance_samples
+
+    e = irradiance_samples(sh)  # (..., D, 3) float64 over the sphere
+    peak = float(e.abs().max())
+    if not peak <= MAX_IRRADIANCE:
+        raise InputError(f"light {name}: its irradiance reaches {peak:.3g}; expected at most {MAX_IRRADIANCE:.0e} "
+                         "(are the coefficients in linear radiance?)")
+    scale = e.abs().amax((-2, -1), keepdim=True)  # each light's own peak
+    negative = (e < -NEGATIVE_DEPTH * scale).double().mean(-2).reshape(-1)  # (T * 3,) share per channel
+    worst = int(negative.argmax())
+    share, channel = float(negative[worst]), "RGB"[worst % 3]
+    where = f"{name} (frame {worst // 3})" if sh.dim() == 3 else name
+    if share > NEGATIVE_REFUSE:
+        raise InputError(f"light {where}: its {channel} irradiance is negative over {100 * share:.0f}% of the "
+                         "sphere; a light adds light (expected it positive nearly everywhere)")
+    if share > NEGATIVE_WARN:
+        logger.warning("light %s: its %s irradiance is negative over %.0f%% of the sphere; those directions shade "
+                       "black", where, channel, 100 * share)
+    return sh
 
 #: Suffixes :func:`save_light` writes; :func:`load_light` also reads ``.exr`` and ``.hdr``.
 LIGHT_SUFFIXES = (".npz", ".json", ".npy")

@@ -105,11 +105,20 @@ def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys
     assert main(["relight-image", str(cut), "--light", "sunset", "--out", str(out)]) == 0
     assert "alpha channel of" in capsys.readouterr().err  # the cut-out's alpha was the mask
     torch.testing.assert_close(read_alpha(out), read_alpha(cut))  # ... and the output keeps it
-    # A light that is negative everywhere, and one of a higher order than the model's.
+    # A light negative nearly everywhere is refused before any work; one from behind the person
+    # lights too little of them (a warning); one of a higher order than the model's is truncated.
     neg = tmp_path / "neg.npy"
     np.save(neg, -np.ones((9, 3), np.float32))
+    assert main(["relight-image", str(cut), "--light", str(neg), "--out", str(tmp_path / "n.png")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "neg.npy: its R irradiance is negative over" in err[0], err
+    assert not (tmp_path / "n.png").exists()
+    back = np.zeros((9, 3), np.float32)
+    back[0], back[3] = 0.2, -1.0  # ambient and a strong dipole away from the camera
+    np.save(neg, back)  # negative over ~38% of the sphere: passes with a warning, and lights little of the person
     assert main(["relight-image", str(cut), "--light", str(neg), "--out", str(out)]) == 0
-    assert "is it a valid SH light" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "irradiance is negative over" in err and "is it a valid SH light" in err
     from relightnet.sh import save_light
 
     hi = save_light(tmp_path / "hi.npz", torch.cat([preset_light("studio"), torch.zeros(7, 3)]))

@@ -236,3 +236,35 @@ def test_light_sequence_errors_name_the_file(tmp_path):
     np.savez(tmp_path / "bad.npz", sh=np.zeros((4, 9, 3), np.float32), raw=np.zeros((2, 9, 3), np.float32))
     with pytest.raises(ShapeError, match="bad.npz: side array 'raw' has 2 rows"):
         load_light_sequence(tmp_path / "bad.npz")
+
+
+def test_lights_no_scene_has_are_refused_and_ringing_is_not(caplog):
+    from relightnet.sh.io import MAX_IRRADIANCE, check_light_physics
+
+    huge = torch.zeros(9, 3)
+    huge[0] = 1e30
+    split = huge.clone()
+    split[1] = -1e30  # half the sphere +1e30, half -1e30: "half red, half cyan"
+    for light, words in ((huge, r"reaches 8.86e\+29"), (split, "reaches"), (-torch.ones(9, 3), "R irradiance is "
+                                                                                                  "negative over")):
+        with pytest.raises(InputError, match=rf"light x.npy: its .*{words}") as e:
+            check_light_physics(light, "x.npy")
+        assert "\n" not in str(e.value)
+    seq = torch.stack([load_light("studio"), -torch.ones(9, 3)])
+    with pytest.raises(InputError, match=r"light seq \(frame 1\): its R irradiance is negative"):
+        check_light_physics(seq, "seq")
+    # A single directional source rings below zero behind it at order 2: accepted without a word.
+    with caplog.at_level("WARNING", logger="relightnet.sh.io"):
+        for name in ("key:az=30,el=10,power=3", "studio", "sunset", "sunrise", "night"):
+            check_light_physics(load_light(name), name)
+    assert caplog.text == ""
+    # Mild negatives (a third of the sphere, green only) pass with a warning naming the channel.
+    mild = torch.zeros(9, 3)
+    mild[0], mild[1:4, 1] = 0.5, -1.2
+    with caplog.at_level("WARNING", logger="relightnet.sh.io"):
+        check_light_physics(mild, "mild")
+    assert "light mild: its G irradiance is negative over" in caplog.text
+    # The bound is on irradiance: a bright physical HDR light below it passes.
+    bright = torch.zeros(9, 3)
+    bright[0] = MAX_IRRADIANCE / 10
+    assert check_light_physics(bright, "bright") is bright
