@@ -47,10 +47,13 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(f"relightnet._cli.{name}").register(sub)
+    from .io.limits import DEFAULT_MAX_PIXELS  # torch-free
+
     for command in _leaf_parsers(sub):  # every command reads files: one limit for all
         command.add_argument("--max-pixels", type=_max_pixels, metavar="N",
-                             help="largest image or video frame decoded, width x height (default: 64000000, "
-                                  "or $RELIGHTNET_MAX_PIXELS); larger files are refused before decoding")
+                             help="largest image or video frame decoded, width x height (default: "
+                                  f"{DEFAULT_MAX_PIXELS:,}, or $RELIGHTNET_MAX_PIXELS); larger files are refused "
+                                  "before decoding")
     return parser
 
 

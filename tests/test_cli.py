@@ -60,6 +60,9 @@ def test_help(command, capsys):
     out = capsys.readouterr().out
     assert e.value.code == 0 and out.startswith(f"usage: relightnet {' '.join(command)}")
     assert "--max-pixels" in out and "examples:" in out
+    from relightnet.io.limits import DEFAULT_MAX_PIXELS
+
+    assert f"{DEFAULT_MAX_PIXELS:,}" in " ".join(out.split())  # the default the code uses
     examples = out.split("examples:\n", 1)[1].splitlines()
     mine = [shlex.split(x.split("  # ")[0].split("# ")[0])[1:] for x in examples
             if x.strip().startswith(f"relightnet {' '.join(command)} ") or x.strip() == f"relightnet {command[0]}"]
