@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import torch
 
 from ..checks import check_finite, check_shape
-from ..color import linear_to_srgb, srgb_to_linear
+from ..color import linear_to_srgb, luminance, srgb_to_linear
 from ..model.exposure import exposure_scale, transport_level
 from ..model.inference import CropMaps
 from ..model.network import shading_map
@@ -28,7 +28,7 @@ from ..model.photo_albedo import ROW_BAND, photo_albedo_rows
 from ..raster.interpolate import to_channels_last
 from ..render.shading import composite, shade
 
-__all__ = ["BandRelit", "relight_over_photo", "transport_sum"]
+__all__ = ["BandRelit", "is_gray", "relight_over_photo", "transport_sum"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +61,18 @@ def transport_sum(maps: CropMaps) -> tuple[torch.Tensor, float]:
     return total, mass
 
 
+def is_gray(image: torch.Tensor) -> bool:
+    """True when a photo has no colour: its three channels equal to within one 8-bit level.
+
+    Args:
+        image: (3, H, W) sRGB in [0, 1] or uint8.
+    """
+    check_shape(image, [3, "H", "W"], name="image")
+    tol = 1 if image.dtype == torch.uint8 else 1.0 / 255 + 1e-6
+    lo, hi = image.aminmax(dim=0)
+    return bool(((hi.float() - lo.float()) <= tol).all())
+
+
 @torch.no_grad()
 def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor, detail: bool = True,
                        keep_exposure: bool = True, reference: torch.Tensor | None = None,
@@ -81,6 +93,9 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
         dtype: ``torch.float32`` (values in [0, 1]) or ``torch.uint8`` (rounded, what a video frame is).
         keep_albedo: also return the relit albedo (3, H, W) (``--save-maps``; a photo's worth of memory).
 
+    A photo without colour (:func:`is_gray`) gives a person without colour: the relit person's
+    luminance, whatever the light's colour.
+
     Returns:
         :class:`BandRelit`.
     """
@@ -95,7 +110,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     mean = ((total @ ref.double()) / max(mass, 1e-8)).to(new).view(1, 3, 1, 1)  # the person's mean shading
     out = torch.empty(h, w, 3, dtype=dtype)
     albedo_out = torch.empty(3, h, w) if keep_albedo else None
-    lit = 0.0
+    lit, gray = 0.0, is_gray(image)
     for r in range(0, h, ROW_BAND):
         r1 = min(r + ROW_BAND, h)
         a, t, m = maps.rows(r, r1)
@@ -105,7 +120,9 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
             a = photo_albedo_rows(srgb_to_linear(photo), shading_map(t, ref), a, mean)
         linear, shading = shade(to_channels_last(a), to_channels_last(t), new, check=False, with_shading=True)
         lit += float(((shading.mean(-1) > 0) * m[:, 0]).sum(dtype=torch.float64))
-        fg = linear_to_srgb(linear.clamp_(0, 1))
+        if gray:
+            linear = luminance(linear)[..., None].expand_as(linear)
+        fg = linear_to_srgb(linear.clamp(0, 1))
         band = composite(fg, to_channels_last(m), to_channels_last(photo))[0]
         if dtype == torch.uint8:
             check_finite(band, "relit image")

@@ -59,3 +59,21 @@ def test_bands_relight_as_the_whole_photo(predict, photo, detail, keep_exposure,
     assert (eight.image.int() - quantised.int()).abs().max() <= 1
     outside = mask == 0
     assert torch.equal(eight.image[outside], (img * 255).round().to(torch.uint8).permute(1, 2, 0)[outside])
+
+
+def test_a_gray_photo_gives_a_gray_person_under_a_coloured_light(predict, photo):
+    from relightnet.pipeline.relight_bands import is_gray
+    from relightnet.sh import preset_light
+
+    img, mask = photo
+    gray = img.mean(0, keepdim=True).expand(3, -1, -1).contiguous()
+    assert is_gray(gray) and is_gray((gray * 255).round().byte()) and not is_gray(img)
+    crop = predict.crop(gray, mask)
+    for dtype in (torch.float32, torch.uint8):
+        src = gray if dtype == torch.float32 else (gray * 255).round().byte()
+        res = relight_over_photo(crop, src, preset_light("sunset"), dtype=dtype)
+        levels = res.image.float() * (255 if dtype == torch.float32 else 1)
+        assert (levels.amax(-1) - levels.amin(-1)).max() <= 1  # no chroma: within one level
+    coloured = relight_over_photo(predict.crop(img, mask), img, preset_light("sunset"))
+    spread = coloured.image.amax(-1) - coloured.image.amin(-1)
+    assert float(spread[mask > 0].mean()) > 0.05  # a coloured photo keeps its colour
