@@ -34,7 +34,11 @@ from .relight_image import to_model_order
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["relight_video"]
+__all__ = ["NO_PERSON_S", "relight_video"]
+
+#: Seconds of a segmented video without a person after which it is refused (a clip of nobody fails
+#: in seconds, not after all its frames).
+NO_PERSON_S = 2.0
 
 
 @torch.no_grad()
@@ -48,7 +52,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         video: input video file (its sound, if any, is carried over to ``out``).
         masks: folder of per-frame mask images (sorted) or a mask video, one per frame, or None
             (``mask_source``: the person segmentation, or the CNN's mask head); a frame whose mask
-            is empty (the person out of view) is written unchanged.
+            is empty (the person out of view) is written unchanged; segmented, a video with nobody
+            in its first :data:`NO_PERSON_S` seconds is refused then.
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
@@ -73,6 +78,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
     info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
+    # Segmented (no masks given): a clip with nobody in its first seconds is refused then, not at its end.
+    give_up = math.ceil(NO_PERSON_S * info.fps) if masks is None and mask_source == "segment" else None
     light = to_model_order(light, predict.lmax)
     smoother = state = None
     n = 0
@@ -84,6 +91,9 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 writer.write(img.permute(1, 2, 0))
                 empty.append(t)
                 n += 1
+                if give_up is not None and len(empty) == n >= give_up:
+                    raise InputError(f"{video}: no person found in its first {NO_PERSON_S:g} s (frames 0-{t}); "
+                                     "expected a video showing a person (give --masks if they enter later)")
                 continue
             try:  # the maps stay at the working size: pasted band by band
                 pred = predict.crop(img, mask)

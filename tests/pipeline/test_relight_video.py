@@ -121,3 +121,15 @@ def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys)
     with pytest.raises(InputError, match="smoothing"):  # the EMA weight is alpha=, no longer a number here
         relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "z.mkv",
                       smoothing=1.0, progress=False)
+
+
+def test_a_clip_of_nobody_is_refused_after_its_first_seconds(tmp_path, masked_clip, capsys):
+    from relightnet.pipeline.relight_video import NO_PERSON_S
+
+    video, _ = masked_clip(tmp_path, n=40)  # 40 frames at 12 fps of a block on noise: nobody to segment
+    out = tmp_path / "r.mp4"
+    assert main(["-q", "relight-video", str(video), "--light", "studio", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    last = int(NO_PERSON_S * 12) - 1
+    assert len(err) == 1 and f"no person found in its first 2 s (frames 0-{last})" in err[0], err
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["clip.mkv", "masks"]
