@@ -15,7 +15,7 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = out_file(args.out, inputs=(args.image, args.mask, args.light, args.checkpoint))
+    out = out_file(args.out, suffixes=(".png",), inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     light = load_single_light(args.light)  # a bad light fails before the photo is read and segmented
     # then: a bad photo fails before the heavy imports (and the person is found in it)
@@ -87,7 +87,7 @@ def register(sub) -> None:
                     "  relightnet relight-image person.png --mask mask.png --light sunset --out relit.png\n"
                     "  relightnet relight-image person.jpg --light light.npy --out relit.png --save-maps maps/\n"
                     "  relightnet relight-image person.png --mask m.png --light studio.exr --absolute --out r.png\n")
-    p.add_argument("image", help="photo (PNG/JPEG)")
+    p.add_argument("image", help="photo (PNG, JPEG, WebP, AVIF, TIFF, ...)")
     p.add_argument("--mask", help="person mask (white = person, or its alpha); default: the photo's alpha if it "
                    "has one, else the person segmentation (--mask-source)")
     add_mask_source_arg(p)

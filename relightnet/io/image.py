@@ -22,7 +22,7 @@ from ..checks import InputError, ShapeError, check_finite
 from ..color import linear_to_srgb, srgb_to_linear
 from .atomic import atomic_write
 from .limits import check_pixels, max_pixels
-from .probe import check_image_file
+from .probe import PHOTO_SUFFIXES, check_image_file
 
 __all__ = ["to_uint8", "write_image", "read_image", "read_image_alpha",
            "read_alpha", "read_mask"]
@@ -132,8 +132,14 @@ def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     except InputError:
         raise
     except av.InvalidDataError:
-        hint = "" if size else limit_hint()
-        raise InputError(f"{path}: cannot read {what}: the file is damaged or truncated{hint}") from None
+        if path.stat().st_size == 0:
+            raise InputError(f"{path}: is empty (0 bytes); expected {what}") from None
+        if size is None:  # no header this package knows: perhaps not an image at all
+            raise InputError(f"{path}: cannot read {what}: damaged, truncated or not an image (expected one of "
+                             f"{', '.join(PHOTO_SUFFIXES)})") from None
+        raise InputError(f"{path}: cannot read {what}: the file is damaged or truncated") from None
+    except av.error.OverflowError:  # the decoder's own pixel limit (a size no header told)
+        raise InputError(f"{path}: cannot read {what}{limit_hint()}") from None
     except (av.FFmpegError, OSError, ValueError) as e:
         hint = "" if size else limit_hint()
         raise InputError(f"{path}: cannot read {what} ({type(e).__name__}: {e}{hint})") from None

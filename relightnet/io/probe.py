@@ -254,6 +254,8 @@ def check_image_file(path: str | Path, what: str = "an image") -> tuple[int, int
     """
     path = Path(path)
     if not path.exists():
+        if path.is_symlink():
+            raise InputError(f"{path}: a symbolic link to nothing (broken or looping); expected {what}")
         raise InputError(f"{path}: no such file")
     if not path.is_file():
         raise InputError(f"{path}: is a folder or special file, not a file")

@@ -161,3 +161,18 @@ def test_truncated_image_is_refused_in_one_line(tmp_path, suffix):
     tail = tmp_path / f"tail{suffix}"
     tail.write_bytes(data + bytes(4096))
     assert read_image(tail).shape == (96, 131, 3)
+
+
+def test_empty_text_and_looping_files_say_what_they_are(tmp_path):
+    empty = tmp_path / "empty.png"
+    empty.write_bytes(b"")
+    text = tmp_path / "notes.jpg"
+    text.write_text("not an image at all\n" * 20)
+    (tmp_path / "a.png").symlink_to(tmp_path / "b.png")
+    (tmp_path / "b.png").symlink_to(tmp_path / "a.png")
+    for path, words in ((empty, r"is empty \(0 bytes\); expected an image"),
+                        (text, r"cannot read an image: damaged, truncated or not an image \(expected one of .png"),
+                        (tmp_path / "a.png", r"a symbolic link to nothing \(broken or looping\)")):
+        with pytest.raises(InputError, match=rf"{path.name}: {words}") as e:
+            read_image(path)
+        assert "MP are refused" not in str(e.value) and "Errno" not in str(e.value)
