@@ -19,9 +19,13 @@ The rules every command follows (see ``docs/design.md``, "Command line"):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 
 from . import __version__
 
@@ -119,6 +123,29 @@ def error_line(e: BaseException) -> str | None:
     return f"{type(e).__name__}: {first}"
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C, so a terminated command cleans up as an interrupted one."""
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Terminated` (where its handler is the default, in the
+    main thread): the temporary files and new folders of the command are removed on the way out."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        yield
+        return
+
+    def stop(signum, frame):
+        raise Terminated()
+
+    signal.signal(signal.SIGTERM, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``relightnet`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
     parser = build_parser()
@@ -134,8 +161,11 @@ def main(argv: list[str] | None = None) -> int:
     from ._cli.paths import made_folders
 
     try:
-        with made_folders():  # a command that fails removes the output folders it made, if still empty
+        with made_folders(), _terminate_as_interrupt():  # a failed command removes the folders it made
             return int(args.func(args) or 0)
+    except Terminated:
+        sys.stderr.write(f"relightnet {args.command}: terminated\n")
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         hint = getattr(args, "interrupt_hint", None)
         sys.stderr.write(f"relightnet {args.command}: interrupted{'; ' + hint(args) if hint else ''}\n")

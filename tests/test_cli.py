@@ -180,3 +180,30 @@ def test_ctrl_c_in_train_is_one_line_with_the_resume_hint(tmp_path, tiny_dataset
     assert err.strip().splitlines()[-1] == (f"relightnet train: interrupted; run the same command with --resume to "
                                             f"continue from {run}/last.pt")
     assert "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_sigterm_is_as_clean_as_ctrl_c(tmp_path, masked_clip):
+    """A real SIGTERM (what `kill`, systemd and container runtimes send) while relight-video writes:
+    one line, status 143, no temporary file and no folder the command made."""
+    video, masks = masked_clip(tmp_path, n=400)
+    out_dir = tmp_path / "new" / "deeper"
+    child = subprocess.Popen([sys.executable, "-m", "relightnet", "relight-video", str(video), "--masks", str(masks),
+                              "--light", "studio", "--out", str(out_dir / "r.mp4")], env=ENV,
+                             preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        end = time.monotonic() + 300
+        while not (out_dir.is_dir() and any(out_dir.iterdir())) and child.poll() is None and time.monotonic() < end:
+            time.sleep(0.02)
+        assert child.poll() is None, child.communicate()[1]
+        time.sleep(0.5)  # frames are being written to the hidden temporary file
+        child.send_signal(signal.SIGTERM)
+        _, err = child.communicate(timeout=120)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    assert child.returncode == 143, err
+    assert err.strip().splitlines()[-1] == "relightnet relight-video: terminated"
+    assert not (tmp_path / "new").exists()
