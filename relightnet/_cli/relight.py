@@ -17,7 +17,10 @@ logger = logging.getLogger("relightnet.relight")
 def run(args: argparse.Namespace) -> int:
     out = out_file(args.out, suffixes=(".png",), inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
-    light = load_single_light(args.light)  # a bad light fails before the photo is read and segmented
+    from ..io.probe import check_image_file
+
+    check_image_file(args.image, "an image")  # an oversized or broken photo is refused before torch loads
+    light = load_single_light(args.light)  # a bad light fails before the photo is decoded and segmented
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
     from ..io import write_image

@@ -138,7 +138,7 @@ def test_a_folder_without_readable_photos_or_people_is_refused(tmp_path, person_
     with pytest.raises(InputError, match="no such folder"):
         check(tmp_path / "missing")
     (tmp_path / "a.txt").write_text("x")
-    with pytest.raises(InputError, match=r"no photos \(.png, .jpg, .jpeg\)"):
+    with pytest.raises(InputError, match=r"no photos \(.png, .jpg, .jpeg, .webp"):
         check(tmp_path)
     (tmp_path / "b.jpg").write_bytes(b"junk")
     with pytest.raises(InputError, match=f"{tmp_path}: no readable photos"):
