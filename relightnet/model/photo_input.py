@@ -8,12 +8,14 @@ around a mask (the segmentation's, a pixel or two off) and resamples it to the w
 and in a video the person may cover few pixels. A network trained on the renders alone learns
 to read the light from those exact silhouette pixels: on the test items its light error is
 0.17 through the renders, 0.47 through the same items' composites and 0.41 when the render is
-only re-framed (issue 23, session 13, README "The light of a photo as the package sees it").
+only re-framed (BENCHMARKS.md, "The light of a photo").
 
 :class:`PhotoInput` turns an item into what the package's own path gives the network: the
 composite instead of the render (probability ``composite``), the item shrunk first
-(``source_scale``: a person covering fewer pixels), the mask thresholded at that size and grown
-or shrunk by up to ``mask_px`` pixels, and :func:`~relightnet.model.inference.frame_person`
+(``source_scale``: a person covering fewer pixels), the mask thresholded at that size, grown
+or shrunk by up to ``mask_px`` pixels and, with probability ``mask_flaws``, given the flaws a
+person segmentation has on real photos (:func:`mask_flaws`: holes, and slivers of background
+stuck to the border), and :func:`~relightnet.model.inference.frame_person`
 with a padding drawn from ``pad``. The targets (every spatial field) are resampled onto the
 same box from the item's full resolution, so the losses compare like with like; the network
 input goes in ``sample["input"]`` (4, S, S), which :func:`~relightnet.model.training.batch_to_input`
@@ -34,7 +36,10 @@ from ..data.augment import SPATIAL_FIELDS, resize
 from .inference import frame_person
 from .network import normalize_input
 
-__all__ = ["PhotoInput", "as_photo", "morph_mask", "photo_input"]
+__all__ = ["PhotoInput", "as_photo", "mask_flaws", "morph_mask", "photo_input"]
+
+#: Most flaws per flawed mask, and their largest radius (a fraction of the mask box's larger side).
+MAX_FLAWS, FLAW_RADIUS = 3, 0.08
 
 #: Fields resampled as labels (then thresholded at 0.5), not as values.
 _MASKS = ("mask",)
@@ -57,6 +62,39 @@ def morph_mask(mask: torch.Tensor, pixels: int) -> torch.Tensor:
     return out[0, 0]
 
 
+def mask_flaws(mask: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
+    """A binary mask with the flaws of a person segmentation: 1 to :data:`MAX_FLAWS` disks, each
+    either a hole (centred on a person pixel, removed) or a sliver of background (centred on a
+    border pixel, added), of radius 1 px to :data:`FLAW_RADIUS` of the mask box's larger side.
+
+    Args:
+        mask: (H, W) in {0, 1}.
+        generator: the draws' source (the same generator state gives the same flaws).
+
+    Returns:
+        (H, W) float in {0, 1}; the mask itself where a hole would have emptied it.
+    """
+    m = mask > 0.5
+    ys, xs = torch.nonzero(m, as_tuple=True)
+    if ys.numel() == 0:
+        return mask.float()
+    inner = -F.max_pool2d(-m.float()[None, None], 3, 1, 1)[0, 0] > 0.5
+    by, bx = torch.nonzero(m & ~inner, as_tuple=True)  # border pixels (never empty when m is not)
+    side = max(int(ys.max() - ys.min()), int(xs.max() - xs.min())) + 1
+    h, w = m.shape
+    yy, xx = torch.meshgrid(torch.arange(h), torch.arange(w), indexing="ij")
+    out = m.clone()
+    n = 1 + int(torch.randint(MAX_FLAWS, (1,), generator=generator))
+    for u in torch.rand(n, 3, generator=generator, dtype=torch.float64).tolist():
+        hole = u[0] < 0.5
+        py, px = (ys, xs) if hole else (by, bx)
+        i = min(int(u[1] * py.numel()), py.numel() - 1)
+        r = 1.0 + u[2] * max(0.0, FLAW_RADIUS * side - 1.0)
+        disk = (yy - int(py[i])) ** 2 + (xx - int(px[i])) ** 2 <= r * r
+        out = out & ~disk if hole else out | disk
+    return out.float() if bool(out.any()) else mask.float()
+
+
 def _box_grid(box, scale: float, size: int, out: int, dtype) -> torch.Tensor:
     """(1, S, S, 2) ``grid_sample`` positions, in an item of ``size`` × ``size``, of the S × S
     (S = ``out``) output pixels of a :class:`~relightnet.model.inference.CropBox` drawn on the item
@@ -68,7 +106,8 @@ def _box_grid(box, scale: float, size: int, out: int, dtype) -> torch.Tensor:
     return torch.stack([gx, gy], -1)[None].to(dtype)
 
 
-def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: float, size: int | None = None) -> dict:
+def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: float, size: int | None = None,
+             flaws: int | None = None) -> dict:
     """One item framed as the package frames a photo (module docstring).
 
     Args:
@@ -80,6 +119,8 @@ def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: flo
         pad: the framing's padding (fraction of the mask box's larger side).
         size: the side S of the framed item (None: the item's own, H). An item made larger than
             the network's working size is framed *down* to it, as a photo is.
+        flaws: a seed for :func:`mask_flaws` on the input's mask (None: none). The targets keep
+            the exact mask: the network learns to see past the flaws.
 
     Returns:
         The item on the framed box at S × S: every spatial field resampled (``mask`` thresholded),
@@ -102,6 +143,8 @@ def as_photo(sample: dict, composite: bool, scale: float, mask_px: int, pad: flo
     seen = morph_mask(mask[0] > 0.5, mask_px)
     if not bool((seen > 0.5).any()):  # shrunk away: the thresholded mask as it is
         seen = (mask[0] > 0.5).float()
+    if flaws is not None:
+        seen = mask_flaws(seen, torch.Generator().manual_seed(flaws))
     if not bool((seen > 0.5).any()):
         raise InputError("as_photo: the item's mask is empty at the drawn scale")
     out_size = h if size is None else int(size)
@@ -128,6 +171,7 @@ class PhotoInput:
         mask_px: the mask is grown or shrunk by a uniform draw of −mask_px … mask_px pixels.
         pad: (lo, hi) range of the framing's padding.
         prob: probability that an item is framed as a photo at all (else it stays the render).
+        mask_flaws: probability that a photo-framed item's input mask gets :func:`mask_flaws`.
         size: the network's working size S when the items are larger (None: the items' own size).
             An item is then always framed down to S × S; one that is not drawn as a photo is its
             render framed the same way, unshrunk, its mask as it is.
@@ -139,11 +183,13 @@ class PhotoInput:
     pad: tuple = (0.03, 0.08)
     prob: float = 1.0
     size: int | None = None
+    mask_flaws: float = 0.0
 
     def __post_init__(self) -> None:
         lo, hi = (float(v) for v in self.source_scale)
-        if not (0.0 <= self.composite <= 1.0 and 0.0 <= self.prob <= 1.0):
-            raise InputError(f"photo: composite and prob are probabilities, got {self.composite}, {self.prob}")
+        if not (0.0 <= self.composite <= 1.0 and 0.0 <= self.prob <= 1.0 and 0.0 <= self.mask_flaws <= 1.0):
+            raise InputError(f"photo: composite, prob and mask_flaws are probabilities, got {self.composite}, "
+                             f"{self.prob}, {self.mask_flaws}")
         if not 0.0 < lo <= hi <= 1.0:
             raise InputError(f"photo.source_scale: expected 0 < lo <= hi <= 1, got {list(self.source_scale)}")
         if isinstance(self.mask_px, bool) or not isinstance(self.mask_px, int) or not 0 <= self.mask_px <= 4:
@@ -160,10 +206,14 @@ class PhotoInput:
         px = min(self.mask_px, int(u[3] * (2 * self.mask_px + 1)) - self.mask_px)
         pad = float(self.pad[0]) + u[4] * (float(self.pad[1]) - float(self.pad[0]))
         person = bool((sample["mask"] > 0.5).any())
+        flaws = None
+        if self.mask_flaws > 0:  # drawn only when asked: the other configs keep their random stream
+            f = torch.rand(2, generator=generator, dtype=torch.float64).tolist()
+            flaws = int(f[1] * 2**31) if f[0] < self.mask_flaws else None
         if u[0] < self.prob and person:
             try:
                 return as_photo(sample, u[1] < self.composite and "image_composite" in sample,
-                                math.exp(lo + u[2] * (hi - lo)), px, pad, self.size)
+                                math.exp(lo + u[2] * (hi - lo)), px, pad, self.size, flaws)
             except InputError:  # a sliver of a person that the shrinking lost: the render, as below
                 pass
         if self.size is not None and self.size != sample["image"].shape[-1]:

@@ -7,7 +7,7 @@ from relightnet.checks import InputError
 from relightnet.color import linear_to_srgb
 from relightnet.model.inference import frame_person
 from relightnet.model.network import normalize_input
-from relightnet.model.photo_input import PhotoInput, as_photo, morph_mask
+from relightnet.model.photo_input import FLAW_RADIUS, PhotoInput, as_photo, mask_flaws, morph_mask
 from relightnet.model.training import TrainConfig, TrainData, batch_to_input, train
 
 pytestmark = pytest.mark.slow  # a generated dataset
@@ -99,9 +99,41 @@ def test_an_item_larger_than_the_working_size_is_framed_down_as_a_photo(items):
     assert empty["input"].shape == (4, h // 2, h // 2) and empty["transport"].shape[-1] == h // 2
 
 
+def test_mask_flaws_are_holes_and_slivers_near_the_person_and_seeded():
+    m = torch.zeros(64, 64)
+    m[12:52, 20:44] = 1  # a 40 x 24 person
+    near = morph_mask(m, int(FLAW_RADIUS * 40) + 2)
+    changed = 0
+    for seed in range(40):
+        a = mask_flaws(m, torch.Generator().manual_seed(seed))
+        assert torch.equal(a, mask_flaws(m, torch.Generator().manual_seed(seed)))  # seeded
+        assert set(a.unique().tolist()) <= {0.0, 1.0} and a.any()
+        assert not bool((a * (1 - near)).any())  # slivers stay within a flaw's reach of the person
+        changed += int((a != m).any())
+        grown, cut = bool(((a - m) > 0).any()), bool(((m - a) > 0).any())
+        assert grown or cut
+    assert changed == 40
+    # An empty mask stays empty; a one-pixel person is never removed entirely.
+    assert not mask_flaws(torch.zeros(8, 8), torch.Generator().manual_seed(0)).any()
+    dot = torch.zeros(8, 8)
+    dot[4, 4] = 1
+    assert all(mask_flaws(dot, torch.Generator().manual_seed(s)).any() for s in range(10))
+
+
+def test_flawed_masks_reach_the_input_only(items):
+    item = _item(items)
+    clean = as_photo(item, True, 0.8, 0, 0.05)
+    flawed = as_photo(item, True, 0.8, 0, 0.05, flaws=3)
+    assert torch.equal(flawed["mask"], clean["mask"])  # the targets keep the exact mask
+    assert not torch.equal(flawed["input"][3], clean["input"][3])  # the input's mask channel has the flaws
+    draws = PhotoInput(composite=1.0, mask_flaws=1.0)
+    a, b = (draws(item, torch.Generator().manual_seed(5)) for _ in range(2))
+    assert torch.equal(a["input"], b["input"])
+
+
 @pytest.mark.parametrize("bad", [{"composite": 1.5}, {"source_scale": (0.0, 1.0)}, {"source_scale": (0.8, 0.5)},
                                  {"mask_px": -1}, {"mask_px": 1.5}, {"pad": (0.1, 0.05)}, {"prob": -0.1},
-                                 {"size": 40}, {"size": True}])
+                                 {"size": 40}, {"size": True}, {"mask_flaws": 1.5}])
 def test_bad_photo_settings_fail_clearly(bad):
     with pytest.raises(InputError, match="photo"):
         PhotoInput(**bad)
