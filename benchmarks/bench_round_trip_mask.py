@@ -54,7 +54,8 @@ def main() -> None:
     photos = [load_photo(p)[0] for p in list_photos(args.photos)]
     masks = [(segment_person(im).mask > 0.5).float() for im in photos]
     rows = [[c, len(photos)] + [round_trip(photos, masks, c, k) for k in args.erode] for c in args.checkpoints]
-    heads = [f"round trip, mask {'grown' if k < 0 else 'shrunk'} {abs(k)} px" if k else "round trip" for k in args.erode]
+    heads = [f"round trip, mask {'grown' if k < 0 else 'shrunk'} {abs(k)} px" if k else "round trip"
+             for k in args.erode]
     print(table(["model", "photos"] + heads, rows))
 
 

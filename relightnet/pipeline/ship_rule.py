@@ -76,7 +76,8 @@ def ship_figures(model, data, clips, photos, device: str = "cpu") -> dict:
     out["compare_light_error"] = float(summary["light"]["raw"]["relative"])
     checks = photo_checks(model, photos, device=device)["median"]
     out |= {"photo_round_trip": checks["round_trip"], "photo_side_contrast": checks["side_contrast"],
-            "photo_chroma_shift_p99": checks["chroma_shift_p99"], "photo_fine_chroma_ratio": checks["fine_chroma_ratio"]}
+            "photo_chroma_shift_p99": checks["chroma_shift_p99"],
+            "photo_fine_chroma_ratio": checks["fine_chroma_ratio"]}
     return out
 
 
