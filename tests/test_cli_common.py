@@ -2,12 +2,14 @@
 rule, input checks and argument types shared by every command."""
 
 import argparse
+from pathlib import Path
 
 import pytest
 import torch
 
 from relightnet._cli import argtypes, inputs, options, paths
 from relightnet.checks import InputError
+from relightnet.cli import main
 from relightnet.sh import save_light
 
 
@@ -119,3 +121,44 @@ def test_shared_options_list_their_choices():
     text = " ".join(p.format_help().split())
     assert "rest, tpose, apose, arms_down, arms_crossed" in text and "walk, turn, idle, arm_raise" in text
     assert all(name in options.LIGHT_HELP for name in ("city", "studio", "sunset"))
+
+
+def _unwritable_folder(tmp_path):
+    """A folder this user cannot create files in: a 0o555 folder, or (root writes those) /sys or /proc."""
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    for folder in (ro, Path("/sys"), Path("/proc")):
+        try:
+            (folder / ".probe-test").touch()
+        except OSError:
+            return folder
+        (folder / ".probe-test").unlink()
+    raise AssertionError("no folder here refuses a new file")
+
+
+def test_an_unwritable_output_folder_is_refused_before_work(tmp_path, capsys):
+    folder = _unwritable_folder(tmp_path)
+    with pytest.raises(InputError, match=r"^OUT .*x.npz: the folder .* is not writable \("):
+        paths.out_file(folder / "x.npz", "OUT")
+    if folder.is_relative_to(tmp_path):
+        with pytest.raises(InputError, match="is not writable"):
+            paths.out_dir(folder)
+    rc = main(["light", "show", "studio", "--out", str(folder / "x.png")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1 and len(err) == 1 and "the folder" in err[0] and "is not writable" in err[0], err
+    assert ".tmp" not in err[0]
+    assert not list(tmp_path.rglob(".relightnet-probe-*"))
+
+
+@pytest.mark.parametrize("argv", [
+    ["light", "show", "studio"],
+    ["render", "teapot.obj", "--light", "studio"],
+    ["render-body", "--light", "studio"],
+    ["synth", "--preview", "data"],
+])
+def test_a_wrong_output_suffix_is_refused_before_work(argv, tmp_path, capsys):
+    rc = main([*argv, "--out", str(tmp_path / "x.jpg")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1 and len(err) == 1 and "--out" in err[0] and "expected a file ending in .png" in err[0], err
+    assert list(tmp_path.iterdir()) == []

@@ -33,7 +33,7 @@ def run_show(args: argparse.Namespace) -> int:
     from ..sh.io import load_light
     from ..sh.visualize import light_preview
 
-    out = out_file(args.out)
+    out = out_file(args.out, suffixes=(".png",))
     sh = load_light(args.light, lmax=args.lmax)
     env = _envmap_of(args.light) if sh.dim() == 2 else None
     img = light_preview(sh, size=args.size, env=env, exposure=args.exposure)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -54,6 +55,20 @@ def _check_writable_parent(path: Path, option: str) -> None:
     run = _RUN.get()
     if run is not None:
         run.extend(reversed(missing))
+    _probe_writable(parent, path, option)
+
+
+def _probe_writable(folder: Path, path: Path, option: str) -> None:
+    """Create and remove a file in ``folder`` (permission bits alone do not tell: root, read-only
+    mounts, immutable folders); an InputError naming ``option`` if that fails."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".relightnet-probe-", dir=folder)
+    except OSError as e:
+        raise InputError(f"{option} {path}: the folder {folder} is not writable "
+                         f"({(e.strerror or str(e)).lower()})") from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
 
 
 def in_path(path: str | Path, option: str, expected: str = "an existing file or folder") -> Path:
@@ -123,4 +138,6 @@ def out_dir(path: str | Path, option: str = "--out") -> Path:
     if p.exists() and not p.is_dir():
         raise InputError(f"{option} {p}: is a file; expected a folder (made if needed)")
     _check_writable_parent(p, option)
+    if p.is_dir():
+        _probe_writable(p, p, option)
     return p

@@ -49,7 +49,7 @@ def run_render(args: argparse.Namespace) -> int:
     from ..io import write_image
     from ..render.jobs import render_mesh_file
 
-    out = out_file(args.out)
+    out = out_file(args.out, suffixes=(".png",))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     light = load_single_light(args.light, lmax=args.lmax)
     r = render_mesh_file(args.mesh, light, size=args.res, occlusion=args.occlusion, bounces=args.bounces,
@@ -93,7 +93,7 @@ def _albedo(body):
 def _body_outputs(args) -> tuple[Path, Path | None, Path | None]:
     """(--out, --mask-out, --save-maps) by the output rule: videos for a motion (a mask video
     beside the video), else an image (a mask image beside it)."""
-    out = out_file(args.out)
+    out = out_file(args.out, suffixes=(".png", *_VIDEO))
     video = out.suffix.lower() in _VIDEO
     if args.motion and not video:
         from ..checks import InputError

@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     if args.preview:
         from ..data.preview import preview
 
-        path = preview(args.preview, out_file(args.out) if args.out else None, n=8 if args.n is None else args.n,
+        path = preview(args.preview, out_file(args.out, suffixes=(".png",)) if args.out else None, n=8 if args.n is None else args.n,
                        split=args.split)
         logger.info("wrote %s", path)
         return 0
