@@ -104,8 +104,8 @@ def run(args: argparse.Namespace) -> int:
     if args.preview:
         from ..data.preview import preview
 
-        path = preview(args.preview, out_file(args.out, suffixes=(".png",)) if args.out else None, n=8 if args.n is None else args.n,
-                       split=args.split)
+        out = out_file(args.out, suffixes=(".png",)) if args.out else None
+        path = preview(args.preview, out, n=8 if args.n is None else args.n, split=args.split)
         logger.info("wrote %s", path)
         return 0
     if not args.out:
