@@ -61,9 +61,9 @@ def estimate_video_evidence(model, video, masks=None, progress: bool = True, mas
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --target-masks or use 'segment'")
-    info, _, frames = video_masks(video, masks, mask_source)
+    _, n_frames, frames = video_masks(video, masks, mask_source)
     lights, evs, priors = [], [], []
-    for _, img, mask in tqdm(frames, total=info.n_frames or None, desc="estimate light",
+    for _, img, mask in tqdm(frames, total=n_frames or None, desc="estimate light",
                              unit="frame", disable=not progress):
         light, ev, prior = predict.light_evidence(img, mask)
         lights.append(light.float().cpu())

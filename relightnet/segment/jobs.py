@@ -98,7 +98,7 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, 
            steady: float) -> list:
     from tqdm import tqdm
 
-    from ..io import VideoWriter, read_video, video_info, write_image
+    from ..io import VideoWriter, count_frames, read_video, video_info, write_image
     from .video import track_person
 
     info = video_info(video)
@@ -107,7 +107,7 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, 
     results, empty = [], []
     as_video = out.suffix.lower() in MASK_VIDEO_SUFFIXES
     with VideoWriter(out, fps=info.fps) if as_video else _folder_out(out) as dest:
-        for t, (img, res) in enumerate(tqdm(tracked, total=info.n_frames or None, desc="segment", unit="frame",
+        for t, (img, res) in enumerate(tqdm(tracked, total=count_frames(video) or None, desc="segment", unit="frame",
                                             disable=not progress)):
             results.append(res)
             if res is None:

@@ -78,12 +78,12 @@ def video_masks(video, masks=None, source: str = "segment", allow_empty: bool = 
         allow_empty: pass frames without the person on with an empty mask instead of failing.
 
     Returns:
-        (:class:`~relightnet.io.VideoInfo`, frame count (0 when the container does not say),
+        (:class:`~relightnet.io.VideoInfo`, frame count (counted from the packets, :func:`~relightnet.io.count_frames`),
         iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W) or None)).
         The iterator raises :class:`InputError` naming the frame when a mask is empty (or no
         person is found) and ``allow_empty`` is False.
     """
-    from ..io import frames_with_masks, read_video, video_info
+    from ..io import count_frames, frames_with_masks, read_video, video_info
 
     check_mask_source(source)
     if masks is not None:
@@ -92,7 +92,7 @@ def video_masks(video, masks=None, source: str = "segment", allow_empty: bool = 
     frames = (torch.from_numpy(f).permute(2, 0, 1).float().div_(255) for f in read_video(video))
     if source == "head":
         logger.info("no masks given: the model's mask head finds the person in %s", video)
-        return info, info.n_frames, ((t, img, None) for t, img in enumerate(frames))
+        return info, count_frames(video), ((t, img, None) for t, img in enumerate(frames))
     logger.info("no masks given: the person segmentation finds the person in %s", video)
     tracked = track_person(frames, models, allow_empty=allow_empty, name=str(video))
-    return info, info.n_frames, ((t, img, _mask_of(img, res)) for t, (img, res) in enumerate(tracked))
+    return info, count_frames(video), ((t, img, _mask_of(img, res)) for t, (img, res) in enumerate(tracked))

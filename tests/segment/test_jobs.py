@@ -45,3 +45,36 @@ def test_segment_files_reads_every_photo_type_and_names_what_it_skips(astronaut,
         res = segment_files(photos, tmp_path / "masks", person_models)
     assert len(res) == 1 and (tmp_path / "masks").is_dir()
     assert "1 file(s) that are not photos skipped (notes.txt)" in caplog.text
+
+
+def _lying_mp4(path, n: int = 6):
+    """An n-frame mp4 whose ``stts`` claims 20 million frames."""
+    import struct
+
+    import numpy as np
+
+    from relightnet.io import VideoWriter
+
+    with VideoWriter(path, fps=10) as w:
+        for _ in range(n):
+            f = np.full((64, 64, 3), 80, np.uint8)
+            f[16:48, 20:44] = 200
+            w.write(f)
+    data = bytearray(path.read_bytes())
+    at = data.find(b"stts")
+    data[at + 12:at + 16] = struct.pack(">I", 20_000_000)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_progress_total_is_the_frames_really_in_the_file(person_models, tmp_path, capsys):
+    from relightnet.io import video_info
+    from relightnet.segment.sources import video_masks
+
+    video = _lying_mp4(tmp_path / "lie.mp4")
+    assert video_info(video).n_frames == 20_000_000  # what the header claims
+    with pytest.raises(InputError, match="no person found in any frame"):  # the bar ran over every frame first
+        segment_files(video, tmp_path / "m.mkv", person_models, allow_empty=True, progress=True)
+    err = capsys.readouterr().err
+    assert "6/6" in err and "20000000" not in err
+    assert video_masks(video, source="head")[1] == 6
