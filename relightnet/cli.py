@@ -22,6 +22,7 @@ import argparse
 import contextlib
 import importlib
 import logging
+import os
 import signal
 import sys
 import threading
@@ -146,8 +147,18 @@ def _terminate_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+def keep_temp_folder_clean() -> None:
+    """Before onnxruntime or torch is imported: ONNX Runtime's telemetry off (it leaves a ``.ses``
+    file in the temp folder) and torch's kernel cache (``import torch._dynamo`` makes
+    ``torchinductor_<user>/`` there) in the user's cache folder; values the user set are kept."""
+    os.environ.setdefault("ORT_DISABLE_TELEMETRY", "1")
+    cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    os.environ.setdefault("TORCHINDUCTOR_CACHE_DIR", os.path.join(cache, "relightnet", "torchinductor"))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``relightnet`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
+    keep_temp_folder_clean()
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(args.verbose, args.quiet)

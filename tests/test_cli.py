@@ -207,3 +207,25 @@ def test_sigterm_is_as_clean_as_ctrl_c(tmp_path, masked_clip):
     assert child.returncode == 143, err
     assert err.strip().splitlines()[-1] == "relightnet relight-video: terminated"
     assert not (tmp_path / "new").exists()
+
+
+def test_commands_leave_nothing_in_the_temp_folder(tmp_path):
+    """ONNX Runtime's telemetry (``.ses``) and torch's kernel cache (``torchinductor_<user>/``, made by
+    ``import torch._dynamo``) are kept out of a fresh temp folder."""
+    tmp, home = tmp_path / "tmp", tmp_path / "home"
+    tmp.mkdir()
+    home.mkdir()
+    env = {k: v for k, v in ENV.items() if k not in ("TORCHINDUCTOR_CACHE_DIR", "ORT_DISABLE_TELEMETRY",
+                                                      "XDG_CACHE_HOME")}
+    env.update(TMPDIR=str(tmp), HOME=str(home))
+    photo = tmp_path / "p.png"
+    subprocess.run([sys.executable, "-c", "import numpy as np; from relightnet.io import write_image; "
+                    f"write_image({str(photo)!r}, np.full((64, 48, 3), 128, np.uint8))"], env=ENV, check=True,
+                   timeout=120)
+    for argv, rc in ((["segment", str(photo), "--out", str(tmp_path / "m.png")], 1),  # ONNX Runtime ran: nobody
+                     (["render-body", "--light", "studio", "--res", "32", "--n-dirs", "8",
+                       "--out", str(tmp_path / "b.png")], 0)):  # roma, hence torch._dynamo
+        r = subprocess.run([sys.executable, "-m", "relightnet", "-q", *argv], capture_output=True, text=True,
+                           env=env, cwd=tmp_path, timeout=300)
+        assert r.returncode == rc and (rc == 0 or "no person found" in r.stderr), r.stderr
+        assert sorted(p.name for p in tmp.iterdir()) == [], argv
