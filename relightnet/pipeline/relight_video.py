@@ -34,11 +34,21 @@ from .relight_image import to_model_order
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["NO_PERSON_S", "relight_video"]
+__all__ = ["NO_PERSON_S", "PERSON_SHARE", "person_in_most", "relight_video"]
 
-#: Seconds of a segmented video without a person after which it is refused (a clip of nobody fails
-#: in seconds, not after all its frames).
+#: Seconds at the start of a segmented video in most of whose frames a person must be found, else it is
+#: refused then (a clip of nobody fails in seconds, not after all its frames).
 NO_PERSON_S = 2.0
+#: The least share of a frame a mask covers for the frame to count as showing a person.
+PERSON_SHARE = 0.005
+
+
+def person_in_most(shares, min_share: float = PERSON_SHARE) -> bool:
+    """Whether more than half of the frames show a person: ``shares`` (T,) the share of each frame
+    its mask covers, each counted when at least ``min_share`` (a few frames of a segmentation's
+    false positives on a clip of nobody do not count as a person)."""
+    shares = list(shares)
+    return 2 * sum(float(s) >= min_share for s in shares) > len(shares)
 
 
 @torch.no_grad()
@@ -84,16 +94,19 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     smoother = state = None
     n = 0
     empty: list[int] = []
+    shares: list[float] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
                                  disable=not progress):
+            if give_up is not None and t < give_up:
+                shares.append(float(mask.float().mean()))
+                if t == give_up - 1 and not person_in_most(shares):
+                    raise InputError(f"{video}: no person found in most of its first {NO_PERSON_S:g} s (frames 0-{t}); "
+                                     "expected a video showing a person (give --masks if they enter later)")
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
                 writer.write(img.permute(1, 2, 0))
                 empty.append(t)
                 n += 1
-                if give_up is not None and len(empty) == n >= give_up:
-                    raise InputError(f"{video}: no person found in its first {NO_PERSON_S:g} s (frames 0-{t}); "
-                                     "expected a video showing a person (give --masks if they enter later)")
                 continue
             try:  # the maps stay at the working size: pasted band by band
                 pred = predict.crop(img, mask)

@@ -131,5 +131,18 @@ def test_a_clip_of_nobody_is_refused_after_its_first_seconds(tmp_path, masked_cl
     assert main(["-q", "relight-video", str(video), "--light", "studio", "--out", str(out)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     last = int(NO_PERSON_S * 12) - 1
-    assert len(err) == 1 and f"no person found in its first 2 s (frames 0-{last})" in err[0], err
+    assert len(err) == 1 and f"no person found in most of its first 2 s (frames 0-{last})" in err[0], err
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["clip.mkv", "masks"]
+
+
+def test_a_few_false_positives_do_not_make_a_person():
+    from relightnet.pipeline.relight_video import PERSON_SHARE, person_in_most
+
+    nobody = [0.0] * 24
+    for t in (0, 3, 4, 9):  # a segmentation's false positives: a few frames, even large ones
+        nobody[t] = 0.2
+    assert not person_in_most(nobody)
+    assert not person_in_most([PERSON_SHARE / 2] * 24)  # specks below the share are nobody
+    assert person_in_most([0.0] * 11 + [0.1] * 13)  # in view for most of the frames
+    assert not person_in_most([0.0] * 12 + [0.1] * 12)  # half is not most
+    assert person_in_most([PERSON_SHARE] * 3)
