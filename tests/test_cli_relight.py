@@ -73,3 +73,21 @@ def test_an_output_equal_to_the_input_is_refused_and_the_original_kept(tmp_path,
         line = _one_line(capsys, main(cmd))
         assert "is the input" in line, (cmd, line)
     assert photo.read_bytes() == before and (tmp_path / "p.mp4").read_bytes() == before_video
+
+
+def test_a_display_p3_photo_gives_a_display_p3_output(tmp_path):
+    """relight-image carries the photo's ICC profile to its PNG (io.icc)."""
+    import numpy as np
+    from PIL import Image
+
+    from relightnet.io import write_image
+    from relightnet.io.icc import read_icc
+
+    from .io.icc_profiles import display_p3
+
+    icc = display_p3()
+    Image.fromarray(np.full((48, 40, 3), (200, 120, 90), np.uint8)).save(tmp_path / "p.png", icc_profile=icc)
+    write_image(tmp_path / "m.png", np.full((48, 40, 3), 255, np.uint8), srgb=False)
+    assert main(["-q", "relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"),
+                 "--light", "studio", "--out", str(tmp_path / "r.png")]) == 0
+    assert read_icc(tmp_path / "r.png") == icc

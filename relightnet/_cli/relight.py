@@ -24,6 +24,7 @@ def run(args: argparse.Namespace) -> int:
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
     from ..io import write_image
+    from ..io.icc import photo_profile
     from ..pipeline.backends import make_predictor
     from ..pipeline.relight_image import relight_image
 
@@ -36,7 +37,8 @@ def run(args: argparse.Namespace) -> int:
         logger.info("no --mask: the person was found by the model's mask head")
     relit, kept = res.image, {"prediction": res.prediction, "albedo": res.albedo, "light": res.light}
     del res  # from here each full-size map is freed once written
-    write_image(out, relit, srgb=False, alpha=alpha)  # a cut-out stays a cut-out
+    # a cut-out stays a cut-out; a Display-P3 photo gives a Display-P3 file (io.icc)
+    write_image(out, relit, srgb=False, alpha=alpha, icc=photo_profile(args.image))
     del relit
     if maps is not None:
         _save_maps(maps, kept)

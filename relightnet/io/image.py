@@ -2,10 +2,11 @@
 
 Images are channels-last ``(H, W, C)`` tensors. Linear float images are
 gamma-encoded (exact piecewise sRGB) only when written to 8-bit files.
-Encoding and decoding use PyAV (FFmpeg's ``png`` encoder and its decoders), so
-the project needs no other image library; files are written atomically. Decoded
+Encoding and decoding use PyAV (FFmpeg's ``png`` encoder and its decoders); ICC
+profiles are read and applied with Pillow's ImageCms; files are written atomically. Decoded
 images are turned upright as their metadata says (a phone photo's EXIF
-orientation, a phone video's rotation), so every reader returns what a viewer shows.
+orientation, a phone video's rotation), and converted to sRGB from the ICC profile
+they embed (:mod:`relightnet.io.icc`), so every reader returns what a viewer shows.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import torch
 from ..checks import InputError, ShapeError, check_finite
 from ..color import linear_to_srgb, srgb_to_linear
 from .atomic import atomic_write
+from .icc import check_profile, embed_icc, profile_to_srgb, read_icc, srgb_to_profile
 from .limits import check_pixels, max_pixels
 from .probe import PHOTO_SUFFIXES, check_image_file
 
@@ -146,7 +148,7 @@ def _decode_frame(path: str | os.PathLike, what: str) -> av.VideoFrame:
     raise InputError(f"{path}: not {what} (no frame decoded)")
 
 
-def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None) -> Path:
+def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None, icc: bytes | None = None) -> Path:
     """Write an 8-bit PNG atomically.
 
     Args:
@@ -156,6 +158,9 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None) -> 
             [0, 1]); uint8 values are written unchanged.
         srgb: gamma-encode float input with :func:`linear_to_srgb`.
         alpha: optional (H, W) coverage in [0, 1] (never gamma-encoded): an RGBA PNG.
+        icc: optional ICC profile (the photo's, :func:`~relightnet.io.icc.photo_profile`): the sRGB
+            pixels are converted into it and the file embeds it (:mod:`relightnet.io.icc`); ignored
+            for a one-channel image without ``alpha``.
 
     Returns:
         The path written.
@@ -165,18 +170,22 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None) -> 
         raise InputError(f"{path}: expected a .png output file")
     img = to_uint8(_as_hwc(img, "image"), srgb)
     arr = np.ascontiguousarray(img.cpu().numpy())
+    icc = check_profile(icc, path)
     if alpha is not None:
         a = torch.as_tensor(alpha).detach().cpu()
         if tuple(a.shape) != arr.shape[:2]:
             raise ShapeError(f"alpha: expected {arr.shape[:2]} like the image, got {tuple(a.shape)}")
         a8 = to_uint8(a.float()[..., None], srgb=False).numpy()
         rgb = np.repeat(arr, 3, axis=-1) if arr.shape[-1] == 1 else arr
+        rgb = srgb_to_profile(rgb, icc, path)
         frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(np.concatenate([rgb, a8], -1)), format="rgba")
     elif arr.shape[-1] == 1:
-        frame = av.VideoFrame.from_ndarray(arr[..., 0], format="gray")
+        frame, icc = av.VideoFrame.from_ndarray(arr[..., 0], format="gray"), None
     else:
-        frame = av.VideoFrame.from_ndarray(arr, format="rgb24")
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(srgb_to_profile(arr, icc, path)), format="rgb24")
     data = _encode("png", frame)
+    if icc is not None:
+        data = embed_icc(data, icc)
     with atomic_write(path) as f:
         f.write(data)
     return path
@@ -274,6 +283,8 @@ def _decode_pixels(path: str | os.PathLike, gray: bool = False) -> tuple[torch.T
     if color is None:
         color = frame.to_ndarray(format=("gray16le" if deep else "gray") if gray else ("rgb48le" if deep else "rgb24"))
         color = color[..., None] if color.ndim == 2 else color
+    if not gray:  # a mask's gray levels are not colours: no profile applies to them
+        color = profile_to_srgb(color, read_icc(path), path)
     exif = _exif_orientation(path)
 
     def turn(arr: np.ndarray) -> torch.Tensor:
@@ -287,7 +298,8 @@ def read_image(path: str | os.PathLike, linear: bool = False) -> torch.Tensor:
     """Read an 8- or 16-bit image (PNG, JPEG, ...) as RGB floats, upright.
 
     Gray images are repeated to three channels; alpha is dropped (see :func:`read_image_alpha`).
-    The EXIF orientation (rotations and mirrors) is applied.
+    The EXIF orientation (rotations and mirrors) is applied, and an embedded ICC profile other
+    than sRGB (Display-P3, Adobe RGB) is converted to sRGB (:mod:`relightnet.io.icc`).
 
     Args:
         path: image file.

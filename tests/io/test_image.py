@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.color import linear_to_srgb, srgb_to_linear
+from relightnet.color import linear_to_srgb, srgb_to_linear, srgb_to_linear_np
 from relightnet.io import read_alpha, read_image, read_image_alpha, read_mask, to_uint8, write_image
 
 
@@ -176,3 +176,35 @@ def test_empty_text_and_looping_files_say_what_they_are(tmp_path):
         with pytest.raises(InputError, match=rf"{path.name}: {words}") as e:
             read_image(path)
         assert "MP are refused" not in str(e.value) and "Errno" not in str(e.value)
+
+
+def test_a_display_p3_photo_is_read_as_srgb_and_written_back_in_its_profile(tmp_path, caplog):
+    """P3 codes → sRGB by the matrix maths (≤ 1 code: ½ for the output's rounding, the rest LittleCMS's
+    16-bit tables); a written output is converted back into the profile and embeds its bytes."""
+    from PIL import Image
+
+    from relightnet.io.icc import photo_profile, read_icc
+
+    from .icc_profiles import P3, SRGB, display_p3, rgb_to_xyz
+
+    icc = display_p3()
+    g = np.random.default_rng(5)
+    codes = g.integers(0, 256, (24, 40, 3), dtype=np.uint8)
+    codes[0, 0] = (255, 0, 0)  # the most saturated P3 red: outside sRGB, clipped to sRGB's red
+    Image.fromarray(codes).save(tmp_path / "p3.png", icc_profile=icc)
+    got = read_image(tmp_path / "p3.png").double().numpy() * 255
+    lin = srgb_to_linear_np(codes / 255) @ np.linalg.solve(rgb_to_xyz(SRGB), rgb_to_xyz(P3)).T
+    want = linear_to_srgb(torch.from_numpy(lin.clip(0, 1))).numpy() * 255
+    assert np.abs(got - want).max() <= 1.0
+    assert np.abs(got[0, 0] - (255, 0, 0)).max() <= 1.0
+    assert photo_profile(tmp_path / "p3.png") == icc
+    out = write_image(tmp_path / "out.png", torch.from_numpy(got / 255).float(), srgb=False, icc=icc)
+    assert read_icc(out) == icc
+    inside = ((lin >= 0) & (lin <= 1)).all(-1)  # colours sRGB holds come back to their P3 codes
+    back = np.asarray(Image.open(out)).astype(int)
+    assert np.abs(back - codes)[inside].max() <= 1
+    # A damaged profile: a warning, sRGB assumed, no profile carried.
+    Image.fromarray(codes).save(tmp_path / "bad.png", icc_profile=icc[:200])
+    with caplog.at_level("WARNING"):
+        assert (read_image(tmp_path / "bad.png") * 255).round().numpy().astype(np.uint8).tolist() == codes.tolist()
+    assert "ICC profile is damaged" in caplog.text and photo_profile(tmp_path / "bad.png") is None
