@@ -28,7 +28,7 @@ def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
         raise InputError(f"radius: expected an integer >= 0, got {radius}")
     if radius == 0:
         return mask
-    return -F.max_pool2d(-mask, 2 * radius + 1, stride=1, padding=radius)
+    return -dilate(-mask, radius)
 
 
 def dilate(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
@@ -46,7 +46,9 @@ def dilate(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
         raise InputError(f"radius: expected an integer >= 0, got {radius}")
     if radius == 0:
         return mask
-    return F.max_pool2d(mask, 2 * radius + 1, stride=1, padding=radius)
+    k = 2 * radius + 1  # separable: a row max, then a column max (the same square, O(r) per pixel)
+    rows = F.max_pool2d(mask, (1, k), stride=1, padding=(0, radius))
+    return F.max_pool2d(rows, (k, 1), stride=1, padding=(radius, 0))
 
 
 def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
@@ -61,4 +63,6 @@ def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
     """
     if radius == 0:
         return x
-    return F.avg_pool2d(x, 2 * radius + 1, stride=1, padding=radius, count_include_pad=False)
+    k = 2 * radius + 1  # separable: the shrinking window's count is a product of its row and column counts
+    rows = F.avg_pool2d(x, (1, k), stride=1, padding=(0, radius), count_include_pad=False)
+    return F.avg_pool2d(rows, (k, 1), stride=1, padding=(radius, 0), count_include_pad=False)
