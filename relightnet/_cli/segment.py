@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
     if not 0 <= args.steady < 0.5:  # refused before the models load
         raise InputError(f"--steady: expected a probability margin in [0, 0.5), got {args.steady}")
     segment_files(src, out, PersonModels(threads=args.threads), args.landmarks, args.allow_empty, args.smoothing,
-                  progress=logger.isEnabledFor(logging.INFO), steady=args.steady)
+                  progress=logger.isEnabledFor(logging.INFO), steady=args.steady, soft=args.soft)
     logger.info("wrote %s", out)
     return 0
 
@@ -38,6 +38,7 @@ def register(sub) -> None:
         "masks; the person is tracked from frame to frame). The largest person is taken.",
         "  relightnet segment person.jpg --out person_mask.png\n"
         "  relightnet segment photos/ --out masks/ --landmarks landmarks.npz\n"
+        "  relightnet segment person.jpg --soft --out person_alpha.png   # soft edges (gray alpha)\n"
         "  relightnet segment clip.mp4 --out clip_masks.mkv            # lossless mask video, one mask per frame\n"
         "  relightnet segment clip.mp4 --out masks/ --allow-empty     # frame_00000.png, ...\n",
     )
@@ -54,5 +55,8 @@ def register(sub) -> None:
                    help="video: hold the mask's outline steady over time: a pixel near the previous mask's outline "
                    "(carried along the landmarks' motion) keeps its state unless its probability is this far past "
                    "one half (0: off; default: 0.15)")
+    p.add_argument("--soft", action="store_true",
+                   help="photos: write the soft matte (the segmentation's probability refined on the photo in a "
+                   "narrow band around the outline; 8-bit gray PNG) instead of the binary mask")
     p.add_argument("--threads", type=nonneg_int, default=0, help="ONNX Runtime threads (default: 0, all cores)")
     p.set_defaults(func=run)

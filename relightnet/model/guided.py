@@ -24,26 +24,12 @@ from torch import nn
 from torch.nn import functional as F
 
 from ..checks import InputError, ShapeError
+from ..raster.morphology import box_filter
 
-__all__ = ["box_filter", "fast_guided_upsample", "FastGuidedUpsample", "pool_input", "double_to", "LUMA"]
+__all__ = ["fast_guided_upsample", "FastGuidedUpsample", "pool_input", "double_to", "LUMA"]
 
 #: Rec. 601 luma weights: the guide's starting point (the person's luminance).
 LUMA = (0.299, 0.587, 0.114)
-
-
-def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
-    """Mean over the (2r + 1)² window of each pixel, over the pixels that exist (border windows shrink).
-
-    Args:
-        x: (B, C, H, W).
-        radius: r >= 0.
-
-    Returns:
-        (B, C, H, W).
-    """
-    if radius == 0:
-        return x
-    return F.avg_pool2d(x, 2 * radius + 1, stride=1, padding=radius, count_include_pad=False)
 
 
 def fast_guided_upsample(low: torch.Tensor, guide: torch.Tensor, scale: int, radius: int = 1,

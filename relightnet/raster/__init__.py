@@ -25,7 +25,7 @@ from .camera import (
 )
 from .fragments import Fragments
 from .interpolate import Interpolate, interpolate, interpolate_pixels, to_channels_first, to_channels_last
-from .morphology import erode
+from .morphology import box_filter, dilate, erode
 from .rasterize import rasterize, screen_box
 from .texture import texture, texture_pixels
 from .window import Window
@@ -35,5 +35,5 @@ __all__ = [
     "orthographic_projection", "perspective_camera", "perspective_projection", "pixel_to_ndc",
     "Fragments", "rasterize", "screen_box", "Window",
     "interpolate", "interpolate_pixels", "Interpolate", "to_channels_first", "to_channels_last",
-    "texture", "texture_pixels", "antialias", "antialias_pixels", "silhouette_pixels", "erode",
+    "texture", "texture_pixels", "antialias", "antialias_pixels", "silhouette_pixels", "erode", "dilate", "box_filter",
 ]

@@ -1,5 +1,6 @@
-"""Binary morphology on image masks (pure torch): the one erosion every part of relightnet uses
-(the losses' inner mask, the Blender comparison's mask)."""
+"""Morphology and local means on image masks (pure torch): the one erosion and dilation every part of
+relightnet uses (the losses' inner mask, the Blender comparison's mask, the matte's border band) and the
+one box filter (the guided filters of :mod:`relightnet.model.guided` and :mod:`relightnet.segment.matte`)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from torch.nn import functional as F
 
 from ..checks import InputError, check_shape
 
-__all__ = ["erode"]
+__all__ = ["box_filter", "dilate", "erode"]
 
 
 def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
@@ -27,4 +28,41 @@ def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
         raise InputError(f"radius: expected an integer >= 0, got {radius}")
     if radius == 0:
         return mask
-    return -F.max_pool2d(-mask, 2 * radius + 1, stride=1, padding=radius)
+    return -dilate(-mask, radius)
+
+
+def dilate(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
+    """Binary dilation of (B, 1, H, W) masks by a (2r+1)² square (max-pooling); the dual of :func:`erode`.
+
+    Args:
+        mask: (B, 1, H, W) masks, values in [0, 1].
+        radius: half the side of the square, in pixels (>= 0).
+
+    Returns:
+        (B, 1, H, W) dilated masks.
+    """
+    check_shape(mask, ("B", 1, "H", "W"), "mask")
+    if radius < 0:
+        raise InputError(f"radius: expected an integer >= 0, got {radius}")
+    if radius == 0:
+        return mask
+    k = 2 * radius + 1  # separable: a row max, then a column max (the same square, O(r) per pixel)
+    rows = F.max_pool2d(mask, (1, k), stride=1, padding=(0, radius))
+    return F.max_pool2d(rows, (k, 1), stride=1, padding=(radius, 0))
+
+
+def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
+    """Mean over the (2r + 1)² window of each pixel, over the pixels that exist (border windows shrink).
+
+    Args:
+        x: (B, C, H, W).
+        radius: r >= 0.
+
+    Returns:
+        (B, C, H, W).
+    """
+    if radius == 0:
+        return x
+    k = 2 * radius + 1  # separable: the shrinking window's count is a product of its row and column counts
+    rows = F.avg_pool2d(x, (1, k), stride=1, padding=(0, radius), count_include_pad=False)
+    return F.avg_pool2d(rows, (k, 1), stride=1, padding=(radius, 0), count_include_pad=False)

@@ -15,6 +15,7 @@ Example:
 """
 
 from .jobs import MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
+from .matte import BAND_FRACTION, MIN_BAND, SoftMatte, band_radius, border_band, soft_matte
 from .models import INPUT_SIZE, LANDMARK_NAMES, POSE_FILE, SELFIE_FILE, PersonModels, PoseOutput
 from .person import (
     CROP_SCALE,
@@ -33,6 +34,7 @@ from .video import PersonTracker, track_person
 
 __all__ = [
     "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
+    "BAND_FRACTION", "MIN_BAND", "SoftMatte", "band_radius", "border_band", "soft_matte",
     "INPUT_SIZE", "LANDMARK_NAMES", "POSE_FILE", "SELFIE_FILE", "PersonModels", "PoseOutput",
     "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
     "segment_crop", "segment_person",

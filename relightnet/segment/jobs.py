@@ -72,8 +72,9 @@ def save_landmarks(path, results: list, names: list[str] | None = None) -> None:
     logger.info("wrote %s (%d frame(s), landmarks (T, 33, 5), world (T, 33, 3))", path, len(results))
 
 
-def _photos(paths: list[Path], out: Path, models, allow_empty: bool) -> list:
+def _photos(paths: list[Path], out: Path, models, allow_empty: bool, soft: bool = False) -> list:
     from ..io import read_image, write_image
+    from .matte import soft_matte
     from .person import segment_person
 
     results = []
@@ -90,7 +91,9 @@ def _photos(paths: list[Path], out: Path, models, allow_empty: bool) -> list:
                 res = None
             results.append(res)
             mask = torch.zeros(img.shape[1:]) if res is None else res.mask
-            write_image(dest if single else dest / f"{Path(p).stem}.png", _mask_rgb(mask), srgb=False)
+            # --soft: the segmentation's probability refined on the photo in the border band, 8-bit gray.
+            pixels = soft_matte(img, res.probability)[..., None] if soft and res is not None else _mask_rgb(mask)
+            write_image(dest if single else dest / f"{Path(p).stem}.png", pixels, srgb=False)
     return results
 
 
@@ -128,7 +131,7 @@ def _video(video: Path, out: Path, models, allow_empty: bool, smoothing: float, 
 
 
 def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, smoothing: float = 0.5,
-                  progress: bool = True, steady: float = STEADY_MARGIN) -> list:
+                  progress: bool = True, steady: float = STEADY_MARGIN, soft: bool = False) -> list:
     """Segment a photo, a folder of photos or a video and write the masks (module docstring).
 
     Args:
@@ -140,6 +143,8 @@ def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, s
         smoothing: video: weight of the new frame in the tracked crop (1: none).
         progress: show a tqdm bar over a video's frames.
         steady: video: hysteresis margin of the temporal mask filter (:mod:`relightnet.segment.steady`; 0: off).
+        soft: photos: write the soft matte (:func:`~relightnet.segment.matte.soft_matte` of the
+            segmentation's probability; an 8-bit gray PNG) instead of the binary mask.
 
     Returns:
         The :class:`~relightnet.segment.PersonMask` (or None) of each photo or frame.
@@ -160,12 +165,15 @@ def segment_files(src, out, models, landmarks=None, allow_empty: bool = False, s
                            ", ".join(f.name for f in files if f not in paths)[:200])
         if out.suffix:
             raise InputError(f"--out {out}: a folder of photos gives a folder of masks; expected a folder path")
-        results, names = _photos(paths, out, models, allow_empty), [p.name for p in paths]
+        results, names = _photos(paths, out, models, allow_empty, soft), [p.name for p in paths]
     elif src.suffix.lower() in PHOTO_SUFFIXES:
         if out.suffix.lower() != ".png":
             raise InputError(f"--out {out}: expected a .png path for the mask of a photo")
-        results = _photos([src], out, models, allow_empty=False)
+        results = _photos([src], out, models, allow_empty=False, soft=soft)
     else:
+        if soft:
+            raise InputError(f"--soft: {src}: the soft matte is written for photos; expected a photo or a folder "
+                             "of photos")
         if out.suffix and out.suffix.lower() not in MASK_VIDEO_SUFFIXES:
             raise InputError(f"--out {out}: expected a mask video (.mkv lossless, .mp4) or a folder for a video")
         results = _video(src, out, models, allow_empty, smoothing, progress, steady)

@@ -5,8 +5,9 @@ import torch
 from torch.nn import functional as F
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.model.guided import LUMA, FastGuidedUpsample, box_filter, double_to, fast_guided_upsample, pool_input
+from relightnet.model.guided import LUMA, FastGuidedUpsample, double_to, fast_guided_upsample, pool_input
 from relightnet.model.network import normalize_input
+from relightnet.raster.morphology import box_filter
 
 
 def _guide(b=2, c=1, h=16, w=24, seed=0):

@@ -66,3 +66,22 @@ def test_segment_steady_option(tmp_path, capsys):
     assert err.count("\n") == 1 and "--steady: expected a probability margin in [0, 0.5), got 0.5" in err
     args = build_parser().parse_args(["segment", "clip.mp4", "--out", "m.mkv"])
     assert args.steady == STEADY_MARGIN  # the help's default is the library's
+
+
+def test_segment_soft_writes_a_gray_matte(person_scene, walking_clip, tmp_path, capsys):
+    from PIL import Image
+
+    img, truth = person_scene
+    write_image(tmp_path / "person.png", img.permute(1, 2, 0), srgb=False)
+    assert main(["-q", "segment", str(tmp_path / "person.png"), "--soft", "--out", str(tmp_path / "alpha.png")]) == 0
+    with Image.open(tmp_path / "alpha.png") as im:
+        assert im.mode == "L"
+        alpha = np.asarray(im)
+    assert alpha.shape == tuple(truth.shape) and ((alpha > 0) & (alpha < 255)).any()  # fractional edge pixels
+    assert iou(torch.from_numpy(alpha > 127), truth) > 0.9
+    frames, _ = walking_clip
+    with VideoWriter(tmp_path / "walk.mkv", fps=10) as w:
+        for f in frames:
+            w.write((f.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy())
+    assert main(["segment", str(tmp_path / "walk.mkv"), "--soft", "--out", str(tmp_path / "m.mkv")]) == 1
+    assert "--soft" in capsys.readouterr().err and not (tmp_path / "m.mkv").exists()
