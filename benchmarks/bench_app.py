@@ -1,4 +1,4 @@
-"""The app's cost per change of light at about 1 megapixel (issue 25: ≤ 150 ms after a first pass ≤ 3 s).
+"""The app's cost per change of light at about 1 megapixel (target: ≤ 150 ms after a first pass ≤ 3 s).
 
 Run: ``.venv/bin/python benchmarks/bench_app.py [--threads 2] [--side 1024]``
 

@@ -1,4 +1,4 @@
-"""Speed of the avatar job with the dressed avatar and --replace-person (issue 28), at 1280x720.
+"""Speed of the avatar job with the dressed avatar and --replace-person, at 1280x720.
 
 The target is :func:`relightnet.pipeline.walk_target.walking_target` (Anny walking across a known,
 textured background; x264 mp4). Each variant runs the whole ``avatar`` job (given light, so the CNN

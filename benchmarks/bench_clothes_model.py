@@ -2,7 +2,7 @@
 
 Run: ``.venv/bin/python benchmarks/bench_clothes_model.py [--n 96] [--painted 48]`` (ANNY_CACHE_DIR set by make).
 
-The shipped model is named in its model card (since session 9: trained on clothed people). Here the
+The shipped model is named in its model card (trained on clothed people). Here the
 generator (today's version, test split: held-out HDRIs, default garment draws, ``prt_reuse`` 1: one person each) makes
 ``--n`` stills at the model's 128², plus ``--painted`` stills of the same config with every
 garment painted (``garment_probs`` all ``none``/``painted``) as the reference. The model

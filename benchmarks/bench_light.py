@@ -1,4 +1,4 @@
-"""Light estimation quality of several models side by side, in one run (issue 14's figures).
+"""Light estimation quality of several models side by side, in one run.
 
 Run: ``.venv/bin/python benchmarks/bench_light.py --data data/large --clips data/seq_constant data/seq_switch
 --checkpoints shipped runs/large_hybrid/last.pt [--out reports/light_bench.md]``

@@ -1,4 +1,4 @@
-"""The light solve's precision: the float32 form it had against the float64 equilibrated one (issue 21).
+"""The light solve's precision: the float32 form it had against the float64 equilibrated one.
 
 Three cases, each solved from the same float32 maps (what the network gives):
 

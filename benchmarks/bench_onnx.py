@@ -5,7 +5,7 @@ with its default smoothing in the graph; 2 threads; B = 1). int8 quality: relit 
 item relit with the next item's light) of the int8 models relative to the fp32 one, on 48 generated
 test-split samples; static int8 with 7-bit weights (the default) and 8-bit weights (for CPUs with
 VNNI/AMX), both with the default layers kept in float (``INT8_KEEP_FLOAT``), and static int8 of every
-layer (``keep_float=()``, the default before issue 23 part 6).
+layer (``keep_float=()``, the former default).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""How closely ``avatar --replace-person`` follows a walking person (issue 28), on generated targets.
+"""How closely ``avatar --replace-person`` follows a walking person, on generated targets.
 
 The target is :func:`relightnet.pipeline.walk_target.walking_target` (Anny walking across a known
 background, x264), whose true path (the root translation per frame) is known. The avatar's path is

@@ -4,7 +4,7 @@ Run: ``.venv/bin/python benchmarks/bench_photo_path.py --data data/clothed --che
 train/checkpoints/X.pt [--n 300] [--hires data/hires512]``
 
 Four inputs of the same test items, for every model: the render (the person alone) at the generator's
-own framing — what training saw until session 13 and what ``evaluate`` scored —, the composite (the person
+own framing — what the earlier stages trained on and what ``evaluate`` scored —, the composite (the person
 over its background, the silhouette's pixels blended) at that framing, and both framed again around
 their masks by :func:`relightnet.model.inference.frame_person` (the path of ``relight-image`` and
 the video jobs). With ``--hires``, a dataset of the same recipe at a higher resolution (its test

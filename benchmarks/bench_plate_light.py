@@ -1,4 +1,4 @@
-"""The light of a background plate against the true light, on generated backgrounds (issue 25).
+"""The light of a background plate against the true light, on generated backgrounds.
 
 Run: ``.venv/bin/python benchmarks/bench_plate_light.py --data data/plate_bench [--make]``
 

@@ -3,7 +3,7 @@
     python benchmarks/bench_untrusted.py [--side 12000] [--runs 3]
     python benchmarks/bench_untrusted.py --resources [NAME ...]
 
-``--resources`` runs the hostile small files of ``tests/fuzz/resource_cases.py`` (issue 27's
+``--resources`` runs the hostile small files of ``tests/fuzz/resource_cases.py`` (the
 table and variants) as real commands, each in a child capped in address space and wall
 clock, and prints per case: the exit status, peak RSS (``os.wait4``), wall time, whether
 anything was left behind, and the error line.

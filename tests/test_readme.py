@@ -17,7 +17,8 @@ from relightnet.io import read_image
 from relightnet.sh import load_light
 
 REPO = Path(__file__).resolve().parents[1]
-DOCS = ["README.md", "train/README.md", "export/README.md", "docs/design.md"]
+DOCS = ["README.md", "train/README.md", "export/README.md", "docs/design.md", *sorted(
+    str(p.relative_to(REPO)) for p in (REPO / "docs").glob("*.md") if p.name != "design.md")]
 
 
 def _bash_lines(text: str) -> list[str]:
@@ -65,7 +66,7 @@ COMMANDS = [(doc, line, argv) for doc in DOCS for line in _bash_lines((REPO / do
 
 def test_the_documents_show_commands():
     docs = {doc for doc, _, _ in COMMANDS}
-    assert set(DOCS) - {"docs/design.md"} <= docs and len(COMMANDS) >= 40  # the design page shows no bash
+    assert {"README.md", "train/README.md", "export/README.md"} <= docs and len(COMMANDS) >= 40
     assert any(argv[:1] == ["train"] and "torchrun" in line for _, line, argv in COMMANDS)
 
 
@@ -108,3 +109,32 @@ def test_cheap_commands_run_as_written(argv, tmp_path, monkeypatch, capsys):
 def test_cheap_lines_are_found():
     assert ["--help"] in CHEAP and any(a[:2] == ["light", "show"] for a in CHEAP)
     assert sum(a[:2] == ["light", "convert"] for a in CHEAP) >= 2
+
+
+def _python_blocks(text: str) -> list[str]:
+    blocks, block = [], None
+    for raw in text.splitlines():
+        if block is None and raw.strip() == "```python":
+            block = []
+        elif block is not None and raw.startswith("```"):
+            blocks.append("\n".join(block))
+            block = None
+        elif block is not None:
+            block.append(raw)
+    return blocks
+
+
+def test_readme_python_runs(tmp_path, monkeypatch):
+    """Each ```python block of the README runs as written, in a folder holding a small photo of a person."""
+    import PIL.Image
+
+    from relightnet.app.examples import example_person
+
+    blocks = _python_blocks((REPO / "README.md").read_text())
+    assert blocks, "the README shows no Python"
+    PIL.Image.open(example_person(tmp_path / "example", res=128)).convert("RGB").save(tmp_path / "person.jpg")
+    monkeypatch.chdir(tmp_path)
+    for code in blocks:
+        exec(compile(code, "README.md", "exec"), {"__name__": "readme"})
+    if "relit.png" in "".join(blocks):
+        assert read_image(tmp_path / "relit.png").shape == (128, 128, 3)

@@ -26,7 +26,7 @@ __all__ = ["INT8_KEEP_FLOAT", "OnnxRelighter", "calibration_set", "quantize_int8
 #: MediaPipe pose encoder's six convolutions before its first residual connection (its weights w1–w18:
 #: the stem and two inverted-residual blocks, at 1/2 and 1/4 of the pose input's size). A per-layer
 #: sweep on the shipped model found nearly all of int8's error there: with them in float the relit RMSE is
-#: within 1% of fp32 instead of +9–17% (BENCHMARKS.md, "Issue 23 part 6"), at a cost in time at small
+#: within 1% of fp32 instead of +9–17% (BENCHMARKS.md, "ONNX export and serving"), at a cost in time at small
 #: sizes (two threads, 256²: 95.8 vs 75.6 ms with every layer in int8).
 #: A model without a pose encoder has no such weight, and every layer is quantised.
 INT8_KEEP_FLOAT = (r"net\.pose\.encoder\.params\.w(1|5|7|13|16|18)",)

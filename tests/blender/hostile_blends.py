@@ -1,6 +1,6 @@
 """Hostile .blend files made with bpy at test time (nothing committed), and the capped runs that read them.
 
-Issue 27: a .blend of 83 KB asked for 20000² pixels × 16.7 M samples × 10⁶ frames; ``blender-render``
+A .blend of 83 KB asked for 20000² pixels × 16.7 M samples × 10⁶ frames; ``blender-render``
 ran past 120 s without applying ``--max-pixels`` and left a folder in OUT and files in /tmp. Each
 case here writes a real .blend through Blender's own Python module (a camera, a cube, the render
 settings, optionally a text block registered to run on load and a Python driver, both writing a
@@ -77,7 +77,7 @@ def _render(blend: str, *extra: str, expect: str = "error") -> Case:
 
 
 def huge_settings(folder: Path) -> Case:
-    """20000² pixels × 16,777,216 samples × 10⁶ frames (issue 27's file): refused for its size, in one line."""
+    """20000² pixels × 16,777,216 samples × 10⁶ frames: refused for its size, in one line."""
     write_blend(folder / "huge.blend", side=20000, samples=16_777_216, frames=1_000_000, scripts=True)
     return _render("huge.blend")
 

@@ -1,6 +1,6 @@
 """``blender-render`` on real hostile .blend files (made with bpy here), each run capped in a child process.
 
-The checks of issue 27: the file's own render size is held to ``--max-pixels``, its samples and
+The resource checks: the file's own render size is held to ``--max-pixels``, its samples and
 frames to the caps (or refused in one line naming the file); its scripts (an auto-run text block,
 a Python driver) never run; within 2 GB; and a render killed mid-frame leaves nothing in OUT or
 in TMPDIR. ``python tests/blender/hostile_blends.py NAME FOLDER`` prints one case's peak RSS.

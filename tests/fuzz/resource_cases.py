@@ -1,4 +1,4 @@
-"""Small hostile files that ask for huge resources (issue 27's table and variants).
+"""Small hostile files that ask for huge resources (SECURITY.md's table and variants).
 
 Each case writes its file(s) into a fresh folder and returns the ``relightnet`` command line
 that reads them; :func:`resource_runner.run_capped` runs it in a capped child process.

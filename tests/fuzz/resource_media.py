@@ -1,4 +1,4 @@
-"""Hostile small images and videos (issue 27): decompression bombs, lying containers, large valid frames.
+"""Hostile small images and videos: decompression bombs, lying containers, large valid frames.
 
 Part of the resource cases (``resource_cases.CASES`` gathers them): each function writes its
 file(s) into a fresh folder and returns the ``relightnet`` command line that reads them.

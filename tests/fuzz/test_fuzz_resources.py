@@ -1,6 +1,6 @@
 """Resource fuzzing: small hostile files end in one line or a correct output, within 2 GB and a wall cap.
 
-Every case of ``resource_cases.CASES`` (the table of issue 27 and variants) runs the real
+Every case of ``resource_cases.CASES`` (SECURITY.md's table and variants) runs the real
 ``relightnet`` command in a child process whose address space is capped (``RLIMIT_AS``, so a
 regression cannot take the machine) and which is killed after ``WALL_CAP`` seconds. The test
 checks the exit status, the one-line error naming the hostile file, the child's peak RSS

@@ -204,7 +204,7 @@ def test_int8_of_a_model_that_solves_its_light_opens(tmp_path):
 
 @pytest.mark.slow
 def test_int8_of_the_shipped_model_relights_within_5_percent_of_fp32(tmp_path):
-    """Issue 23's quality goal for the default int8 file, on 16 generated test people at the model's size:
+    """The quality goal for the default int8 file, on 16 generated test people at the model's size:
     relit RMSE (each person relit with the next one's light) within 5% of the fp32 file's (measured: +0.5–0.8%
     on 48 and 64 people; every layer in int8 gave +9–17%). Not an exact value: int8 kernels differ by CPU."""
     from relightnet.body import AnnyBody

@@ -111,7 +111,7 @@ def test_person_placement_is_the_median_of_the_masks():
 
 
 def test_plate_of_a_walking_person_is_within_30_db_of_the_true_background(walk, anny_body, tmp_path):
-    """Target of issue 28: masks from the person segmentation, PSNR over the pixels the person covered and
+    """Target: masks from the person segmentation, PSNR over the pixels the person covered and
     later uncovered (the inpainted ones excluded and reported)."""
     cp, cam, _ = stand_in(walk.video, tmp_path / "o.mp4", N, anny_body)
     region = walk.ever & ~walk.always & ~cp.flagged
@@ -129,7 +129,7 @@ def _eye(cam) -> torch.Tensor:
 
 
 def test_the_avatar_follows_the_walking_person(walk, anny_body, tmp_path):
-    """Issue 28: with masks from the person segmentation, the avatar's feet follow the person's true path.
+    """With masks from the person segmentation, the avatar's feet follow the person's true path.
 
     Compared relative to each camera (the target's default camera, the avatar's placed one), which is what
     puts the avatar where the person is in the image. Bounds at 192×144 (f ≈ 228 px, 3 m away: 1 px ≈

@@ -99,7 +99,7 @@ def _hem_labels(d: DressedBody, verts: torch.Tensor, eye, target) -> np.ndarray:
 
 @pytest.mark.parametrize("name", OUTFITS)
 def test_no_stair_stepped_hem_in_any_outfit(anny_body, name):
-    """Issue 28's target: the hems of every named outfit, rendered at 512² in close-ups, stray from their own
+    """Target: the hems of every named outfit, rendered at 512² in close-ups, stray from their own
     10-pixel smoothing by less than 0.85 px (the smooth reference's bound, as for the default albedo, whose
     face-wise zig-zag strays by about 1.4 px; a smooth curve by a fraction of a pixel), and on the whole by
     less than the generator's face-wise borders do."""

@@ -47,7 +47,7 @@ def test_boundary_jaggedness_tells_a_zigzag_from_a_smooth_curve():
 
 
 def test_default_albedo_garment_edges_are_smooth(maps):
-    """Target of issue 28: the neckline, sleeves and waist of the default albedo are not stair-stepped.
+    """Target: the neckline, sleeves and waist of the default albedo are not stair-stepped.
 
     Bounds: a smooth boundary drawn on 512² pixels strays from its 10-pixel smoothing by well under a pixel
     (quantisation and the true curvature of neckline and sleeves); the face-wise labels' zig-zag strays by
