@@ -133,3 +133,21 @@ def test_a_clip_of_nobody_is_refused_after_its_first_seconds(tmp_path, masked_cl
     last = int(NO_PERSON_S * 12) - 1
     assert len(err) == 1 and f"no person found in its first 2 s (frames 0-{last})" in err[0], err
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["clip.mkv", "masks"]
+
+
+@pytest.mark.parametrize("clip", ["vfr", "late"])
+def test_relight_video_keeps_the_frame_times_and_the_sync(tmp_path, clip):
+    """A phone's variable frame rate (30 then 15 fps) and a video stream that starts 0.5 s after its sound
+    come out as they went in: every frame against the sound within the writers' ms clocks."""
+    from tests.io import timed_media as media
+
+    times, clicks = {"vfr": (media.VFR_SHORT, [0.2]), "late": (media.LATE_SHORT, [0.5])}[clip]
+    video = media.write_timed_clip(tmp_path / "phone.mp4", times, clicks)
+    masks = media.write_masks(tmp_path / "masks", len(times))
+    out = tmp_path / "relit.mp4"
+    assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--out", str(out)]) == 0
+    offsets = media.av_offsets(video, out)  # (T,) seconds, frame t later against the sound than in the source
+    assert np.abs(offsets).max() <= 2e-3  # half a frame would be 17 ms (mp4 edit lists: a 1 ms clock)
+    shown, heard = media.decoded_frame_times(out), media.click_times(out)
+    np.testing.assert_allclose(np.diff(shown), np.diff(times), rtol=0, atol=1e-3)  # VFR stays VFR
+    assert shown[0] - heard[0] == pytest.approx(times[0] - clicks[0], abs=2e-3)  # the late start kept
