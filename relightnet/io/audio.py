@@ -3,7 +3,9 @@
 The relit or composited video is encoded first (video only); :func:`add_audio` then muxes
 the source's audio under it, stream-copied where the container accepts the codec (AAC, MP3,
 Opus, ... in ``.mp4``; anything in ``.mkv``) and re-encoded to AAC otherwise (e.g. PCM into
-``.mp4``). Audio past the end of the video is dropped.
+``.mp4``). Audio past the end of the video is dropped. With ``origin`` the sound is moved onto the
+video's timeline (:mod:`relightnet.io.timestamps`): its timestamps lose the same seconds as the
+source's frame times did, so it stays in sync with frames that keep their times.
 """
 
 from __future__ import annotations
@@ -35,27 +37,35 @@ def has_audio(path) -> bool:
         return False
 
 
-def _packets(container, stream, end: float | None):
-    """(time, n, packet) of one stream in decode order, up to ``end`` seconds."""
+def _packets(container, stream, end: float | None, origin: float = 0.0):
+    """(time, n, packet) of one stream in decode order, up to ``end`` seconds, its timestamps
+    ``origin`` seconds earlier."""
+    shift = round(origin / stream.time_base) if origin else 0
     for n, p in enumerate(container.demux(stream)):
         if p.dts is None:  # the demuxer's flush packet
             continue
+        if shift:
+            p.dts -= shift
+            p.pts = None if p.pts is None else p.pts - shift
         t = float(p.dts * p.time_base)
         if end is not None and t > end:
             break
         yield t, n, p
 
 
-def _aac_packets(src, a_in, out_stream, end: float):
-    """Decode the source audio and encode it to AAC for ``out_stream``, up to ``end`` seconds."""
+def _aac_packets(src, a_in, out_stream, end: float, origin: float = 0.0):
+    """Decode the source audio and encode it to AAC for ``out_stream``, up to ``end`` seconds, its
+    timestamps ``origin`` seconds earlier."""
     import av
 
     resampler = av.AudioResampler(format="fltp", layout=out_stream.layout, rate=out_stream.rate)
 
     def frames():  # resampled frames, then the resampler's and the encoder's flushes (None)
         for frame in src.decode(a_in):
-            if frame.time is not None and frame.time > end:
+            if frame.time is not None and frame.time - origin > end:
                 break
+            if origin and frame.pts is not None:
+                frame.pts -= round(origin / frame.time_base)
             yield from resampler.resample(frame)
         yield from resampler.resample(None)
         yield None
@@ -67,15 +77,18 @@ def _aac_packets(src, a_in, out_stream, end: float):
             yield (float(p.dts * p.time_base) if p.dts is not None else (0.0 if f is not None else end)), n, p
 
 
-def add_audio(video, audio_from, out, duration: float | None = None) -> Path:
+def add_audio(video, audio_from, out, duration: float | None = None, origin: float = 0.0) -> Path:
     """Write ``out``: the video stream of ``video`` (copied) with the audio of ``audio_from``.
 
     Args:
         video: a video file (its first video stream is copied bit for bit).
         audio_from: media file whose first audio stream is added (trimmed to the video's length).
         out: destination (``.mp4`` or ``.mkv``), written atomically.
-        duration: the video's length in seconds (default: as its container says; audio is not
+        duration: where the video ends, in seconds (default: as its container says; audio is not
             trimmed when it says nothing).
+        origin: seconds taken off the audio's timestamps: the
+            :func:`~relightnet.io.timestamps.timeline_origin` of ``audio_from`` when the video's
+            frames carry its frame times (:func:`relightnet.io.video.frame_times`); 0 leaves them as they are.
 
     Returns:
         The path written.
@@ -104,12 +117,12 @@ def add_audio(video, audio_from, out, duration: float | None = None) -> Path:
         copy = fmt == "matroska" or a_in.codec_context.name in _MP4_AUDIO
         if copy:
             a_out = dst.add_stream_from_template(a_in)
-            audio = _packets(src, a_in, end)
+            audio = _packets(src, a_in, end, origin)
         else:
             stereo = a_in.codec_context.layout.nb_channels != 1
             a_out = dst.add_stream("aac", rate=a_in.codec_context.sample_rate or 48000,
                                    layout="stereo" if stereo else "mono")
-            audio = _aac_packets(src, a_in, a_out, end if end is not None else float("inf"))
+            audio = _aac_packets(src, a_in, a_out, end if end is not None else float("inf"), origin)
             logger.info("%s: audio %s re-encoded to AAC for %s", audio_from, a_in.codec_context.name, out.name)
         streams = {0: v_out, 1: a_out}
         video_packets = (((t, 0, n), p) for t, n, p in _packets(vin, v_in, None))

@@ -1,7 +1,11 @@
 """Video files through PyAV: streaming reader and an atomic streaming writer.
 
-``.mp4`` is written with libx264 (CRF 18; yuv420p, or yuv444p for odd sizes); ``.mkv`` with the
-lossless ffv1 codec (exact 8-bit RGB round trip, for tests and intermediate files). Above 1080p
+``.mp4`` is written with libx264 (CRF 18, yuv420p: every player decodes it; 4:2:0 chroma needs even
+sides, so an odd-sized frame is padded by one pixel, its last row or column repeated, with a
+warning); ``.mkv`` with the lossless ffv1 codec (exact 8-bit RGB round trip, for tests and
+intermediate files). Frames keep the source's presentation times when they are given
+(:func:`frame_times`, ``VideoWriter.write(frame, time=...)``; :mod:`relightnet.io.timestamps`): a
+variable-frame-rate video stays so, a late video stream keeps its offset from the sound. Above 1080p
 libx264 looks ahead 4 frames and makes no B-frames (:data:`X264_LARGE`): the frames it holds
 bound its memory (at 12.5 MP, 0.5 GB instead of 1 GB with the preset's 10-frame lookahead and
 3 B-frames), at the price of a somewhat larger file at the same quality.
@@ -14,6 +18,7 @@ import contextlib
 import itertools
 import logging
 import math
+from array import array
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -26,10 +31,12 @@ from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
 from .image import limit_hint, open_limited, to_uint8, upright
 from .limits import check_pixels, check_video_expansion
+from .timestamps import MKV_CLOCK, MP4_CLOCK, PtsClock, timeline_origin
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["VideoInfo", "video_info", "count_frames", "read_video", "VideoWriter", "read_masks", "frames_with_masks"]
+__all__ = ["VideoInfo", "video_info", "count_frames", "frame_times", "read_video", "VideoWriter", "read_masks",
+           "frames_with_masks"]
 
 _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), ".mkv": ("ffv1", "bgr0", {})}
 #: libx264's options for frames above 1080p (:data:`X264_LARGE_PIXELS`): the frames it holds (lookahead,
@@ -114,6 +121,44 @@ def _count_checked(path, width: int, height: int) -> int:
     return n
 
 
+def frame_times(path) -> np.ndarray | None:
+    """Presentation times of a video's frames, in display order, on the timeline relightnet's
+    writers keep (:mod:`relightnet.io.timestamps`): seconds from the file's
+    :func:`~relightnet.io.timestamps.timeline_origin`, so a video stream that starts 0.5 s after its
+    sound begins at 0.5 and a variable frame rate shows in the steps.
+
+    Read from the packets (demuxed, not decoded, as :func:`count_frames` does; packets the demuxer
+    marks as discarded, which decode to no frame, are left out) and refused as it does when they
+    decode to far more than the file holds; memory grows by 8 bytes a packet.
+
+    Returns:
+        (T,) float64 seconds, increasing, one per frame :func:`read_video` yields; None when the
+        file's packets carry no timestamps.
+    """
+    import av
+
+    h, w = video_info(path).size  # the size, rate and first frame checked as every reader does
+    file_bytes = Path(path).stat().st_size
+    pts = array("q")
+    with contextlib.closing(_open(path)) as c:
+        s = c.streams.video[0]
+        origin, tb = timeline_origin(c), s.time_base
+        try:
+            for p in c.demux(s):
+                if not p.size or p.is_discard:
+                    continue
+                if p.pts is None:
+                    return None
+                pts.append(p.pts)
+                if len(pts) % 4096 == 0:  # refused while reading: a bomb's packets are never all held
+                    check_video_expansion(len(pts), w, h, file_bytes, f"{path}")
+        except (av.error.FFmpegError, ValueError) as e:
+            raise InputError(f"{path}: corrupt video ({type(e).__name__}: {e})") from None
+    check_video_expansion(len(pts), w, h, file_bytes, f"{path}")
+    ticks = np.sort(np.frombuffer(pts, np.int64)).astype(np.float64)
+    return ticks * tb.numerator / tb.denominator - origin  # pts × time base: one rounding (exact products)
+
+
 def read_video(path) -> Iterator[np.ndarray]:
     """Yield the frames of a video one at a time (memory does not grow with length), upright
     (a display rotation stored by the camera is applied).
@@ -144,6 +189,12 @@ class VideoWriter:
     ``audio_from``: a media file whose audio track goes under the video (see
     :func:`relightnet.io.audio.add_audio`); ignored when it has none.
 
+    Timestamps: ``write(frame, time=t)`` shows the frame at ``t`` seconds (the times of
+    :func:`frame_times` of ``audio_from``: the sound is then put on the same timeline, shifted by that
+    file's :func:`~relightnet.io.timestamps.timeline_origin`), on a 1/90000 s clock in mp4 (1 ms in
+    mkv), one tick after the previous frame at least. Frames written without a time follow the
+    previous one at ``fps`` (all of them: a constant-rate video from 0, its sound as it is).
+
     ``gray``: the frames are grey (masks, R = G = B): an .mkv stores their first channel as one 8-bit plane,
     exactly (ffv1 ``gray``: at 12.5 MP its encoder holds ~0.5 GB instead of ~1 GB for ``bgr0``); an .mp4
     is written as usual. Readers get (H, W, 3) frames back either way.
@@ -152,6 +203,9 @@ class VideoWriter:
         >>> with VideoWriter("out.mp4", fps=30) as w:  # doctest: +SKIP
         ...     for frame in frames:
         ...         w.write(frame)  # (H, W, 3) uint8, or float linear RGB
+        >>> with VideoWriter("out.mp4", fps=30, audio_from="phone.mp4") as w:  # doctest: +SKIP
+        ...     for frame, t in zip(frames, frame_times("phone.mp4")):
+        ...         w.write(frame, time=t)  # the phone's timing kept
     """
 
     def __init__(self, path, fps: float = 30.0, srgb: bool = True, audio_from=None, gray: bool = False) -> None:
@@ -177,10 +231,14 @@ class VideoWriter:
             self._file = open(self._video_path, "xb")
         self._container = None
         self._stream = None
+        self._clock: PtsClock | None = None
+        self._size: tuple[int, int] | None = None  # (H, W) of the frames given (before any padding)
+        self._timed = False
         self.n_frames = 0
 
-    def write(self, frame) -> None:
-        """Append one frame: (H, W, 3) uint8, or float linear RGB (converted to sRGB 8-bit)."""
+    def write(self, frame, time: float | None = None) -> None:
+        """Append one frame: (H, W, 3) uint8, or float linear RGB (converted to sRGB 8-bit), shown at
+        ``time`` seconds (None: one frame at ``fps`` after the previous one; class docstring)."""
         import av
 
         if isinstance(frame, torch.Tensor):
@@ -190,32 +248,46 @@ class VideoWriter:
             frame = frame.numpy() if isinstance(frame, torch.Tensor) else frame
         check_shape(frame, ["H", "W", 3], name=f"{self.path}: frame")
         h, w = frame.shape[:2]
-        codec, pix_fmt, opts = _CODECS[self.path.suffix.lower()]
-        pix_fmt = "gray" if self._gray else pix_fmt
+        codec = _CODECS[self.path.suffix.lower()][0]
         if self._stream is None:
-            if codec == "libx264" and (h % 2 or w % 2):
-                # 4:2:0 chroma needs even sizes; 4:4:4 keeps odd-sized frames whole (fewer players read it).
-                pix_fmt = "yuv444p"
-                logger.warning("%s: odd frame size %dx%d (width x height): mp4 written as yuv444p (4:4:4)",
-                               self.path, w, h)
-            if codec == "libx264" and h * w > X264_LARGE_PIXELS:
-                opts = {**opts, **X264_LARGE}
-            fmt = "mp4" if codec == "libx264" else "matroska"
-            self._container = av.open(self._file, mode="w", format=fmt)
-            self._stream = self._container.add_stream(codec, rate=Fraction(self.fps).limit_denominator(1001))
-            self._stream.width, self._stream.height, self._stream.pix_fmt = w, h, pix_fmt
-            self._stream.options = opts
-        elif (h, w) != (self._stream.height, self._stream.width):
-            raise InputError(
-                f"{self.path}: frame {self.n_frames} is {h}x{w}, expected {self._stream.height}x{self._stream.width}"
-            )
+            self._open_stream(h, w)
+        elif (h, w) != self._size:
+            raise InputError(f"{self.path}: frame {self.n_frames} is {h}x{w}, expected {self._size[0]}x{self._size[1]}")
+        if codec == "libx264" and (h % 2 or w % 2):  # 4:2:0 chroma: even sides (the module docstring)
+            frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
         if self._gray:
             vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame[..., 0]), format="gray")
         else:
             vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="rgb24")
+        vf.pts, vf.time_base = self._clock.pts(time), self._clock.tick
+        self._timed = self._timed or time is not None
         for packet in self._stream.encode(vf):
             self._container.mux(packet)
         self.n_frames += 1
+
+    def _open_stream(self, h: int, w: int) -> None:
+        """The container and the video stream, for frames of (h, w), made at the first frame."""
+        import av
+
+        codec, pix_fmt, opts = _CODECS[self.path.suffix.lower()]
+        pix_fmt = "gray" if self._gray else pix_fmt
+        even = codec == "libx264"  # yuv420p
+        if even and (h % 2 or w % 2):
+            logger.warning("%s: odd frame size %dx%d (width x height): padded to %dx%d (the last %s repeated) "
+                           "for yuv420p", self.path, w, h, w + w % 2, h + h % 2,
+                           " and ".join(n for n, odd in (("column", w % 2), ("row", h % 2)) if odd))
+        if even and h * w > X264_LARGE_PIXELS:
+            opts = {**opts, **X264_LARGE}
+        fmt = "mp4" if codec == "libx264" else "matroska"
+        rate = Fraction(self.fps).limit_denominator(1001)
+        self._clock = PtsClock(MP4_CLOCK if fmt == "mp4" else MKV_CLOCK, rate, f"{self.path}")
+        self._container = av.open(self._file, mode="w", format=fmt)
+        self._stream = self._container.add_stream(codec, rate=rate)
+        self._stream.codec_context.time_base = self._stream.time_base = self._clock.tick
+        self._stream.width, self._stream.height = (w + w % 2, h + h % 2) if even else (w, h)
+        self._stream.pix_fmt = pix_fmt
+        self._stream.options = opts
+        self._size = (h, w)
 
     def close(self) -> Path:
         """Flush the encoder and move the file into place (with the sound of ``audio_from``)."""
@@ -235,7 +307,8 @@ class VideoWriter:
             from .audio import add_audio
 
             try:
-                add_audio(self._video_path, self._audio_from, self.path, duration=self.n_frames / self.fps)
+                add_audio(self._video_path, self._audio_from, self.path, duration=self._clock.end(),
+                          origin=timeline_origin(self._audio_from) if self._timed else 0.0)
             except (InputError, av.FFmpegError, ValueError) as e:
                 logger.warning("%s: written without sound: the audio of %s could not be added (%s)",
                                self.path, self._audio_from, e)

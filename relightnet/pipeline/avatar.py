@@ -34,7 +34,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, read_video, video_info
+from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, frame_times, read_video, video_info
 from ..names import VIDEO_SMOOTHING
 from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
@@ -190,16 +190,19 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
 
 def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, antialias: bool, camera: Camera,
                    faces: torch.Tensor, progress: bool, source) -> int:
-    """Stages 3–5, render → composite → write, streaming: returns the frames written."""
+    """Stages 3–5, render → composite → write, streaming, on the target's timeline (its frame times
+    and sound): returns the frames written."""
     from tqdm import tqdm
 
+    times = frame_times(target)  # None: the target states no times, the frames follow at its average rate
     written = 0
     with VideoWriter(out, fps=fps, srgb=False, audio_from=target) as writer:
         pairs = zip(backgrounds, frames, strict=False)
         for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
             if written == n:
                 break
-            writer.write(_composite_frame(fr.render, bg, antialias, camera, fr.verts, faces))
+            time = float(times[written]) if times is not None and written < len(times) else None
+            writer.write(_composite_frame(fr.render, bg, antialias, camera, fr.verts, faces), time=time)
             del bg, fr  # the next frame is decoded and rendered without this one's
             written += 1
         if written < n:
@@ -260,7 +263,7 @@ def avatar(
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
     Args:
-        target: target video file (its frame rate, size and sound are kept).
+        target: target video file (its size, frame times and sound are kept: VFR stays VFR, ``io.timestamps``).
         out: output video (.mp4/.mkv), written atomically; side files next to it (module docstring).
         model: a :class:`~relightnet.model.RelightNet` or a predictor; needed unless ``light`` is given.
         motion: a motion preset (``walk``, ``turn``, ``idle``, ``arm_raise``; made as long as the

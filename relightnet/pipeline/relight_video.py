@@ -23,7 +23,7 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
-from ..io import VideoWriter
+from ..io import VideoWriter, frame_times
 from ..names import STREAMING_SMOOTHING
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
@@ -59,7 +59,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
 
     Args:
         model: the CNN: a :class:`RelightNet` or a predictor (:mod:`relightnet.pipeline.backends`).
-        video: input video file (its sound, if any, is carried over to ``out``).
+        video: input video file (its frames' times and its sound, if any, are kept in ``out``:
+            a variable frame rate stays so; :mod:`relightnet.io.timestamps`).
         masks: folder of per-frame mask images (sorted) or a mask video, one per frame, or None
             (``mask_source``: the person segmentation, or the CNN's mask head); a frame whose mask
             is empty (the person out of view) is written unchanged; segmented, a video with nobody
@@ -91,6 +92,7 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     # Segmented (no masks given): a clip with nobody in its first seconds is refused then, not at its end.
     give_up = math.ceil(NO_PERSON_S * info.fps) if masks is None and mask_source == "segment" else None
     light = to_model_order(light, predict.lmax)
+    times = frame_times(video)  # None: the file states no times, the frames follow at its average rate
     smoother = state = None
     n = 0
     empty: list[int] = []
@@ -98,13 +100,14 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
                                  disable=not progress):
+            time = float(times[t]) if times is not None and t < len(times) else None
             if give_up is not None and t < give_up:
                 shares.append(float(mask.float().mean()))
                 if t == give_up - 1 and not person_in_most(shares):
                     raise InputError(f"{video}: no person found in most of its first {NO_PERSON_S:g} s (frames 0-{t}); "
                                      "expected a video showing a person (give --masks if they enter later)")
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
-                writer.write(img.permute(1, 2, 0))
+                writer.write(img.permute(1, 2, 0), time=time)
                 empty.append(t)
                 n += 1
                 continue
@@ -118,9 +121,11 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
                 else {}
             y, state = smoother(pred.light, state, torch.tensor([state is None]), **kw)
             src = y[0]
-            new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * t / info.fps)
+            elapsed = t / info.fps if time is None else time - float(times[0])
+            new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * elapsed)
             # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8).image)
+            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8).image,
+                         time=time)
             del pred, img, mask  # the next frame is decoded and predicted without this one's
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left

@@ -41,16 +41,23 @@ def test_failure_leaves_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_odd_sizes_in_mp4_are_kept_whole(tmp_path, caplog):
-    g = np.random.default_rng(1)
-    frames = [g.integers(0, 255, (31, 47, 3), dtype=np.uint8) for _ in range(3)]
+def test_odd_sizes_in_mp4_are_padded_to_yuv420p(tmp_path, caplog):
+    import av
+
+    g = np.random.default_rng(1)  # grey detail (full-resolution luma) and colour in blocks (4:2:0 chroma)
+    frames = [np.repeat(g.integers(0, 255, (31, 47, 1), dtype=np.uint8), 3, axis=2) for _ in range(3)]
+    for f in frames:
+        f[:16, :24] = (200, 40, 40)
     with VideoWriter(tmp_path / "odd.mp4", fps=10) as w:
         for f in frames:
             w.write(f)
-    assert "yuv444p" in caplog.text
+    assert "odd frame size 47x31 (width x height): padded to 48x32" in caplog.text
+    with av.open(str(tmp_path / "odd.mp4")) as c:
+        assert c.streams.video[0].codec_context.pix_fmt == "yuv420p"  # what every player decodes
     back = list(read_video(tmp_path / "odd.mp4"))
-    assert len(back) == 3 and back[0].shape == (31, 47, 3)
-    assert np.abs(back[1].astype(int) - frames[1].astype(int)).mean() < 12  # lossy, but the same picture
+    assert len(back) == 3 and back[0].shape == (32, 48, 3)
+    err = np.abs(back[1].astype(int) - frames[1].astype(int)[np.r_[:31, 30]][:, np.r_[:47, 46]])  # edges repeated
+    assert max(err[:31, :47].mean(), err[31].mean(), err[:, 47].mean()) < 8  # lossy (~3.5); a wrong row: ~85
 
 
 def test_bad_inputs(tmp_path):
@@ -196,3 +203,61 @@ def test_gray_mkv_keeps_every_grey_level_in_one_plane(tmp_path):
         w.write(g)
     with av.open(str(tmp_path / "m.mp4")) as c:
         assert c.streams.video[0].codec_context.pix_fmt == "yuv420p"
+
+
+def _packet_pts(path) -> tuple[object, list[int]]:
+    """The video stream's time base and its packets' pts in display order."""
+    import av
+
+    with av.open(str(path)) as c:
+        s = c.streams.video[0]
+        return s.time_base, sorted(p.pts for p in c.demux(s) if p.size)
+
+
+@pytest.mark.parametrize(("suffix", "tick"), [(".mp4", 1 / 90000), (".mkv", 1 / 1000)])
+def test_frames_with_times_keep_them_on_the_writers_clock(tmp_path, caplog, suffix, tick):
+    from fractions import Fraction
+
+    from relightnet.io import frame_times
+    from tests.io.timed_media import VFR_TIMES
+
+    times = [*VFR_TIMES[:31], VFR_TIMES[30], *VFR_TIMES[31:]]  # frame 31 repeats frame 30's time
+    out = tmp_path / f"vfr{suffix}"
+    with VideoWriter(out, fps=25) as w:
+        for f, t in zip(_frames(len(times), 16, 16), times, strict=True):
+            w.write(f, time=t)
+    tb, pts = _packet_pts(out)
+    assert tb == Fraction(tick).limit_denominator(90000)
+    assert all(b > a for a, b in zip(pts, pts[1:], strict=False))  # strictly increasing
+    want = np.round(np.array(times) / tick)
+    want[31] = want[30] + 1  # the repeated time: one tick later
+    assert np.abs(np.array(pts) - want).max() <= 1  # exact on the clock, within a tick
+    assert "is not after the previous frame's" in caplog.text
+    np.testing.assert_allclose(frame_times(out), want * tick, rtol=0, atol=tick)
+    assert len(list(read_video(out))) == len(times)
+
+
+@pytest.mark.parametrize("clip", ["vfr", "late", "both-late"])
+@pytest.mark.parametrize(("src_name", "acodec", "fmt"), [("in.mp4", "aac", "mp4"),
+                                                         ("in.mkv", "pcm_s16le", "matroska")])
+@pytest.mark.parametrize("out_name", ["out.mp4", "out.mkv"])
+def test_writer_keeps_vfr_and_a_late_start_in_sync_with_the_sound(tmp_path, clip, src_name, acodec, fmt, out_name):
+    from relightnet.io import frame_times
+    from tests.io import timed_media as media
+
+    late = media.LATE_TIMES
+    times, clicks, start = {"vfr": (media.VFR_TIMES, [0.5, 1.0, 1.5], 0.0), "late": (late, [0.5, 1.0], 0.0),
+                            "both-late": ([t + 0.2 for t in late], [0.7, 1.2], 0.2)}[clip]  # sound from 0.2 s
+    src = media.write_timed_clip(tmp_path / src_name, times, clicks, audio_start=start, acodec=acodec, fmt=fmt)
+    out = tmp_path / out_name
+    with VideoWriter(out, fps=video_info(src).fps, audio_from=src) as w:
+        for f, t in zip(read_video(src), frame_times(src), strict=True):
+            w.write(f, time=t)
+    # Every frame against the sound as in the source, within the ms clocks of mkv and of mp4's edit
+    # lists (under 1 ms per stream; half a frame would be 17 ms).
+    assert np.abs(media.av_offsets(src, out)).max() <= 2e-3
+    shown, heard = media.decoded_frame_times(out), media.click_times(out)
+    np.testing.assert_allclose(np.diff(shown), np.diff(times), rtol=0, atol=1e-3)  # VFR stays VFR
+    # The late video still starts as the first click (0.5 s into the sound) sounds; the clicks keep their spacing.
+    assert shown[0] - heard[0] == pytest.approx(times[0] - clicks[0], abs=2e-3)
+    np.testing.assert_allclose(np.diff(heard), np.diff(clicks), rtol=0, atol=1e-3)

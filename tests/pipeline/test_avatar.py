@@ -331,3 +331,21 @@ def test_composite_of_the_box_render_is_the_frames(anny_body, target_at):
             assert np.array_equal(g, _composite_frame(full.render, bg, aa, cam, full.verts, anny_body.faces))
         visible = target_at[0] < 5
         assert (got[0] != bg).any() == visible and (got[1] != got[0]).any() == visible  # antialiasing did work
+
+
+def test_avatar_is_written_on_the_targets_timeline(anny_body, tmp_path):
+    """A target recorded at a variable frame rate (30 then 15 fps) whose video starts 0.5 s after its sound:
+    the avatar video keeps the target's frame times and sound (every frame within the writers' ms clocks)."""
+    from tests.io import timed_media as media
+
+    times = [0.5 + t for t in media.VFR_SHORT]
+    target = media.write_timed_clip(tmp_path / "phone.mp4", times, clicks=[0.5])
+    out = tmp_path / "avatar.mp4"
+    light = torch.zeros(9, 3)
+    light[0] = 2.0
+    res = avatar(target, out, light=light, body=anny_body, n_dirs=16, progress=False)
+    assert res.n_frames == len(times)
+    assert np.abs(media.av_offsets(target, out)).max() <= 2e-3  # half a frame would be 17 ms
+    shown, heard = media.decoded_frame_times(out), media.click_times(out)
+    np.testing.assert_allclose(np.diff(shown), np.diff(times), rtol=0, atol=1e-3)  # VFR stays VFR
+    assert shown[0] - heard[0] == pytest.approx(0.0, abs=2e-3)  # the video starts as the click, 0.5 s in

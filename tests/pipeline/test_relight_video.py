@@ -146,3 +146,21 @@ def test_a_few_false_positives_do_not_make_a_person():
     assert person_in_most([0.0] * 11 + [0.1] * 13)  # in view for most of the frames
     assert not person_in_most([0.0] * 12 + [0.1] * 12)  # half is not most
     assert person_in_most([PERSON_SHARE] * 3)
+
+
+@pytest.mark.parametrize("clip", ["vfr", "late"])
+def test_relight_video_keeps_the_frame_times_and_the_sync(tmp_path, clip):
+    """A phone's variable frame rate (30 then 15 fps) and a video stream that starts 0.5 s after its sound
+    come out as they went in: every frame against the sound within the writers' ms clocks."""
+    from tests.io import timed_media as media
+
+    times, clicks = {"vfr": (media.VFR_SHORT, [0.2]), "late": (media.LATE_SHORT, [0.5])}[clip]
+    video = media.write_timed_clip(tmp_path / "phone.mp4", times, clicks)
+    masks = media.write_masks(tmp_path / "masks", len(times))
+    out = tmp_path / "relit.mp4"
+    assert main(["-q", "relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--out", str(out)]) == 0
+    offsets = media.av_offsets(video, out)  # (T,) seconds, frame t later against the sound than in the source
+    assert np.abs(offsets).max() <= 2e-3  # half a frame would be 17 ms (mp4 edit lists: a 1 ms clock)
+    shown, heard = media.decoded_frame_times(out), media.click_times(out)
+    np.testing.assert_allclose(np.diff(shown), np.diff(times), rtol=0, atol=1e-3)  # VFR stays VFR
+    assert shown[0] - heard[0] == pytest.approx(times[0] - clicks[0], abs=2e-3)  # the late start kept
