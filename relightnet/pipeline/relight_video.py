@@ -90,22 +90,18 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
     info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
     # Segmented (no masks given): a clip with nobody in its first seconds is refused then, not at its end.
-    give_up = math.ceil(NO_PERSON_S * info.fps) if masks is None and mask_source == "segment" else None
+    gate = _person_gate(video, info.fps) if masks is None and mask_source == "segment" else None
     light = to_model_order(light, predict.lmax)
     times = frame_times(video)  # None: the file states no times, the frames follow at its average rate
     smoother = state = None
     n = 0
     empty: list[int] = []
-    shares: list[float] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
                                  disable=not progress):
             time = float(times[t]) if times is not None and t < len(times) else None
-            if give_up is not None and t < give_up:
-                shares.append(float(mask.float().mean()))
-                if t == give_up - 1 and not person_in_most(shares):
-                    raise InputError(f"{video}: no person found in most of its first {NO_PERSON_S:g} s (frames 0-{t}); "
-                                     "expected a video showing a person (give --masks if they enter later)")
+            if gate is not None:
+                gate(t, mask)
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
                 writer.write(img.permute(1, 2, 0), time=time)
                 empty.append(t)
@@ -134,6 +130,22 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         logger.warning("%d frame(s) with an empty mask were written unchanged (first: frame %d)", len(empty), empty[0])
     logger.info("wrote %s (%d frames)", Path(out), n)
     return n
+
+
+def _person_gate(video, fps: float):
+    """A check called with each frame's ``(t, mask)``: raises once the first :data:`NO_PERSON_S` seconds
+    are seen and most of them show nobody (:func:`person_in_most`)."""
+    give_up = math.ceil(NO_PERSON_S * fps)
+    shares: list[float] = []
+
+    def gate(t: int, mask: torch.Tensor) -> None:
+        if t >= give_up:
+            return
+        shares.append(float(mask.float().mean()))
+        if t == give_up - 1 and not person_in_most(shares):
+            raise InputError(f"{video}: no person found in most of its first {NO_PERSON_S:g} s (frames 0-{t}); "
+                             "expected a video showing a person (give --masks if they enter later)")
+    return gate
 
 
 def _smoothing_spelling(smoothing, alpha: float) -> tuple[str, float]:
