@@ -8,6 +8,7 @@ import pytest
 import torch
 
 from relightnet.io import VideoWriter, hdr, read_video
+from tests.io.timed_media import write_timed_clip
 
 #: BT.2020 → BT.709 linear RGB as published (ITU-R BT.2087, four decimals).
 BT2087 = np.array([[1.6605, -0.5876, -0.0728], [-0.1246, 1.1329, -0.0083], [-0.0182, -0.1006, 1.1187]])
@@ -42,15 +43,15 @@ def test_bt2020_to_bt709_matrix_is_the_published_one():
 def test_tone_map_keeps_the_shadows_and_brings_the_peak_to_white():
     peak = hdr.HLG_PEAK / hdr.REFERENCE_WHITE
     m = torch.linspace(0, peak * 1.2, 2001, dtype=torch.float64)
-    out = hdr.tone_map(m[:, None].repeat(1, 3).clone(), peak)[:, 0]
+    out = hdr.tone_map(m.repeat(3, 1), peak)[0]
     below = m <= hdr.KNEE
     np.testing.assert_allclose(out[below], m[below], atol=1e-12)
     assert (out.diff() >= 0).all() and out.max() == 1.0
-    assert hdr.tone_map(torch.full((1, 3), peak, dtype=torch.float64), peak)[0, 0] == pytest.approx(1.0)
+    assert hdr.tone_map(torch.full((3,), peak, dtype=torch.float64), peak)[0] == pytest.approx(1.0)
     eps = 1e-6
-    above = hdr.tone_map(torch.full((1, 3), hdr.KNEE + eps, dtype=torch.float64), peak)[0, 0].item()
+    above = hdr.tone_map(torch.full((3, 1), hdr.KNEE + eps, dtype=torch.float64), peak)[0, 0].item()
     assert (above - hdr.KNEE) / eps == pytest.approx(1.0, abs=1e-4)  # slope 1 at the knee
-    colour = hdr.tone_map(torch.tensor([[3.0, 1.5, 0.3]], dtype=torch.float64), peak)[0]
+    colour = hdr.tone_map(torch.tensor([3.0, 1.5, 0.3], dtype=torch.float64), peak)
     np.testing.assert_allclose(colour / colour[0], [1.0, 0.5, 0.1])  # hue and ratios kept
 
 
@@ -167,10 +168,13 @@ def test_written_videos_are_tagged_sdr_and_keep_their_colours(tmp_path):
     frame = np.zeros((H, W, 3), np.uint8)
     frame[:, :32] = (230, 20, 20)  # saturated: a BT.601 / BT.709 matrix mismatch moves it by ~20 codes
     frame[:, 32:] = (30, 180, 90)
-    for name, tags in (("a.mp4", (1, 1, 1, 1)), ("a.mkv", (1, 13, 0, 2))):
-        with VideoWriter(tmp_path / name, fps=10) as w:
+    write_timed_clip(tmp_path / "sound.mp4", [i / 30 for i in range(3)], [0.05])
+    for name, tags, sound in (("a.mp4", (1, 1, 1, 1), None), ("a.mkv", (1, 13, 0, 2), None),
+                              ("b.mp4", (1, 1, 1, 1), tmp_path / "sound.mp4")):  # the tags kept when muxed
+        with VideoWriter(tmp_path / name, fps=10, audio_from=sound) as w:
             w.write(frame)
         with av.open(str(tmp_path / name)) as c:
+            assert len(c.streams.audio) == (sound is not None)
             cc = c.streams.video[0].codec_context
             assert (cc.color_primaries, cc.color_trc, cc.colorspace, cc.color_range) == tags
         back = next(read_video(tmp_path / name)).astype(int)
