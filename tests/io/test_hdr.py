@@ -55,6 +55,21 @@ def test_tone_map_keeps_the_shadows_and_brings_the_peak_to_white():
     np.testing.assert_allclose(colour / colour[0], [1.0, 0.5, 0.1])  # hue and ratios kept
 
 
+def test_ycbcr_to_rgb_ranges_matrices_and_widened_codes():
+    bt709, bt2020 = (0.2126, 0.0722), (0.2627, 0.0593)
+    codes = torch.tensor([[64.0, 940.0, 0.0], [512.0, 512.0, 512.0], [512.0, 512.0, 512.0]])  # (3, 3): 3 pixels
+    np.testing.assert_allclose(hdr.ycbcr_to_rgb(codes, 10, bt2020, False)[:, :2].T, [[0.0] * 3, [1.0] * 3], atol=1e-6)
+    full = hdr.ycbcr_to_rgb(torch.tensor([[0.0, 1023.0], [512.0, 512.0], [512.0, 512.0]]), 10, bt2020, True)
+    np.testing.assert_allclose(full[0], [0.0, 1.0], atol=1e-6)
+    # 8-bit BT.709 red (unrounded codes), and the same codes widened to 16 bits by a shift of 8
+    red = torch.tensor([[16 + 219 * 0.2126], [128 - 112 * 0.2126 / 0.9278], [240.0]])
+    np.testing.assert_allclose(hdr.ycbcr_to_rgb(red, 8, bt709, False)[:, 0], [1, 0, 0], atol=1e-5)
+    np.testing.assert_allclose(hdr.ycbcr_to_rgb(red * 256, 8, bt709, False, shift=8)[:, 0], [1, 0, 0], atol=1e-5)
+    rgb = torch.rand(3, 50, dtype=torch.float64)  # BT.2020 ncl: the test's own encoding inverted
+    back = hdr.ycbcr_to_rgb(torch.from_numpy(_codes(rgb.T.numpy()).T.astype(np.float32)), 10, bt2020, False)
+    np.testing.assert_allclose(back, rgb, atol=2e-3)  # 10-bit rounding of Y'CbCr
+
+
 def _patches(transfer: str) -> np.ndarray:
     """(8, 3) BT.2020 R'G'B' signals: black, greys, reference white, peak, saturated and skin colours."""
     if transfer == "hlg":  # scene light in [0, 1]
