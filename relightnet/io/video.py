@@ -1,15 +1,14 @@
 """Video files through PyAV: streaming reader and an atomic streaming writer.
 
 ``.mp4`` is written with libx264 (CRF 18, yuv420p: every player decodes it; 4:2:0 chroma needs even
-sides, so an odd-sized frame is padded by one pixel, its last row or column repeated, with a
-warning); ``.mkv`` with the lossless ffv1 codec (exact 8-bit RGB round trip, for tests and
-intermediate files). Frames keep the source's presentation times when they are given
-(:func:`frame_times`, ``VideoWriter.write(frame, time=...)``; :mod:`relightnet.io.timestamps`): a
-variable-frame-rate video stays so, a late video stream keeps its offset from the sound. Above 1080p
-libx264 looks ahead 4 frames and makes no B-frames (:data:`X264_LARGE`): the frames it holds
-bound its memory (at 12.5 MP, 0.5 GB instead of 1 GB with the preset's 10-frame lookahead and
-3 B-frames), at the price of a somewhat larger file at the same quality.
-Frames are (H, W, 3) uint8 sRGB, or float linear RGB that the writer converts.
+sides, so an odd-sized frame is padded by one pixel, its last row or column repeated, with a warning),
+tagged SDR BT.709; ``.mkv`` with the lossless ffv1 codec (exact 8-bit RGB round trip, tagged sRGB).
+Frames keep the source's presentation times when given (:func:`frame_times`, ``write(frame, time=...)``;
+:mod:`relightnet.io.timestamps`): a variable frame rate stays so, a late video stream keeps its offset from
+the sound. Above 1080p libx264 looks ahead 4 frames and makes no B-frames (:data:`X264_LARGE`): the frames
+it holds bound its memory (at 12.5 MP, 0.5 GB instead of 1 GB), for a somewhat larger file at the same
+quality. Frames are (H, W, 3) uint8 sRGB, or float linear RGB that the writer converts; an HDR clip (HLG,
+PQ) is read tone-mapped to SDR (:mod:`relightnet.io.hdr`).
 """
 
 from __future__ import annotations
@@ -29,6 +28,7 @@ import torch
 
 from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
+from .hdr import frame_to_rgb24, note_hdr, sdr_frame, tag_sdr
 from .image import limit_hint, open_limited, to_uint8, upright
 from .limits import check_pixels, check_video_expansion
 from .timestamps import MKV_CLOCK, MP4_CLOCK, PtsClock, timeline_origin
@@ -176,7 +176,8 @@ def read_video(path) -> Iterator[np.ndarray]:
             for i, frame in enumerate(c.decode(video=0)):
                 if i == 0:
                     _count_checked(path, frame.width, frame.height)
-                yield upright(frame.to_ndarray(format="rgb24"), frame.rotation)
+                    note_hdr(frame, path)
+                yield upright(frame_to_rgb24(frame), frame.rotation)
         except InputError:
             raise
         except (av.error.FFmpegError, ValueError) as e:
@@ -239,8 +240,6 @@ class VideoWriter:
     def write(self, frame, time: float | None = None) -> None:
         """Append one frame: (H, W, 3) uint8, or float linear RGB (converted to sRGB 8-bit), shown at
         ``time`` seconds (None: one frame at ``fps`` after the previous one; class docstring)."""
-        import av
-
         if isinstance(frame, torch.Tensor):
             frame = frame.detach().cpu()
         if not (isinstance(frame, np.ndarray) and frame.dtype == np.uint8):
@@ -255,10 +254,7 @@ class VideoWriter:
             raise InputError(f"{self.path}: frame {self.n_frames} is {h}x{w}, expected {self._size[0]}x{self._size[1]}")
         if codec == "libx264" and (h % 2 or w % 2):  # 4:2:0 chroma: even sides (the module docstring)
             frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
-        if self._gray:
-            vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame[..., 0]), format="gray")
-        else:
-            vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="rgb24")
+        vf = sdr_frame(frame, gray=self._gray, yuv=codec == "libx264")
         vf.pts, vf.time_base = self._clock.pts(time), self._clock.tick
         self._timed = self._timed or time is not None
         for packet in self._stream.encode(vf):
@@ -287,6 +283,7 @@ class VideoWriter:
         self._stream.width, self._stream.height = (w + w % 2, h + h % 2) if even else (w, h)
         self._stream.pix_fmt = pix_fmt
         self._stream.options = opts
+        tag_sdr(self._stream.codec_context, yuv=even)
         self._size = (h, w)
 
     def close(self) -> Path:
