@@ -30,8 +30,9 @@ def run(args: argparse.Namespace) -> int:
 
     model = make_predictor(args.backend, args.checkpoint, args.device)
     # without --save-maps the CNN's maps are never held at the photo's size (memory budget)
+    # a cut-out's own alpha is its edge; any other mask gets the soft matte in its border band
     res = relight_image(model, image, light, mask, keep_exposure=not args.absolute, detail=not args.cnn_albedo,
-                        maps=maps is not None)
+                        maps=maps is not None, soft_edges=alpha is None and not args.hard_edges)
     del image, mask
     if res.mask_predicted:
         logger.info("no --mask: the person was found by the model's mask head")
@@ -82,8 +83,12 @@ def run_video(args: argparse.Namespace) -> int:
     model = make_predictor(args.backend, args.checkpoint, args.device)
     relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
-                  mask_source=args.mask_source, alpha=args.alpha)
+                  mask_source=args.mask_source, alpha=args.alpha, soft_edges=not args.hard_edges)
     return 0
+
+
+_HARD_EDGES = ("paste the person with the mask as it is (default: a soft matte in the person's border band, "
+               "the edge refined on the photo; a cut-out keeps its own alpha)")
 
 
 def register(sub) -> None:
@@ -104,6 +109,7 @@ def register(sub) -> None:
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo (at its working size) instead of the photo divided by the "
                         "predicted shading (the default, which keeps the photo's detail)")
+    p.add_argument("--hard-edges", action="store_true", help=_HARD_EDGES)
     add_model_args(p)
     p.set_defaults(func=run)
 
@@ -123,5 +129,6 @@ def register(sub) -> None:
     p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo instead of each frame divided by the predicted shading")
+    p.add_argument("--hard-edges", action="store_true", help=_HARD_EDGES)
     add_model_args(p)
     p.set_defaults(func=run_video)

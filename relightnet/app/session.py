@@ -21,6 +21,7 @@ from ..color import linear_to_srgb, srgb_to_linear
 from ..model.exposure import exposure_level, exposure_scale, transport_level
 from ..model.network import Prediction
 from ..model.photo_albedo import photo_albedo
+from ..segment.matte import edge_matte, soft_composite
 from ..sh.io import resize_sh
 
 __all__ = ["Photo", "load_photo", "RelightSession"]
@@ -107,6 +108,8 @@ class RelightSession:
         self._photo_hwc = image[0].permute(1, 2, 0).contiguous()
         self._photo_u8 = (self._photo_hwc * 255).round().to(torch.uint8)
         self._lut = linear_to_srgb(torch.linspace(0, 1, _LUT_SIZE, dtype=image.dtype))
+        # the soft border band, as relight-image composites it (a cut-out keeps its own alpha)
+        self._edge = edge_matte(image[0], m) if self.photo.alpha is None else None
 
     @property
     def light(self) -> torch.Tensor:
@@ -139,17 +142,21 @@ class RelightSession:
         y0, y1, x0, x1 = self._box
         out = self._photo_hwc.clone()
         out[y0:y1, x0:x1] = self._box_srgb(light, keep_exposure, True).T.reshape(y1 - y0, x1 - x0, 3)
-        return out
+        return soft_composite(out, self._edge)
 
     @torch.no_grad()
     def relight_u8(self, light: torch.Tensor, keep_exposure: bool = True) -> torch.Tensor:
         """:meth:`relight` for the live view: (H, W, 3) uint8, the sRGB curve from a lookup table
         (within one 8-bit level of :meth:`relight` quantised)."""
         y0, y1, x0, x1 = self._box
-        out = self._photo_u8.clone()
-        box = self._box_srgb(light, keep_exposure, False).mul_(255).round_().to(torch.uint8)
-        out[y0:y1, x0:x1] = box.T.reshape(y1 - y0, x1 - x0, 3)
-        return out
+        box = self._box_srgb(light, keep_exposure, False).T.reshape(y1 - y0, x1 - x0, 3)
+        if self._edge is None:
+            out = self._photo_u8.clone()
+            out[y0:y1, x0:x1] = box.mul_(255).round_().to(torch.uint8)
+            return out
+        out = self._photo_hwc.clone()  # the soft band from float values, then one rounding
+        out[y0:y1, x0:x1] = box
+        return soft_composite(out, self._edge).mul_(255).round_().to(torch.uint8)
 
     def mask_overlay(self) -> torch.Tensor:
         """(H, W, 3) sRGB: the photo with the person's mask tinted, for viewing."""

@@ -27,6 +27,7 @@ from ..model.network import shading_map
 from ..model.photo_albedo import ROW_BAND, photo_albedo_rows
 from ..raster.interpolate import to_channels_last
 from ..render.shading import composite, shade
+from ..segment.matte import edge_matte, soft_composite
 
 __all__ = ["BandRelit", "is_gray", "relight_over_photo", "transport_sum"]
 
@@ -76,7 +77,8 @@ def is_gray(image: torch.Tensor) -> bool:
 @torch.no_grad()
 def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor, detail: bool = True,
                        keep_exposure: bool = True, reference: torch.Tensor | None = None,
-                       dtype: torch.dtype = torch.float32, keep_albedo: bool = False) -> BandRelit:
+                       dtype: torch.dtype = torch.float32, keep_albedo: bool = False,
+                       soft_edges: bool = False) -> BandRelit:
     """Relight the person of a photo with a new light and put them over the photo, band by band.
 
     Args:
@@ -92,6 +94,9 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
             photo albedo); default the predicted light (a video passes its smoothed estimate).
         dtype: ``torch.float32`` (values in [0, 1]) or ``torch.uint8`` (rounded, what a video frame is).
         keep_albedo: also return the relit albedo (3, H, W) (``--save-maps``; a photo's worth of memory).
+        soft_edges: composite the person's border band with a soft matte
+            (:func:`~relightnet.segment.matte.soft_composite`: the alpha refined on the photo, the relit
+            colour there from the person's side); False pastes with the mask as it is.
 
     A photo without colour (:func:`is_gray`) gives a person without colour: the relit person's
     luminance, whatever the light's colour.
@@ -130,4 +135,6 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
         out[r:r1] = band
         if albedo_out is not None:
             albedo_out[:, r:r1] = a[0]
+    if soft_edges:
+        soft_composite(out, edge_matte(image, maps.mask[0, 0]))
     return BandRelit(out, new, lit / max(mass, 1.0), albedo_out)

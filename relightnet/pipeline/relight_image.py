@@ -129,13 +129,13 @@ def over_photo(relit: torch.Tensor, mask: torch.Tensor, image: torch.Tensor) -> 
 @torch.no_grad()
 def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.Tensor | None = None,
                   keep_exposure: bool = True, size: int | None = None, detail: bool = True,
-                  maps: bool = True) -> RelitImage:
+                  maps: bool = True, soft_edges: bool = True) -> RelitImage:
     """Relight a photo.
 
     The photo is relit at its full size in bands of rows
-    (:func:`~relightnet.pipeline.relight_bands.relight_over_photo`): the same result as
-    :func:`relight_prediction` and :func:`over_photo` on the pasted prediction (to float32 rounding),
-    without holding the CNN's maps at the photo's size unless ``maps`` asks for them.
+    (:func:`~relightnet.pipeline.relight_bands.relight_over_photo`): with ``soft_edges=False`` the same
+    result as :func:`relight_prediction` and :func:`over_photo` on the pasted prediction (to float32
+    rounding), without holding the CNN's maps at the photo's size unless ``maps`` asks for them.
 
     Args:
         model: the CNN: a :class:`~relightnet.model.RelightNet` (e.g. ``relightnet.model.load_model()``)
@@ -149,6 +149,8 @@ def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.T
             relights the CNN's albedo.
         maps: also return the prediction and the relit albedo at the photo's size (about
             0.06 GB per megapixel more; ``relight-image --save-maps``).
+        soft_edges: a soft matte in the person's border band (:func:`~relightnet.segment.matte.soft_composite`);
+            False pastes the person with the mask as it is (a cut-out's own alpha, ``--hard-edges``).
 
     Returns:
         :class:`RelitImage`; outside the mask the photo is unchanged.
@@ -160,7 +162,8 @@ def relight_image(model, image: torch.Tensor, light: torch.Tensor, mask: torch.T
     predict = as_predictor(model, size=size)
     light = to_model_order(light, predict.lmax)
     crop = predict.crop(image, mask)
-    res = relight_over_photo(crop, image, light, detail=detail, keep_exposure=keep_exposure, keep_albedo=maps)
+    res = relight_over_photo(crop, image, light, detail=detail, keep_exposure=keep_exposure, keep_albedo=maps,
+                             soft_edges=soft_edges)
     if res.lit < 0.5:
         logger.warning("light: it lights only %.0f%% of the person (negative or zero irradiance elsewhere): "
                        "is it a valid SH light?", 100 * res.lit)

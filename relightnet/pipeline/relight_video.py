@@ -54,7 +54,7 @@ def person_in_most(shares, min_share: float = PERSON_SHARE) -> bool:
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
                   smoothing: str = "auto", progress: bool = True, detail: bool = True,
-                  mask_source: str = "segment", alpha: float = 0.3) -> int:
+                  mask_source: str = "segment", alpha: float = 0.3, soft_edges: bool = True) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -76,6 +76,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
         mask_source: without ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`).
         alpha: ``ema``'s weight of the newest frame, in (0, 1].
+        soft_edges: each frame's person composited with a soft matte in its border band
+            (:func:`~relightnet.segment.matte.soft_composite`); False pastes with the mask as it is.
 
     Returns:
         The number of frames written.
@@ -120,8 +122,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             elapsed = t / info.fps if time is None else time - float(times[0])
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * elapsed)
             # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8).image,
-                         time=time)
+            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8,
+                                            soft_edges=soft_edges).image, time=time)
             del pred, img, mask  # the next frame is decoded and predicted without this one's
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left

@@ -7,6 +7,7 @@ from relightnet.data import SynthConfig, generate_sample
 from relightnet.io import read_image, write_image
 from relightnet.model import load_model
 from relightnet.pipeline import relight_image
+from relightnet.segment.matte import band_radius, border_band
 from relightnet.sh import load_light, preset_light
 
 pytestmark = pytest.mark.slow  # the CNN on real photos, relighting, the CLI; 8-17 s each on a loaded machine
@@ -30,7 +31,11 @@ def test_relight_keeps_background_and_size(photo):
     assert res.image.shape == (120, 150, 3)
     outside = mask < 0.5
     orig = img.permute(1, 2, 0).float() / 255
-    torch.testing.assert_close(res.image[outside], orig[outside])
+    band = border_band(mask, band_radius(120, 150))  # the soft edge changes its band only
+    torch.testing.assert_close(res.image[outside & ~band], orig[outside & ~band])
+    hard = relight_image(load_model(), img, preset_light("sunset"), mask, soft_edges=False).image
+    torch.testing.assert_close(hard[outside], orig[outside])
+    torch.testing.assert_close(res.image[~band], hard[~band])
     assert (res.image[~outside] - orig[~outside]).abs().mean() > 0.005  # the person changed
     # Exposure is kept: the relit person is about as bright as in the photo.
     assert 0.3 < float(res.image[~outside].mean() / orig[~outside].mean()) < 3.0
@@ -59,6 +64,19 @@ def test_cli_relight_image_and_errors(photo, tmp_path, capsys):
                  str(bad), "--out", str(tmp_path / "x.png")]) == 1
     assert "NaN" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_cli_soft_edges_change_the_border_band_only(photo, tmp_path):
+    img, mask = photo
+    write_image(tmp_path / "p.png", img.permute(1, 2, 0))
+    write_image(tmp_path / "m.png", mask[..., None].expand(-1, -1, 3), srgb=False)
+    args = ["-q", "relight-image", str(tmp_path / "p.png"), "--mask", str(tmp_path / "m.png"), "--light", "sunset"]
+    assert main(args + ["--out", str(tmp_path / "soft.png")]) == 0
+    assert main(args + ["--out", str(tmp_path / "hard.png"), "--hard-edges"]) == 0
+    soft, hard = read_image(tmp_path / "soft.png"), read_image(tmp_path / "hard.png")
+    band = border_band(mask, band_radius(120, 150)).numpy()
+    assert np.array_equal(soft[~band], hard[~band])
+    assert not np.array_equal(soft[band], hard[band])
 
 
 def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
