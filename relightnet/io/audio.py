@@ -109,6 +109,8 @@ def add_audio(video, audio_from, out, duration: float | None = None, origin: flo
         if not src.streams.audio:
             raise InputError(f"{audio_from}: no audio stream")
         v_in, a_in = vin.streams.video[0], src.streams.audio[0]
+        if a_in.codec_context is None:  # a damaged header can name a codec FFmpeg does not have
+            raise InputError(f"{audio_from}: cannot read its audio (the codec is unknown or damaged)")
         end = duration if duration is not None else (
             float(v_in.duration * v_in.time_base) if v_in.duration else None)
         f = stack.enter_context(atomic_write(out))

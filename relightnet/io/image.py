@@ -108,6 +108,8 @@ def open_limited(path: str | os.PathLike, what: str):
         if not container.streams.video:
             raise InputError(f"{path}: not {what} (no image stream)")
         ctx = container.streams.video[0].codec_context
+        if ctx is None:  # a damaged header can name a codec FFmpeg does not have
+            raise InputError(f"{path}: cannot read {what} (its image stream's codec is unknown or damaged)")
         if ctx.width or ctx.height:
             check_pixels(ctx.width, ctx.height, f"{path}")
         ctx.options = opts
