@@ -11,8 +11,10 @@ registered or stitched into a panorama: that is not done.
    the person's mask becomes the blocks it touches, grown by one block (the person's outline,
    shadow and motion blur).
 2. **Phase correlation** (:func:`phase_shift`). The pixels the person covers in either thumbnail
-   are set to the thumbnail's mean over the others (they carry no texture, so the person's own
-   motion does not count); each thumbnail, less that mean, is multiplied by a Hann window; the
+   get weight 0 (they carry no texture, so the person's own motion does not count), rising
+   smoothly to 1 over 8 pixels outside them (a hard edge around the person, at the same place in
+   both frames when the camera follows the person, would pull the peak toward zero); each
+   thumbnail, less its weighted mean, times the weight, is multiplied by a Hann window; the
    cross-power spectrum is normalised to unit magnitude (phase only) and multiplied by a Gaussian
    of 1 pixel, so that its inverse transform is a sampled Gaussian centred at the shift. The peak
    is refined to sub-pixel by a parabola through the logarithms of the peak and its two neighbours
@@ -44,6 +46,8 @@ MOTION_SHARE = 0.01
 EARLY_FRAMES = 60
 #: Width (standard deviation, thumbnail pixels) of the Gaussian the correlation peak is shaped into.
 _SIGMA = 1.0
+#: Thumbnail pixels over which the weight rises from 0 (the person) to 1.
+_TAPER = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,7 +108,7 @@ def phase_shift(a: np.ndarray, b: np.ndarray, valid: np.ndarray | None = None) -
 
     Args:
         a, b: (H, W) float images of the same size.
-        valid: (H, W) bool pixels to correlate (the others are set to the image's mean over these), or None.
+        valid: (H, W) bool pixels to correlate (the others get weight 0, tapered: module docstring), or None.
     """
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
     if a.ndim != 2 or a.shape != b.shape:
@@ -124,11 +128,24 @@ def phase_shift(a: np.ndarray, b: np.ndarray, valid: np.ndarray | None = None) -
     return (dy - H if dy > H / 2 else dy), (dx - W if dx > W / 2 else dx)
 
 
+def _box(x: np.ndarray, r: int) -> np.ndarray:
+    """The mean of ``x`` over a (2r + 1)² square around each pixel (zero outside), by cumulative sums."""
+    for axis in (0, 1):
+        c = np.cumsum(np.pad(x, [(r + 1, r) if a == axis else (0, 0) for a in (0, 1)]), axis=axis)
+        x = (np.take(c, np.arange(2 * r + 1, c.shape[axis]), axis) - np.take(c, np.arange(c.shape[axis] - 2 * r - 1),
+                                                                               axis)) / (2 * r + 1)
+    return x
+
+
 def _centred(x: np.ndarray, valid: np.ndarray | None) -> np.ndarray:
-    """``x`` less its mean over ``valid``, 0 (the mean) elsewhere."""
+    """``x`` less its mean, weighted: 0 on the invalid pixels, rising to 1 over :data:`_TAPER` pixels
+    outside them (a hard hole's edge, at the same place in both images, would pull the peak toward 0)."""
     if valid is None:
         return x - x.mean()
-    return np.where(valid, x - x[valid].mean(), 0.0)
+    w = np.clip(2 * _box(valid.astype(np.float64), _TAPER) - 1, 0, 1) ** 2 * valid
+    if not w.any():
+        w = valid.astype(np.float64)
+    return (x - (x * w).sum() / w.sum()) * w
 
 
 def shifts_to_first(thumbs: Sequence[Thumbnail]) -> np.ndarray:
