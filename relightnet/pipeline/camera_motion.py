@@ -114,7 +114,9 @@ def phase_shift(a: np.ndarray, b: np.ndarray, valid: np.ndarray | None = None) -
     if a.ndim != 2 or a.shape != b.shape:
         raise InputError(f"phase shift: expected two (H, W) images of one size, got {a.shape} and {b.shape}")
     H, W = a.shape
-    if valid is not None and not valid.any():
+    if valid is not None and np.shape(valid) != a.shape:
+        raise InputError(f"phase shift: valid {np.shape(valid)} differs from the images' {a.shape}")
+    if valid is not None and not np.any(valid):
         raise InputError("phase shift: no valid pixel to correlate")
     win = np.outer(np.hanning(H), np.hanning(W))
     A, B = (np.fft.rfft2(_centred(x, valid) * win) for x in (a, b))
@@ -130,10 +132,11 @@ def phase_shift(a: np.ndarray, b: np.ndarray, valid: np.ndarray | None = None) -
 
 def _box(x: np.ndarray, r: int) -> np.ndarray:
     """The mean of ``x`` over a (2r + 1)² square around each pixel (zero outside), by cumulative sums."""
+    k = 2 * r + 1
     for axis in (0, 1):
         c = np.cumsum(np.pad(x, [(r + 1, r) if a == axis else (0, 0) for a in (0, 1)]), axis=axis)
-        x = (np.take(c, np.arange(2 * r + 1, c.shape[axis]), axis) - np.take(c, np.arange(c.shape[axis] - 2 * r - 1),
-                                                                               axis)) / (2 * r + 1)
+        n = c.shape[axis]
+        x = (np.take(c, np.arange(k, n), axis) - np.take(c, np.arange(n - k), axis)) / k
     return x
 
 
