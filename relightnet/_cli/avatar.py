@@ -85,7 +85,8 @@ def register(sub) -> None:
     p.add_argument("--replace-person", action="store_true",
                    help="put the avatar in place of the target's person: composite over the target's clean plate "
                    "(temporal median of the background where the person's mask uncovers it; never-uncovered pixels "
-                   "inpainted; OUT.plate.png) with the avatar standing where the person stood")
+                   "inpainted; OUT.plate.png) with the avatar standing where the person stood; needs a fixed camera (a "
+                   "moving one is refused)")
     p.add_argument("--motion", default=None,
                    help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video), an Anny motion file from "
                    "`relightnet fit`, or an SMPL-style motion file (.npz/.pkl) for --body smpl:PATH (default: walk)")

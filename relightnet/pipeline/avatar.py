@@ -40,7 +40,7 @@ from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
-from .clean_plate import check_stand_in, stand_in_frames
+from .clean_plate import check_camera_start, check_stand_in, stand_in_frames
 from .outfits import avatar_look
 from .scene import load_body, open_motion
 from .video_lights import estimate_video_evidence, lights_fingerprint, read_light_estimates, write_video_lights
@@ -101,6 +101,15 @@ def _plate_frames(plate, target, size):
     if video_info(p).size != tuple(size):
         raise InputError(f"--plate {plate}: size {video_info(p).size} differs from the target's {tuple(size)}")
     return read_video(p)
+
+
+def _backgrounds(plate, target, size, replace_person: bool, target_masks, mask_source):
+    """:func:`_plate_frames` (a bad plate fails before the light pass: frames are read lazily); with
+    ``replace_person``, first the early check that the target's camera is fixed (its first frames:
+    :func:`.clean_plate.check_camera_start`)."""
+    if replace_person:
+        check_camera_start(target, target_masks, mask_source)
+    return _plate_frames(plate, target, size)
 
 
 def _side_paths(out: Path) -> tuple[Path, Path]:
@@ -296,7 +305,7 @@ def avatar(
     base, body_model, tex = avatar_look(load_body(body), albedo, outfit)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, base, info.fps)
-    backgrounds = _plate_frames(plate, target, info.size)  # likewise a bad plate (frames are read lazily)
+    backgrounds = _backgrounds(plate, target, info.size, replace_person, target_masks, mask_source)  # likewise
     lights_file, plot = _side_paths(out)
     if light is None:
         lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,

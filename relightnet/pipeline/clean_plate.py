@@ -2,10 +2,12 @@
 
 :func:`clean_plate` builds the background of a video from its frames and person masks:
 
-1. **Samples.** At most ``max_samples`` frames, evenly spaced over the video, are kept
-   (uint8 frames and boolean masks), so memory is bounded whatever the video's length.
+1. **Samples.** At most ``max_samples`` frames, evenly spaced over the video, are kept,
+   streamed into one preallocated uint8 (S, H, W, 3) buffer, so memory is bounded whatever the
+   video's length (about S · H · W · 4 bytes with the masks: 400 MB for 48 samples at 1080p).
 2. **Covered.** Each mask is dilated by ``margin`` pixels (the segmentation's outline is
-   soft, and the person's contact shadow and motion blur lie just outside it).
+   soft, and the person's contact shadow and motion blur lie just outside it) as it arrives,
+   into one preallocated (S, H, W) bool buffer.
 3. **Temporal median.** Per pixel and channel, the median of the samples where the dilated
    mask does not cover the pixel (the lower median for an even count). A pixel the person
    covers in some frames and uncovers in others gets only background samples.
@@ -25,7 +27,8 @@ the samples of the feet (the figure's centre column, the mask's lowest row) and 
 (so the camera-relative light is unchanged) moved so that the avatar's feet at the world
 origin land on the person's feet and its standing height on the person's height. :func:`stand_in`
 also tracks the person's box in every frame and moves the avatar along that path
-(:mod:`.person_path`).
+(:mod:`.person_path`). The median needs a fixed camera: :func:`check_camera_start` (the first frames) and
+:func:`stand_in` (the samples) refuse one that moves (:mod:`.camera_motion`); a pan is not registered.
 """
 
 from __future__ import annotations
@@ -41,12 +44,13 @@ import torch.nn.functional as F
 
 from ..checks import InputError, check_shape
 from ..raster import Camera, look_at, perspective_camera
+from .camera_motion import EARLY_FRAMES, check_fixed_camera, thumbnail
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["WARN_SHARE", "CleanPlate", "sample_indices", "dilate_masks", "masked_median", "push_pull_fill",
            "clean_plate", "Placement", "person_box", "person_placement", "placed_camera", "plate_psnr",
-           "check_stand_in", "stand_in", "stand_in_frames"]
+           "check_stand_in", "check_camera_start", "stand_in", "stand_in_frames"]
 
 #: The avatar job warns when more than this share of the person's area had to be inpainted.
 WARN_SHARE = 0.02
@@ -94,7 +98,8 @@ def dilate_masks(masks: torch.Tensor, margin: int) -> torch.Tensor:
 
 
 def masked_median(frames: torch.Tensor, covered: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """Per-pixel temporal median over the uncovered samples.
+    """Per-pixel temporal median over the uncovered samples, :data:`_ROWS` rows at a time (the float
+    working memory is N × _ROWS × W × C, not the whole stack's).
 
     Args:
         frames: (N, H, W, C) uint8 or float samples.
@@ -106,11 +111,14 @@ def masked_median(frames: torch.Tensor, covered: torch.Tensor) -> tuple[torch.Te
     d = check_shape(frames, ["N", "H", "W", "C"], name="frames")
     check_shape(covered, [d["N"], d["H"], d["W"]], name="covered")
     out = torch.empty(d["H"], d["W"], d["C"])
+    count = torch.empty(d["H"], d["W"], dtype=torch.int64)
     for r in range(0, d["H"], _ROWS):
         x = frames[:, r:r + _ROWS].float()
-        x[covered[:, r:r + _ROWS]] = float("nan")
+        c = covered[:, r:r + _ROWS]
+        x[c] = float("nan")
         out[r:r + _ROWS] = torch.nanmedian(x, dim=0).values
-    return out, (~covered).sum(0)
+        count[r:r + _ROWS] = c.shape[0] - c.sum(0)
+    return out, count
 
 
 def push_pull_fill(image: torch.Tensor, known: torch.Tensor) -> torch.Tensor:
@@ -143,8 +151,47 @@ def push_pull_fill(image: torch.Tensor, known: torch.Tensor) -> torch.Tensor:
     return torch.where(known[..., None], image, out)
 
 
+def _sample(t: int, f, m) -> tuple[np.ndarray, torch.Tensor]:
+    """One sample's checked (H, W, 3) uint8 frame and (H, W) bool mask."""
+    f = np.asarray(f)
+    if f.ndim != 3 or f.shape[2] != 3 or f.dtype != np.uint8:
+        raise InputError(f"clean plate: frame {t}: expected (H, W, 3) uint8, got {f.shape} {f.dtype}")
+    m = torch.as_tensor(np.asarray(m)) > 0.5
+    if tuple(m.shape) != f.shape[:2]:
+        raise InputError(f"clean plate: frame {t}: mask {tuple(m.shape)} differs from the frame {f.shape[:2]}")
+    return f, m
+
+
+def _stream_samples(frames: Iterable, want: set[int], margin: int | None) -> tuple[torch.Tensor, torch.Tensor]:
+    """The sampled frames streamed into one preallocated (S, H, W, 3) uint8 buffer and their dilated masks
+    into one (S, H, W) bool buffer (allocated at the first sample's size): (frames, covered), cut to the
+    samples the iterator gave."""
+    buf = cov = None
+    k = 0
+    for t, (f, m) in enumerate(frames):
+        if t not in want:
+            continue
+        f, m = _sample(t, f, m)
+        if buf is None:
+            H, W = f.shape[:2]
+            margin = max(2, round(0.01 * H)) if margin is None else int(margin)
+            buf = torch.empty(len(want), H, W, 3, dtype=torch.uint8)
+            cov = torch.empty(len(want), H, W, dtype=torch.bool)
+        elif f.shape[:2] != tuple(buf.shape[1:3]):
+            raise InputError(f"clean plate: frame {t}: size {f.shape[:2]} differs from the first sample's "
+                             f"{tuple(buf.shape[1:3])}")
+        buf[k] = torch.from_numpy(f)
+        cov[k] = dilate_masks(m[None], margin)[0]  # one mask at a time: no float copy of the stack
+        k += 1
+    if buf is None:
+        raise InputError("clean plate: the video has no frame")
+    return buf[:k], cov[:k]
+
+
 def clean_plate(frames: Iterable, n_frames: int, max_samples: int = 48, margin: int | None = None) -> CleanPlate:
     """The clean plate of a video from its frames and person masks (module docstring).
+
+    Peak memory: about the samples' own, S · H · W · 4 bytes (module docstring, steps 1–3), plus a few frames.
 
     Args:
         frames: (frame, mask) pairs in the video's order (an iterator is read once): (H, W, 3) uint8
@@ -156,24 +203,8 @@ def clean_plate(frames: Iterable, n_frames: int, max_samples: int = 48, margin: 
     Returns:
         :class:`CleanPlate`.
     """
-    want = set(sample_indices(n_frames, max_samples))
-    fs, ms = [], []
-    for t, (f, m) in enumerate(frames):
-        if t in want:
-            f = np.asarray(f)
-            if f.ndim != 3 or f.shape[2] != 3 or f.dtype != np.uint8:
-                raise InputError(f"clean plate: frame {t}: expected (H, W, 3) uint8, got {f.shape} {f.dtype}")
-            m = torch.as_tensor(np.asarray(m)) > 0.5
-            if tuple(m.shape) != f.shape[:2]:
-                raise InputError(f"clean plate: frame {t}: mask {tuple(m.shape)} differs from the frame {f.shape[:2]}")
-            fs.append(torch.from_numpy(np.ascontiguousarray(f)))
-            ms.append(m)
-    if not fs:
-        raise InputError("clean plate: the video has no frame")
-    H = fs[0].shape[0]
-    margin = max(2, round(0.01 * H)) if margin is None else int(margin)
-    covered = dilate_masks(torch.stack(ms), margin)
-    med, count = masked_median(torch.stack(fs), covered)
+    fs, covered = _stream_samples(frames, set(sample_indices(n_frames, max_samples)), margin)
+    med, count = masked_median(fs, covered)
     flagged = count == 0
     ever = covered.any(0)
     if bool(flagged.all()):
@@ -215,13 +246,18 @@ def person_placement(masks: Iterable) -> Placement | None:
     """The median feet position and height of a person over (H, W) masks (None when every mask is empty),
     each over the masks the frame's edges do not cut (:func:`person_box`), or over all when every one is cut."""
     ms = [np.asarray(m) > 0.5 for m in masks]
-    framed = [b for b in (person_box(m) for m in ms) if b is not None]
+    return _placement([(person_box(m), person_box(m, framed=False)) for m in ms])
+
+
+def _placement(boxes) -> Placement | None:
+    """:func:`person_placement` from each mask's (framed, unframed) :func:`person_box` (no mask kept)."""
+    framed = [b for b, _ in boxes if b is not None]
     if not framed:
         return None
     a = np.asarray(framed)
     cut = np.isnan(a).all(0)
     if cut.any():  # cut in every frame (a close-up): the cut values
-        a[:, cut] = np.asarray([person_box(m, framed=False) for m in ms if person_box(m) is not None])[:, cut]
+        a[:, cut] = np.asarray([u for b, u in boxes if b is not None])[:, cut]
     med = np.nanmedian(a, axis=0)
     return Placement((float(med[0]), float(med[1])), float(med[2]))
 
@@ -252,11 +288,43 @@ def plate_psnr(plate: np.ndarray, truth: np.ndarray, region: np.ndarray) -> floa
     return math.inf if mse == 0 else 10 * math.log10(255.0**2 / mse)
 
 
+def _stand_in_masks(target, target_masks, mask_source):
+    """The target's frames with the person's masks for ``--replace-person`` (``head`` gives none: refused)."""
+    from ..segment.sources import video_masks
+
+    if target_masks is None and mask_source == "head":
+        raise InputError("--replace-person: needs the person's masks: give --target-masks or use --mask-source "
+                         "segment")
+    return video_masks(target, target_masks, mask_source, allow_empty=True)
+
+
+def _uint8(img: torch.Tensor) -> np.ndarray:
+    """A (3, H, W) float sRGB frame in [0, 1] as (H, W, 3) uint8."""
+    return (img.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy()
+
+
+def check_camera_start(target, target_masks=None, mask_source: str = "segment",
+                       n_frames: int = EARLY_FRAMES) -> None:
+    """``--replace-person``'s early check: refuse a target whose camera moves over its first ``n_frames``
+    frames (the person's masks left out; :func:`.camera_motion.check_fixed_camera`), before any expensive
+    work. ``target_masks``, ``mask_source``: as :func:`stand_in`."""
+    info, _, frames = _stand_in_masks(target, target_masks, mask_source)
+    thumbs, idx = [], []
+    for t, img, m in frames:
+        if t >= n_frames:
+            break
+        thumbs.append(thumbnail(_uint8(img), m))
+        idx.append(t)
+    if thumbs:
+        check_fixed_camera(target, thumbs, idx, info.size[1])
+
+
 def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: str = "segment",
              max_samples: int = 48, fov_deg: float = 35.0) -> tuple[CleanPlate, Camera, torch.Tensor]:
     """``avatar --replace-person``: the target's clean plate, the camera that puts the avatar where the
     person stood in the median frame (module docstring) and the avatar's path that follows the person
-    frame by frame (:mod:`.person_path`). Writes ``OUT.plate.png`` (the plate) beside ``out``.
+    frame by frame (:mod:`.person_path`). Writes ``OUT.plate.png`` (the plate) beside ``out``. A camera
+    that moves between the plate's samples is refused before the median (:mod:`.camera_motion`).
 
     Args:
         target: the target video. out: the avatar's output path. n_frames: frames the avatar job writes.
@@ -270,28 +338,29 @@ def stand_in(target, out, n_frames: int, body, target_masks=None, mask_source: s
     from pathlib import Path
 
     from ..io import write_image
-    from ..segment.sources import video_masks
     from .person_path import path_offsets, smooth_track
 
-    if target_masks is None and mask_source == "head":
-        raise InputError("--replace-person: needs the person's masks: give --target-masks or use --mask-source "
-                         "segment")
-    info, _, frames = video_masks(target, target_masks, mask_source, allow_empty=True)
+    info, _, frames = _stand_in_masks(target, target_masks, mask_source)
     want = set(sample_indices(n_frames, max_samples))
-    kept, boxes = [], []
+    kept, boxes, thumbs, idx = [], [], [], []
 
     def pairs():  # one decode: the frames come back from the masks' iterator
         for t, img, m in frames:
             if t >= n_frames:
-                return
+                break
             m = torch.as_tensor(m) > 0.5
             boxes.append(person_box(m.numpy()))
-            if t in want:
-                kept.append(m.numpy())
-            yield (img.permute(1, 2, 0) * 255).round().to(torch.uint8).numpy(), m
+            f = _uint8(img)
+            if t in want:  # the boxes and a thumbnail only: no mask kept beyond the plate's buffer
+                kept.append((boxes[-1], person_box(m.numpy(), framed=False)))
+                thumbs.append(thumbnail(f, m.numpy()))
+                idx.append(t)
+            yield f, m
+        if thumbs:  # before the median: a moving camera would only smear it
+            check_fixed_camera(target, thumbs, idx, info.size[1])
 
     plate = clean_plate(pairs(), n_frames, max_samples)
-    where = person_placement(kept)
+    where = _placement(kept)
     if where is None:
         raise InputError(f"--replace-person: {target}: no person found in any sampled frame")
     level = logging.WARNING if plate.inpainted_share > WARN_SHARE else logging.INFO
