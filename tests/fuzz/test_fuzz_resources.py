@@ -6,8 +6,9 @@ regression cannot take the machine) and which is killed after ``WALL_CAP`` secon
 checks the exit status, the one-line error naming the hostile file, the child's peak RSS
 (``os.wait4``) against the 2 GB budget, and that nothing was left in the case folder or the
 child's ``TMPDIR``; a case with a ``check`` (the phone and stranger-file families of
-``resource_phone.py`` and ``resource_phone_video.py``) then has its result checked too. Peak RSS and time per case are printed by
-``benchmarks/bench_untrusted.py --resources`` (BENCHMARKS.md, SECURITY.md).
+``resource_phone.py`` and ``resource_phone_video.py``) then has its result checked too. Peak RSS
+and time per case are printed by ``benchmarks/bench_untrusted.py --resources`` (BENCHMARKS.md,
+SECURITY.md).
 """
 
 from __future__ import annotations
