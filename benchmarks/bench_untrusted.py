@@ -103,6 +103,12 @@ def resources(names: list[str]) -> None:
             case = rc.CASES[name](folder)
             size = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
             res = rc.run_capped(case, folder)
+            wrong = ""
+            if case.check is not None and not res.timed_out and res.rc in (0, 1):  # the result itself
+                try:
+                    case.check(folder)
+                except AssertionError as e:
+                    wrong = f"; WRONG: {e}"
         lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
         line = (lines[-1] if lines else "").replace("|", "/")
         line = line if len(line) <= 110 else line[:107] + "..."
@@ -110,7 +116,7 @@ def resources(names: list[str]) -> None:
         command = next(a for a in case.argv if not a.startswith("-"))
         print(f"| {name} | {size / 1e3:,.0f} KB | {command} | {status} | {res.rss / 2**20:,.0f} MiB | "
               f"{res.wall:.1f} s | {', '.join(res.leftovers) or 'nothing'} | "
-              f"{line if res.rc else 'ok: ' + ', '.join(case.outputs[:1])} |", flush=True)
+              f"{line if res.rc else 'ok: ' + ', '.join(case.outputs[:1])}{wrong} |", flush=True)
 
 
 def main() -> None:

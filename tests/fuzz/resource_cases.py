@@ -21,6 +21,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import resource_fit  # noqa: E402
 import resource_media  # noqa: E402
+import resource_phone  # noqa: E402
+import resource_phone_video  # noqa: E402
 from resource_media import _png_chunk, png, video  # noqa: E402
 from resource_runner import AS_CAP, RSS_BUDGET, THIRD_PARTY_TMP, WALL_CAP, Case, Result, run_capped  # noqa: E402
 
@@ -324,9 +326,12 @@ CASES = {
     "checkpoint-wide": checkpoint_wide,
     **resource_media.CASES,
     **resource_fit.CASES,
+    **resource_phone.CASES,
+    **resource_phone_video.CASES,
 }
 #: Cases that take more than a few seconds (marked ``slow`` in the test).
-SLOW = {*resource_media.SLOW, *resource_fit.SLOW, "exr-12.5MP-projected", "mp4-stts-20M-frames"}
+SLOW = {*resource_media.SLOW, *resource_fit.SLOW, *resource_phone.SLOW, *resource_phone_video.SLOW,
+        "exr-12.5MP-projected", "mp4-stts-20M-frames"}
 
 
 def describe(name: str) -> str:

@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +35,8 @@ class Case:
     names: str
     expect: str = "error"  # "error": exit 1 with one line naming ``names``; "ok": exit 0; "any": either
     outputs: tuple[str, ...] = ()  # files the command may leave (relative to the case folder)
+    #: called with the case folder after the other assertions: raises AssertionError if the result is wrong
+    check: Callable[[Path], None] | None = None
 
 
 @dataclass

@@ -5,8 +5,10 @@ Every case of ``resource_cases.CASES`` (SECURITY.md's table and variants) runs t
 regression cannot take the machine) and which is killed after ``WALL_CAP`` seconds. The test
 checks the exit status, the one-line error naming the hostile file, the child's peak RSS
 (``os.wait4``) against the 2 GB budget, and that nothing was left in the case folder or the
-child's ``TMPDIR``. Peak RSS and time per case are printed by
-``benchmarks/bench_untrusted.py --resources`` (BENCHMARKS.md, SECURITY.md).
+child's ``TMPDIR``; a case with a ``check`` (the phone and stranger-file families of
+``resource_phone.py`` and ``resource_phone_video.py``) then has its result checked too. Peak RSS
+and time per case are printed by ``benchmarks/bench_untrusted.py --resources`` (BENCHMARKS.md,
+SECURITY.md).
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ def test_hostile_file_is_bounded(tmp_path, name):
     else:
         assert res.rc == 0, f"{name}: exit {res.rc}: {res.stderr[-2000:]}"
     assert res.leftovers == [], f"{name}: left {res.leftovers}"
+    if case.check is not None:  # the result itself (resource_phone's families): what the output must be
+        case.check(tmp_path)
 
 
 def test_the_caps_and_the_peak_are_real(tmp_path):
@@ -63,3 +67,42 @@ def test_the_caps_and_the_peak_are_real(tmp_path):
     second = rc.run_capped(case, tmp_path)
     assert first.rc == second.rc == 0, second.stderr
     assert 100 << 20 < first.rss < 1 << 30 and abs(second.rss - first.rss) < 64 << 20, (first.rss, second.rss)
+
+
+def test_the_result_checks_refuse_wrong_results(tmp_path):
+    """The families' checks (``Case.check``) fail on a wrong output: an RGBA or resized photo, a profile
+    dropped, a grey person tinted, an input overwritten, an output left by a failed run."""
+    from PIL import Image
+
+    def case(prefix: str):
+        name = next(n for n in sorted(rc.CASES) if n.startswith(prefix))
+        folder = tmp_path / name
+        folder.mkdir()
+        return rc.CASES[name](folder), folder
+
+    def refused(check, folder) -> None:
+        with pytest.raises(AssertionError):
+            check(folder)
+
+    c, f = case("phone-width-")
+    w, h = Image.open(f / "mask.png").size
+    Image.new("RGBA", (w, h)).save(f / "out.png")
+    refused(c.check, f)
+    Image.new("RGB", (w + 1, h)).save(f / "out.png")
+    refused(c.check, f)
+    c, f = case("icc-p3-png")
+    Image.new("RGB", Image.open(f / "mask.png").size).save(f / "out.png")
+    refused(c.check, f)
+    c, f = case("gray-rgb-png")
+    Image.new("RGB", Image.open(f / "mask.png").size, (120, 118, 130)).save(f / "out.png")
+    refused(c.check, f)
+    Image.new("RGB", Image.open(f / "mask.png").size, (120, 121, 120)).save(f / "out.png")
+    c.check(f)  # one level apart: grey
+    c, f = case("out-is-input-hard-link")
+    c.check(f)
+    (f / "p.png").write_bytes(b"overwritten")
+    refused(c.check, f)
+    c, f = case("trunc-png-")
+    c.check(f)
+    (f / "out.png").write_bytes(b"half")
+    refused(c.check, f)
