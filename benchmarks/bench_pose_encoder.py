@@ -65,7 +65,7 @@ def exported_encoder(path: Path) -> Path:
     return path
 
 
-def session(model, threads: int):
+def ort_session(model, threads: int):
     import onnxruntime as ort
 
     opts = ort.SessionOptions()
@@ -99,8 +99,8 @@ def main() -> None:
             with torch.no_grad():
                 eager = median_ms(lambda: enc(x), args.repeat)
                 eager_cl = median_ms(lambda: enc_cl(x_cl), args.repeat)
-            feeds = [(session(ort_model(OUTPUTS), threads), nhwc), (session(ort_model(taps), threads), nhwc),
-                     (session(exported, threads), {"image": x.numpy()})]
+            feeds = [(ort_session(ort_model(OUTPUTS), threads), nhwc), (ort_session(ort_model(taps), threads), nhwc),
+                     (ort_session(exported, threads), {"image": x.numpy()})]
             rows.append([threads, eager, eager_cl] + [ort_ms(s, f, args.repeat) for s, f in feeds])
     n_enc = sum(p.numel() for p in enc.parameters())
     n_full = sum(p.numel() for p in GraphModule(load_onnx(), OUTPUTS).parameters())

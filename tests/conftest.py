@@ -1,4 +1,4 @@
-"""Fixtures shared by every test folder: the Anny cache location, one Anny model per session, and the
+"""Fixtures shared by every test folder: the Anny cache location, one Anny model per test run, and the
 ``--device`` / ``--dtype`` options (fixtures ``device``, ``dtype``) of the kernel tests."""
 
 from __future__ import annotations

@@ -72,29 +72,17 @@ def _clip_case(name: str, times: list[float], clicks: list[float], masks: str, w
 
 def _hdr_clip(path: Path, w: int, h: int, trc: int, n: int, seed: int) -> None:
     """``n`` frames of 10-bit 4:2:0 HEVC tagged BT.2020 (primaries and matrix, limited range) and ``trc``."""
-    import av
+    from tests.io.hdr_media import write_hevc10
 
     g = np.random.default_rng(seed)
-    with av.open(str(path), "w") as c:
-        s = c.add_stream("libx265", rate=10)
-        s.width, s.height, s.pix_fmt = w, h, "yuv420p10le"
-        s.options = {"x265-params": "bframes=0:log-level=error"}
-        cc = s.codec_context
-        cc.color_primaries, cc.color_trc, cc.colorspace, cc.color_range = 9, trc, 9, 1
-        for i in range(n):
+
+    def frames():
+        for _ in range(n):
             y = g.integers(200, 500, (h, w)).astype(np.uint16)
             y[h // 6:h * 5 // 6, w // 3:w * 2 // 3] = 700
-            planes = (y, np.full((h // 2, w // 2), 480, np.uint16), np.full((h // 2, w // 2), 540, np.uint16))
-            f = av.VideoFrame(w, h, "yuv420p10le")
-            for plane, a in zip(f.planes, planes, strict=True):
-                buf = np.zeros((a.shape[0], plane.line_size // 2), np.uint16)
-                buf[:, :a.shape[1]] = a
-                plane.update(buf.tobytes())
-            f.pts = i
-            for p in s.encode(f):
-                c.mux(p)
-        for p in s.encode():
-            c.mux(p)
+            yield y, np.full((h // 2, w // 2), 480, np.uint16), np.full((h // 2, w // 2), 540, np.uint16)
+
+    write_hevc10(path, frames(), (w, h), trc)
 
 
 def _hdr_family() -> dict:

@@ -8,6 +8,7 @@ import pytest
 import torch
 
 from relightnet.io import VideoWriter, hdr, read_video
+from tests.io.hdr_media import write_hevc10
 from tests.io.timed_media import write_timed_clip
 
 #: BT.2020 → BT.709 linear RGB as published (ITU-R BT.2087, four decimals).
@@ -116,23 +117,7 @@ def _write_hevc(path, codes: np.ndarray, trc: int, n: int = 2) -> None:
     """``n`` frames of (8, 3) patch codes as 10-bit 4:2:0 HEVC (lossless), tagged BT.2020 + ``trc``."""
     img = codes.reshape(2, 4, 3).repeat(BLOCK, 0).repeat(BLOCK, 1)  # (H, W, 3)
     planes = (img[..., 0], img[::2, ::2, 1], img[::2, ::2, 2])  # flat patches: 4:2:0 exactly
-    with av.open(str(path), "w") as c:
-        s = c.add_stream("libx265", rate=10)
-        s.width, s.height, s.pix_fmt = W, H, "yuv420p10le"
-        s.options = {"x265-params": "lossless=1:bframes=0:log-level=error"}
-        cc = s.codec_context
-        cc.color_primaries, cc.color_trc, cc.colorspace, cc.color_range = 9, trc, 9, 1  # bt2020, bt2020nc, tv
-        for i in range(n):
-            f = av.VideoFrame(W, H, "yuv420p10le")
-            for plane, a in zip(f.planes, planes, strict=True):
-                buf = np.zeros((a.shape[0], plane.line_size // 2), np.uint16)
-                buf[:, : a.shape[1]] = a
-                plane.update(buf.tobytes())
-            f.pts = i
-            for p in s.encode(f):
-                c.mux(p)
-        for p in s.encode():
-            c.mux(p)
+    write_hevc10(path, [planes] * n, (W, H), trc, lossless=True)
 
 
 @pytest.mark.parametrize("transfer, trc", [("hlg", 18), ("pq", 16)])
