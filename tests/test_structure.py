@@ -30,7 +30,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("temporal",),
     ("render",),
     ("data",),
-    ("blender",),
+    ("blender", "capture"),
     ("model",),
     ("pipeline",),
     ("app",),
