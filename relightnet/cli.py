@@ -34,7 +34,7 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "relight", "avatar",
+    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "capture", "relight", "avatar",
     "compare", "blender", "demo", "batch", "app",
 ]
 

@@ -24,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
 
     out = out_file(args.out, suffixes=(".mp4", ".mkv"),
                    inputs=(args.target, args.target_masks, args.plate, args.camera, args.albedo, args.motion_from,
-                           args.light, args.checkpoint))
+                           args.light, args.checkpoint, args.avatar))
     for option, value in (("--target-masks", args.target_masks), ("--plate", args.plate),
                           ("--camera", args.camera), ("--albedo", None if args.albedo == "default" else args.albedo)):
         if value:
@@ -55,7 +55,9 @@ def run(args: argparse.Namespace) -> int:
                  n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
                  model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
                  mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None,
-                 replace_person=args.replace_person, outfit=args.outfit)
+                 replace_person=args.replace_person, outfit=args.outfit,
+                 captured=in_path(args.avatar, "--avatar", "an avatar file from `relightnet capture`") if args.avatar
+                 else None)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -73,6 +75,7 @@ def register(sub) -> None:
         "  relightnet avatar --target clip.mp4 --light sunset --camera cam.json --bounces 1 --out a.mp4\n"
         "  relightnet avatar --target clip.mp4 --replace-person --outfit casual --out avatar.mp4\n"
         "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n"
+        "  relightnet avatar --avatar me.avatar.npz --motion-from dancer.mp4 --target clip.mp4 --out me_dancing.mp4\n"
         "  relightnet avatar --target empty_room.mp4 --light-from plate --out a.mp4   # no person to read\n"
         "  relightnet avatar --target clip.mp4 --plate room.jpg --light-from both --out a.mp4\n",
     )
@@ -95,6 +98,9 @@ def register(sub) -> None:
                    "the motion (retargeted to its body, feet held on the ground)")
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--albedo", default="default", help="texture image in the body's UV layout, or 'default'")
+    p.add_argument("--avatar", metavar="FILE.avatar.npz",
+                   help="the performer is a person captured by `relightnet capture` (their shape, clothes as "
+                   "offsets and de-lit texture), lit by the target's light")
     p.add_argument("--outfit", metavar="NAME|random:SEED",
                    help="dress the avatar in clothes and hair as geometry, with their own albedo: "
                    f"{', '.join(OUTFITS)}, or random:SEED (a drawn outfit)")

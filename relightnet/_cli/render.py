@@ -10,7 +10,7 @@ from ..names import OUTFITS
 from .argtypes import exposure_arg, nonneg_int, pos_int
 from .inputs import load_single_light
 from .options import LIGHT_HELP, add_body_args, add_command
-from .paths import out_dir, out_file
+from .paths import in_path, out_dir, out_file
 
 logger = logging.getLogger("relightnet.render")
 
@@ -118,10 +118,19 @@ def run_render_body(args: argparse.Namespace) -> int:
     light = check_light_physics(load_light(args.light, lmax=args.lmax), args.light)
     body, params = _body_and_params(args)
     albedo, vertex_albedo = _albedo(body)
+    if args.outfit and args.avatar:
+        from ..checks import InputError
+
+        raise InputError("--avatar brings its own geometry and texture: drop --outfit")
     if args.outfit:
         from ..pipeline.outfits import dressed_body
 
         body = dressed_body(body, args.outfit)
+        albedo, vertex_albedo = body.albedo, None
+    if args.avatar:
+        from ..pipeline.outfits import captured_body
+
+        body = captured_body(body, in_path(args.avatar, "--avatar", "an avatar file from `relightnet capture`"))
         albedo, vertex_albedo = body.albedo, None
     frames = render_body_frames(body, params, light, albedo, size=args.res, n_dirs=args.n_dirs,
                                 occlusion=args.occlusion, bounces=args.bounces, seed=args.seed,
@@ -193,6 +202,8 @@ def register(sub) -> None:
     p.add_argument("--mask-out", help="also write the coverage mask: a PNG for a still pose, a mask video "
                    "(.mkv lossless, .mp4) with --motion")
     p.add_argument("--save-maps", metavar="DIR", help="also write transport/albedo/normal/depth maps here")
+    p.add_argument("--avatar", metavar="FILE.avatar.npz",
+                   help="render a person captured by `relightnet capture` (their shape, offsets and texture)")
     p.add_argument("--outfit", metavar="NAME|random:SEED",
                    help=f"dress Anny in clothes and hair as geometry: {', '.join(OUTFITS)}, or random:SEED")
     _prt_options(p, 64)

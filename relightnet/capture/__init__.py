@@ -2,10 +2,16 @@
 
 The fitted body of every frame (:mod:`relightnet.fit`) is grown by per-vertex offsets along its
 normals (:mod:`.offsets`), every frame's visible texels are divided by the shading of that
-geometry under the frame's light and fused over the frames (:mod:`.texture`), texels never seen
-are filled (:mod:`.fill`), and the result is one versioned file of arrays (:mod:`.avatar_file`).
+geometry under the frame's light and fused over the frames (:mod:`.texture`, :mod:`.fuse`), texels
+never seen are filled (:mod:`.fill`), and the result is one versioned file of arrays
+(:mod:`.avatar_file`) that :class:`CapturedBody` poses and renders.
 """
 
+from .avatar_file import AVATAR_SUFFIX, CapturedAvatar, load_avatar, save_avatar
+from .body import CapturedBody
+from .fuse import CaptureResult, capture_person
 from .offsets import apply_offsets
+from .texture import TextureOptions
 
-__all__ = ["apply_offsets"]
+__all__ = ["AVATAR_SUFFIX", "CapturedAvatar", "load_avatar", "save_avatar", "CapturedBody", "CaptureResult",
+           "capture_person", "apply_offsets", "TextureOptions"]

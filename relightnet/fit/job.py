@@ -49,12 +49,14 @@ class FitOptions:
 
 @dataclass(frozen=True, eq=False)
 class FitOutput:
-    """raw: the fit before smoothing; result: after; motion: the world-frame AnnyMotion; fps."""
+    """raw: the fit before smoothing; result: after; motion: the world-frame AnnyMotion; fps; masks: the
+    person masks the fit saw (:class:`~relightnet.fit.PackedMasks`, each window at its working resolution)."""
 
     raw: FitResult
     result: FitResult
     motion: object
     fps: float
+    masks: object = None
 
 
 def media_frames(path: str | Path) -> tuple[Iterator[torch.Tensor], float, bool]:
@@ -98,7 +100,7 @@ def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody |
         logger.warning("%s: no person in %d frame(s): their pose is interpolated (flagged in the motion file)",
                        path, n_missing)
     result = smooth_motion(raw, options.smooth_sigma)
-    return FitOutput(raw, result, place_in_world(result, fb, fps), fps)
+    return FitOutput(raw, result, place_in_world(result, fb, fps), fps, obs.masks)
 
 
 def _chunks(frames: Iterator[torch.Tensor], n: int) -> Iterator[torch.Tensor]:

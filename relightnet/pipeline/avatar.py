@@ -265,9 +265,8 @@ def avatar(
     bounces: int = 0,
     antialias: bool = False,
     model_name: str = "model",
-    progress: bool = True,
-    mask_source: str = "segment", plate_light=None,
-    replace_person: bool = False, outfit: str | None = None,
+    progress: bool = True, mask_source: str = "segment", plate_light=None,
+    replace_person: bool = False, outfit: str | None = None, captured=None,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -295,14 +294,15 @@ def avatar(
         mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
             (the model's mask head); :mod:`relightnet.segment.sources`.
         plate_light: a :class:`relightnet.sh.Plate`, combined with the estimates (``sh.combine_person_plate``).
-        replace_person, outfit: take the person's place (:func:`.clean_plate.stand_in`); dress (:func:`.avatar_look`).
+        replace_person, outfit, captured: take the person's place (:func:`.clean_plate.stand_in`); dress, or a
+            captured person's avatar file (``relightnet capture``) performs (:func:`.avatar_look`).
 
     Returns:
         :class:`AvatarResult`.
     """
     out = _check_options(out, smoothing, replace_person, plate, camera)
     info = video_info(target)
-    base, body_model, tex = avatar_look(load_body(body), albedo, outfit)
+    base, body_model, tex = avatar_look(load_body(body), albedo, outfit, captured)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, base, info.fps)
     backgrounds = _backgrounds(plate, target, info.size, replace_person, target_masks, mask_source)  # likewise

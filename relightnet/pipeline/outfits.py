@@ -38,7 +38,7 @@ from ..names import OUTFITS
 from .outfit_parts import hem_cut, shoe_panel, shoe_rig
 
 __all__ = ["OUTFITS", "OUTFIT_SLOTS", "OUTFIT_SHOES", "OUTFIT_COLORS", "OutfitDraw", "draw_outfit", "DressedBody",
-           "dressed_body", "outfit_field", "avatar_look"]
+           "dressed_body", "outfit_field", "avatar_look", "captured_body"]
 
 #: What each named outfit wears (upper, lower, head, hair) and the seed of its look.
 OUTFIT_SLOTS = {
@@ -276,18 +276,32 @@ def outfit_field(body, look: dict, assets=None) -> np.ndarray:
     return region_field(body.faces.cpu().numpy(), ids.numpy(), iters=16)
 
 
-def avatar_look(body, albedo="default", outfit: str | None = None) -> tuple:
+def avatar_look(body, albedo="default", outfit: str | None = None, captured=None) -> tuple:
     """The avatar job's body and albedo: (``body``, the body to render, its albedo). With an ``outfit``
-    (``NAME`` or ``random:SEED``) the body to render is a :class:`DressedBody` with the outfit's albedo, and
-    ``albedo`` must be ``"default"``; without, ``body`` and :func:`~relightnet.pipeline.scene.avatar_albedo`."""
+    (``NAME`` or ``random:SEED``) the body to render is a :class:`DressedBody` with the outfit's albedo; with
+    ``captured`` (an avatar file from ``relightnet capture``) a :class:`~relightnet.capture.CapturedBody` with
+    the captured texture; either way ``albedo`` must be ``"default"``. Without, ``body`` and
+    :func:`~relightnet.pipeline.scene.avatar_albedo`."""
     from .scene import avatar_albedo
 
-    if outfit is None:
+    if outfit is None and captured is None:
         return body, body, avatar_albedo(body, albedo)
+    if outfit is not None and captured is not None:
+        raise InputError("--avatar brings its own geometry and texture: drop --outfit")
     if not (isinstance(albedo, str) and albedo == "default"):
-        raise InputError("--outfit brings its own albedo: drop --albedo")
-    dressed = dressed_body(body, outfit)
+        raise InputError(f"{'--outfit' if outfit else '--avatar'} brings its own albedo: drop --albedo")
+    dressed = dressed_body(body, outfit) if outfit is not None else captured_body(body, captured)
     return body, dressed, dressed.albedo
+
+
+def captured_body(body, path) -> object:
+    """A :class:`~relightnet.capture.CapturedBody` of the avatar file at ``path`` on ``body`` (Anny)."""
+    from ..body import AnnyBody
+    from ..capture import CapturedBody, load_avatar
+
+    if not isinstance(body, AnnyBody):
+        raise InputError(f"--avatar: a captured person is an Anny body, not {type(body).__name__}")
+    return CapturedBody(body, load_avatar(path, body.num_verts))
 
 
 def dressed_body(body, outfit: str | None) -> object:

@@ -1,0 +1,64 @@
+"""``relightnet capture``: a filmed person → an avatar file (geometry beyond the body, a de-lit texture)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+
+from ..errors import InputError
+from ..names import VIDEO_SMOOTHING, smoothing_help
+from .argtypes import pos_int
+from .options import add_command, add_model_args
+from .paths import in_path, out_file
+
+logger = logging.getLogger("relightnet.capture")
+
+
+def run(args: argparse.Namespace) -> int:
+    src = in_path(args.input, "SOURCE", "a video or a photo of a person")
+    if not str(args.out).endswith(".avatar.npz"):
+        raise InputError(f"--out {args.out}: expected a file name ending in .avatar.npz")
+    out = out_file(args.out, "--out", (".npz",), inputs=(args.input, args.checkpoint))
+    preview = out_file(args.preview, "--preview", (".png",), inputs=(args.input,)) if args.preview else None
+    import torch
+
+    from ..capture.texture import TextureOptions
+    from ..pipeline.backends import make_predictor
+    from ..pipeline.capture_job import CaptureOptions, capture_file
+    from ..segment import PersonModels
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    texture = TextureOptions(size=args.texture_size)  # a bad size fails before the model is loaded
+    predictor = make_predictor(args.backend, args.checkpoint, args.device)
+    opts = CaptureOptions(texture=texture, offsets=False if args.no_offsets else None, smoothing=args.smoothing)
+    rep = capture_file(src, out, predictor, opts, preview, PersonModels(threads=args.threads or 0))
+    logger.info("wrote %s: %.1f%% of the surface seen over %d frame(s)%s", rep.out, 100 * rep.avatar.seen_share,
+                rep.avatar.frames, "" if rep.iou_body is None else
+                f"; silhouette IoU {rep.iou_body:.3f} bare, {rep.iou_offset:.3f} captured")
+    if preview:
+        logger.info("wrote %s", preview)
+    return 0
+
+
+def register(sub) -> None:
+    p = add_command(
+        sub, "capture",
+        "Capture the largest person of a video (or a photo) as an avatar: the fitted Anny body grown by per-vertex "
+        "offsets to the person's silhouettes (clothes, hair) and an albedo texture in Anny's UV layout, each frame "
+        "divided by the shading of that geometry under the frame's estimated light and fused over the frames. "
+        "avatar --avatar and render-body --avatar make the captured person perform.",
+        "  relightnet capture walk.mp4 --out person.avatar.npz --preview sheet.png\n"
+        "  relightnet avatar --avatar person.avatar.npz --target clip.mp4 --motion-from walk.mp4 --out moved.mp4\n"
+        "  relightnet render-body --avatar person.avatar.npz --pose apose --light studio --out person.png\n",
+    )
+    p.add_argument("input", metavar="SOURCE", help="a video (a person turning shows every side) or a photo")
+    p.add_argument("--out", required=True, help="the avatar file (NAME.avatar.npz; arrays only, see the README)")
+    p.add_argument("--preview", metavar="PNG", help="draw the texture, its confidence and the avatar from four sides")
+    p.add_argument("--texture-size", type=pos_int, default=1024, help="texture side in texels (default: 1024)")
+    p.add_argument("--no-offsets", action="store_true", help="keep the bare fitted body (no geometry beyond it)")
+    p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
+                   help="the source light over time: " + smoothing_help(VIDEO_SMOOTHING, "auto"))
+    p.add_argument("--threads", type=pos_int, default=None, help="torch and ONNX Runtime threads (default: all)")
+    add_model_args(p)
+    p.set_defaults(func=run)
