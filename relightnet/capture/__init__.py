@@ -6,6 +6,20 @@ geometry under the frame's light and fused over the frames (:mod:`.texture`), te
 are filled (:mod:`.fill`), and the result is one versioned file of arrays (:mod:`.avatar_file`).
 """
 
+from .metrics import (
+    HIDDEN_PARTS,
+    albedo_error,
+    light_invariance,
+    person_psnr,
+    person_ssim,
+    seen_share,
+    silhouette_iou,
+    surface_texels,
+)
 from .offsets import apply_offsets
+from .truth import TruthClip, light_pair, person_texture, truth_phenotype, turning_params, turning_person
 
 __all__ = ["apply_offsets"]
+__all__ += ["HIDDEN_PARTS", "albedo_error", "light_invariance", "person_psnr", "person_ssim", "seen_share",
+            "silhouette_iou", "surface_texels"]
+__all__ += ["TruthClip", "light_pair", "person_texture", "truth_phenotype", "turning_params", "turning_person"]
