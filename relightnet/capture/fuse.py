@@ -18,15 +18,13 @@ import torch
 from ..checks import InputError, check_shape
 from .avatar_file import CapturedAvatar
 from .fill import fill_unseen, mirror_texels
+from .metrics import seen_share
 from .offsets import apply_offsets
 from .texture import TextureFusion, TextureOptions, frame_samples, texel_table
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["HIDDEN_PARTS", "CaptureResult", "surface_texels", "capture_person"]
-
-#: Anny's parts inside the head that no camera sees on a person (not counted in the seen share).
-HIDDEN_PARTS = ("eye_back.L", "eye_back.R", "eye_cavity.L", "eye_cavity.R", "mouth_cavity", "tongue")
+__all__ = ["CaptureResult", "capture_person"]
 
 #: Frames posed together (the whole mesh, ~1 MB a frame).
 _POSE_CHUNK = 8
@@ -48,16 +46,6 @@ class CaptureResult:
     raw_texture: torch.Tensor | None
     seen: torch.Tensor
     ms_per_frame: float
-
-
-def surface_texels(atlas) -> torch.Tensor:
-    """(S·S,) bool: the island texels of the body's visible surface (not :data:`HIDDEN_PARTS`)."""
-    from ..body import ANNY_PARTS
-
-    src = torch.as_tensor(atlas.texel_source)
-    island = src == torch.arange(src.numel())
-    hidden = torch.as_tensor(np.isin(atlas.parts, [ANNY_PARTS.index(p) for p in HIDDEN_PARTS]))
-    return island & ~hidden[torch.as_tensor(atlas.texel_vertex)]
 
 
 def _posed(result, fb, offsets: torch.Tensor | None):
@@ -138,9 +126,8 @@ def _finish(fusion: TextureFusion, table, atlas, fb, result, offsets, used: int,
     mirror = torch.as_tensor(mirror_texels(atlas.texel_pos[table.index.numpy()]))
     filled, how = fill_unseen(values, seen, table.tri, table.bary, mirror, fb.body.faces.cpu(),
                               torch.as_tensor(atlas.parts), fb.body.num_verts)
-    surface = surface_texels(atlas)
     seen_full = torch.zeros(table.size ** 2, dtype=torch.bool).index_copy_(0, table.index, seen)
-    share = float((seen_full & surface).sum()) / max(int(surface.sum()), 1)
+    share = seen_share(seen_full.view(table.size, table.size), atlas)
     logger.info("capture: %d frame(s), %.0f ms a frame; %.1f%% of the surface seen, %.1f%% from the mirror "
                 "image, %.1f%% inpainted", used, ms, 100 * share, 100 * float((how == 1).float().mean()),
                 100 * float((how == 2).float().mean()))

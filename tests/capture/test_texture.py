@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from relightnet.capture import TextureOptions, capture_person
-from relightnet.capture.fuse import surface_texels
+from relightnet.capture import surface_texels
 from relightnet.capture.texture import TextureFusion, TexelSamples, weighted_median
 from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb
