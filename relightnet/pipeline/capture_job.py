@@ -43,7 +43,9 @@ class CaptureOptions:
 @dataclass(frozen=True, eq=False)
 class CaptureReport:
     """What :func:`capture_file` did: ``out``, the ``avatar``, the smoothed ``lights`` (T, K, 3), the silhouette
-    IoU of the bare and the offset body (None without offsets), the capture's ``ms_per_frame`` after the fit."""
+    IoU of the bare and the offset body against the masks (None without offsets), the capture's
+    ``ms_per_frame`` after the fit, the ``fit`` (:class:`~relightnet.fit.FitOutput`), ``seen`` (S, S) bool and,
+    when asked, ``raw_texture`` (S, S, 3): the frames fused without de-lighting (for evaluation)."""
 
     out: Path
     avatar: CapturedAvatar
@@ -51,6 +53,9 @@ class CaptureReport:
     iou_body: float | None
     iou_offset: float | None
     ms_per_frame: float
+    fit: object = None
+    seen: torch.Tensor | None = None
+    raw_texture: torch.Tensor | None = None
 
 
 def frame_masks(masks, n: int):
@@ -88,7 +93,7 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
 
 
 def capture_file(source, out, predictor, options: CaptureOptions = CaptureOptions(), preview=None,
-                 models=None) -> CaptureReport:
+                 models=None, raw: bool = False) -> CaptureReport:
     """Capture the largest person of a video or a photo into an avatar file (module docstring).
 
     Args:
@@ -96,6 +101,7 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
         predictor: the CNN's predictor (:func:`relightnet.pipeline.backends.make_predictor`), for the light.
         options: :class:`CaptureOptions`. preview: a ``.png`` sheet to draw (:func:`.capture_preview.preview_sheet`).
         models: the segmentation's :class:`~relightnet.segment.PersonModels` (made when None).
+        raw: also fuse the raw colours (:attr:`CaptureReport.raw_texture`).
 
     Raises:
         InputError: no person in the source; ``options.offsets`` asked of a single frame. One line.
@@ -120,7 +126,7 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
     elif T < 2:
         logger.info("%s: a single photo: only the side facing the camera is seen; the rest is filled", source)
     res = capture_person(fit.result, fb, media_frames(source)[0], frame_masks(fit.masks, T), lights, offsets,
-                         options.texture)
+                         options.texture, raw=raw)
     path = save_avatar(out, res.avatar)
     logger.info("%s: wrote %s (%.1f%% of the surface seen, %d frame(s), %.0f ms a frame)", source, path,
                 100 * res.avatar.seen_share, res.avatar.frames, res.ms_per_frame)
@@ -128,4 +134,5 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
         from .capture_preview import preview_sheet
 
         preview_sheet(preview, res.avatar, fb.body)
-    return CaptureReport(path, res.avatar, lights, iou_body, iou_offset, res.ms_per_frame)
+    return CaptureReport(path, res.avatar, lights, iou_body, iou_offset, res.ms_per_frame, fit, res.seen,
+                         res.raw_texture)
