@@ -20,9 +20,15 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out}: expected a file name ending in .avatar.npz")
     out = out_file(args.out, "--out", (".npz",), inputs=(args.input, args.checkpoint))
     preview = out_file(args.preview, "--preview", (".png",), inputs=(args.input,)) if args.preview else None
+    from ..io.probe import PHOTO_SUFFIXES
+
+    kinds = (".png",) if src.suffix.lower() in PHOTO_SUFFIXES else (".mp4", ".mkv")
+    checks = {opt: out_file(val, opt, kinds, inputs=(args.input,)) if val else None
+              for opt, val in (("--reproject", args.reproject), ("--mask-out", args.mask_out))}
     import torch
 
     from ..capture.texture import TextureOptions
+    from ..fit import FitBody
     from ..pipeline.backends import make_predictor
     from ..pipeline.capture_job import CaptureOptions, capture_file
     from ..segment import PersonModels
@@ -32,12 +38,19 @@ def run(args: argparse.Namespace) -> int:
     texture = TextureOptions(size=args.texture_size)  # a bad size fails before the model is loaded
     predictor = make_predictor(args.backend, args.checkpoint, args.device)
     opts = CaptureOptions(texture=texture, offsets=False if args.no_offsets else None, smoothing=args.smoothing)
-    rep = capture_file(src, out, predictor, opts, preview, PersonModels(threads=args.threads or 0))
+    fb = FitBody()
+    rep = capture_file(src, out, predictor, opts, preview, PersonModels(threads=args.threads or 0), fb=fb)
     logger.info("wrote %s: %.1f%% of the surface seen over %d frame(s)%s", rep.out, 100 * rep.avatar.seen_share,
                 rep.avatar.frames, "" if rep.iou_body is None else
                 f"; silhouette IoU {rep.iou_body:.3f} bare, {rep.iou_offset:.3f} captured")
     if preview:
         logger.info("wrote %s", preview)
+    if checks["--reproject"] or checks["--mask-out"]:
+        from ..pipeline.capture_check import reproject
+
+        r = reproject(rep, src, fb, checks["--reproject"], checks["--mask-out"])
+        logger.info("reprojected over %d frame(s): %.1f dB inside the person, silhouette IoU %.3f%s", r.frames,
+                    r.psnr, r.iou, "".join(f"; wrote {p}" for p in checks.values() if p))
     return 0
 
 
@@ -55,6 +68,10 @@ def register(sub) -> None:
     p.add_argument("input", metavar="SOURCE", help="a video (a person turning shows every side) or a photo")
     p.add_argument("--out", required=True, help="the avatar file (NAME.avatar.npz; arrays only, see the README)")
     p.add_argument("--preview", metavar="PNG", help="draw the texture, its confidence and the avatar from four sides")
+    p.add_argument("--reproject", metavar="VIDEO", help="the captured avatar re-rendered in the source's camera, "
+                   "poses and light over its frames (.mp4/.mkv; .png for a photo); logs the PSNR inside the person")
+    p.add_argument("--mask-out", metavar="VIDEO", help="the captured mesh's silhouette in the source camera (a mask "
+                   "video .mkv/.mp4; .png for a photo)")
     p.add_argument("--texture-size", type=pos_int, default=1024, help="texture side in texels (default: 1024)")
     p.add_argument("--no-offsets", action="store_true", help="keep the bare fitted body (no geometry beyond it)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,

@@ -97,7 +97,7 @@ def capture_person(result, fb, frames: Iterable[torch.Tensor], masks: Iterable[t
     T = result.pose.shape[0]
     check_shape(lights, [T, "K", 3], name="lights")
     atlas = uv_atlas(fb.body, options.size) if atlas is None else atlas
-    table = texel_table(atlas)
+    table = texel_table(atlas, fb.body.faces.cpu())
     fusion = TextureFusion(table.index.numel(), options.top_k, raw)
     camera = fit_camera(result)
     t0, used, t = time.perf_counter(), 0, -1

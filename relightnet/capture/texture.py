@@ -34,7 +34,7 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError, check_shape, sh_order_from_count
-from ..raster import Camera, rasterize, screen_box
+from ..raster import Camera, ndc_to_pixel, rasterize, screen_box
 
 __all__ = ["TextureOptions", "TexelTable", "TexelSamples", "TextureFusion", "texel_table", "frame_samples",
            "weighted_median"]
@@ -81,6 +81,7 @@ class TexelTable:
         tri: (M, 3) int64 vertices of each texel's triangle. bary: (M, 3) float32 its barycentrics.
         source: (S·S,) int64 the island texel each texel copies (itself inside the islands; the
             nearest island texel in the gutters between islands).
+        face: (M,) int64 each texel's face (the row of ``faces`` whose vertices are ``tri``).
     """
 
     size: int
@@ -88,14 +89,23 @@ class TexelTable:
     tri: torch.Tensor
     bary: torch.Tensor
     source: torch.Tensor
+    face: torch.Tensor
 
 
-def texel_table(atlas) -> TexelTable:
-    """The island texels of a :class:`~relightnet.data.textures.UVAtlas`."""
+def texel_table(atlas, faces: torch.Tensor) -> TexelTable:
+    """The island texels of a :class:`~relightnet.data.textures.UVAtlas` of the mesh with (F, 3) ``faces``."""
     src = torch.as_tensor(atlas.texel_source)
     index = torch.nonzero(src == torch.arange(src.numel())).squeeze(1)
-    return TexelTable(int(atlas.size), index, torch.as_tensor(atlas.texel_tri)[index],
-                      torch.as_tensor(atlas.texel_bary)[index].float(), src)
+    tri = torch.as_tensor(atlas.texel_tri)[index]
+    n = int(faces.max()) + 1
+    key = (faces[:, 0] * n + faces[:, 1]) * n + faces[:, 2]
+    order = key.argsort()
+    texel_key = (tri[:, 0] * n + tri[:, 1]) * n + tri[:, 2]
+    at = torch.searchsorted(key[order], texel_key).clamp_max(len(key) - 1)
+    face = order[at]
+    if not torch.equal(key[face], texel_key):
+        raise InputError("atlas: its texel triangles are not faces of this mesh")
+    return TexelTable(int(atlas.size), index, tri, torch.as_tensor(atlas.texel_bary)[index].float(), src, face)
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,6 +160,33 @@ def _visible_depth(camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
     return win, camera.depth_to_view(frags.depth)[0]
 
 
+def _seen_texels(table: TexelTable, verts, normals, faces, camera: Camera, win, depth, options: TextureOptions):
+    """Steps 1–2: ``(index (N,) into the M texels, pixel points (N, 2), view cosines (N,))`` of the texels the
+    frame sees, or None. The cosine is tested first at the vertices (V of them, not M texels): only texels
+    whose face has a vertex that passes are placed on the mesh and projected."""
+    to_cam_v = F.normalize(camera.position[0].to(verts) - verts, dim=-1)
+    cos_v = (normals * to_cam_v).sum(-1)
+    face_ok = (cos_v[faces] > options.min_cos).any(1)
+    sel = torch.nonzero(face_ok[table.face]).squeeze(1)
+    tri, bary = table.tri[sel], table.bary[sel]
+    pos = torch.einsum("mk,mkc->mc", bary, verts[tri])
+    nrm = F.normalize(torch.einsum("mk,mkc->mc", bary, normals[tri]), dim=-1)
+    cos = (nrm * F.normalize(camera.position[0].to(pos) - pos, dim=-1)).sum(-1)
+    ok = cos > options.min_cos
+    sel, pos, cos = sel[ok], pos[ok], cos[ok]
+    c = camera.transform(pos)[0]
+    uv = ndc_to_pixel(c[:, :2] / c[:, 3:], camera.size)
+    zt = -camera.world_to_view(pos)[0, :, 2]
+    col = uv[:, 0].floor().long() - win.left
+    row = uv[:, 1].floor().long() - win.top
+    inside = torch.nonzero((col >= 0) & (col < win.width) & (row >= 0) & (row < win.height)).squeeze(1)
+    zb = depth[row[inside], col[inside]]
+    keep = inside[torch.isfinite(zb) & (zt[inside] <= zb + options.depth_tol)]
+    if keep.numel() == 0:
+        return None
+    return sel[keep], uv[keep], cos[keep]
+
+
 def frame_samples(table: TexelTable, verts: torch.Tensor, normals: torch.Tensor, faces: torch.Tensor,
                   light: torch.Tensor, camera: Camera, image: torch.Tensor, mask: torch.Tensor,
                   options: TextureOptions = TextureOptions()) -> TexelSamples | None:
@@ -178,36 +215,26 @@ def frame_samples(table: TexelTable, verts: torch.Tensor, normals: torch.Tensor,
     win, depth = _visible_depth(camera, verts, faces)
     if win is None or not bool(mask.any()):
         return None
-    tri, bary = table.tri, table.bary
-    pos = torch.einsum("mk,mkc->mc", bary, verts[tri])
-    nrm = F.normalize(torch.einsum("mk,mkc->mc", bary, normals[tri]), dim=-1)
-    to_cam = F.normalize(camera.position[0].to(pos) - pos, dim=-1)
-    cos = (nrm * to_cam).sum(-1)
-    sel = torch.nonzero(cos > options.min_cos).squeeze(1)
-    uv = camera.project(pos[sel])[0]
-    zt = -camera.world_to_view(pos[sel])[0, :, 2]
-    col = uv[:, 0].floor().long() - win.left
-    row = uv[:, 1].floor().long() - win.top
-    inside = (col >= 0) & (col < win.width) & (row >= 0) & (row < win.height)
-    sel, uv, zt, col, row = sel[inside], uv[inside], zt[inside], col[inside], row[inside]
-    zb = depth[row, col]
-    keep = torch.isfinite(zb) & (zt <= zb + options.depth_tol)
-    sel, uv = sel[keep], uv[keep]
-    if sel.numel() == 0:
+    seen = _seen_texels(table, verts, normals, faces, camera, win, depth, options)
+    if seen is None:
         return None
+    sel, uv, cos = seen
+    tri, bary = table.tri[sel], table.bary[sel]
     lmax = sh_order_from_count(light.shape[-2], "light")
     # The vertices of the texels kept: a sub-pixel triangle covers no pixel centre, yet its texels are seen.
-    need = torch.unique(tri[sel].reshape(-1))
-    T = vertex_transport(verts, faces, normals, lmax=lmax, n_dirs=options.n_dirs, vertices=need, manifold="ignore")
+    need = torch.zeros(verts.shape[0], dtype=torch.bool)
+    need[tri.reshape(-1)] = True
+    T = vertex_transport(verts, faces, normals, lmax=lmax, n_dirs=options.n_dirs, vertices=torch.nonzero(need)[:, 0],
+                         manifold="ignore")
     L = light_in_world(light.float(), camera)[0]
     s_v = shading(T, L)  # (V, 3)
-    s = torch.einsum("mk,mkc->mc", bary[sel], s_v[tri[sel]]).clamp_min(1e-4)
+    s = torch.einsum("mk,mkc->mc", bary, s_v[tri]).clamp_min(1e-4)
     rgb = _bilinear(image.float(), uv)
     edge = _bilinear(_edge_weight(mask, options.edge_share)[None], uv)[:, 0]
     lum = s.mean(1)
     shade = (lum / (0.5 * lum.median().clamp_min(1e-4))).clamp(0, 1)
     clipped = _bilinear(_clipped(image, options.clip_level)[None], uv)[:, 0] > 0
-    w = cos[sel].square() * edge * shade * (~clipped)
+    w = cos.square() * edge * shade * (~clipped)
     good = w > 1e-4
     return TexelSamples(sel[good], (rgb / s)[good], rgb[good], w[good])
 

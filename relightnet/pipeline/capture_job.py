@@ -93,7 +93,7 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
 
 
 def capture_file(source, out, predictor, options: CaptureOptions = CaptureOptions(), preview=None,
-                 models=None, raw: bool = False) -> CaptureReport:
+                 models=None, raw: bool = False, fb=None) -> CaptureReport:
     """Capture the largest person of a video or a photo into an avatar file (module docstring).
 
     Args:
@@ -102,6 +102,7 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
         options: :class:`CaptureOptions`. preview: a ``.png`` sheet to draw (:func:`.capture_preview.preview_sheet`).
         models: the segmentation's :class:`~relightnet.segment.PersonModels` (made when None).
         raw: also fuse the raw colours (:attr:`CaptureReport.raw_texture`).
+        fb: the :class:`~relightnet.fit.FitBody` to fit with (made when None).
 
     Raises:
         InputError: no person in the source; ``options.offsets`` asked of a single frame. One line.
@@ -110,7 +111,7 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
     from ..fit import FitBody
     from ..fit.job import fit_file, media_frames
 
-    fb = FitBody()
+    fb = FitBody() if fb is None else fb
     fit = fit_file(source, options.fit, fb, models)
     T = fit.result.pose.shape[0]
     if options.offsets and T < 2:
