@@ -5,16 +5,20 @@ Every frame adds samples to the texels it sees (:func:`frame_samples`):
 1. each texel of the UV islands (:class:`TexelTable`) is placed on the posed, offset mesh at
    its barycentrics and projected into the frame;
 2. it is *seen* when it faces the camera (cosine above :attr:`TextureOptions.min_cos`), lies in
-   the frame, and its depth is within :attr:`TextureOptions.depth_tol` of the rasterized depth
-   at its pixel (nothing in front of it);
+   the frame, and its depth is within a tolerance of the rasterized depth at its pixel (nothing in
+   front of it): :attr:`TextureOptions.depth_tol` plus how far the surface's depth can change across
+   the pixel (its footprint ``z / f`` times the tangent of the view angle, twice over), so a
+   grazing surface still sees itself and an eyeball behind its lid does not;
 3. its colour is the frame's linear RGB at the projected point (bilinear), divided by the
    shading of the captured geometry under that frame's light, ``S = T · L`` (PRT transport with
    occlusion at the vertices, interpolated) — what remains is albedo on the light's scale, so
    the exposure is kept;
-4. its weight is ``cos² × edge × shade``: the squared view cosine (a grazing view smears a
+4. its weight is ``cos² × edge × registration⁴ × shade``: the squared view cosine (a grazing view smears a
    texel over few pixels), the distance inside the person's mask ramped over
    :attr:`TextureOptions.edge_share` of the person's height (0 outside the mask: the fitted body
-   strays over the background at the outline), and the shading relative to the frame's median
+   strays over the background at the outline), the frame's registration (the IoU of the fitted
+   mesh's coverage with the mask, to the fourth power: a frame whose fit slipped paints the wrong
+   texels, and weighs less), and the shading relative to the frame's median
    (a dark, self-shadowed texel divides noise by a small number). A sample that touches a clipped
    pixel (any channel at :attr:`TextureOptions.clip_level`, or a neighbour's) weighs 0: clipping
    cuts the colour, and dividing it by the shading would darken the texel.
@@ -49,16 +53,17 @@ class TextureOptions:
         n_dirs: PRT directions of each frame's transport.
         top_k: samples kept per texel for the weighted median.
         min_cos: smallest view cosine of a texel that is sampled.
-        depth_tol: metres a texel may lie behind the rasterized surface and still be seen.
+        depth_tol: metres a texel may lie behind the rasterized surface and still be seen, beyond the
+            depth change across its pixel.
         edge_share: the mask-edge ramp, as a share of the person's height in the frame.
         clip_level: linear value at or above which a pixel counts as clipped.
     """
 
     size: int = 1024
     n_dirs: int = 64
-    top_k: int = 8
+    top_k: int = 12
     min_cos: float = 0.2
-    depth_tol: float = 0.02
+    depth_tol: float = 0.004
     edge_share: float = 0.012
     clip_level: float = 0.985
 
@@ -136,6 +141,16 @@ def _edge_weight(mask: torch.Tensor, share: float) -> torch.Tensor:
     return torch.from_numpy(out)
 
 
+def _registration(win, depth: torch.Tensor, mask: torch.Tensor) -> float:
+    """IoU of the fitted mesh's coverage with the person's mask (in the mesh's box, the mask outside it counted
+    as missed): how well the frame's fit is registered."""
+    cover = torch.isfinite(depth)
+    inside = mask[win.top:win.top + win.height, win.left:win.left + win.width]
+    both = float((cover & inside).sum())
+    union = float((cover | inside).sum()) + float(mask.sum()) - float(inside.sum())
+    return both / max(union, 1.0)
+
+
 def _clipped(image: torch.Tensor, level: float) -> torch.Tensor:
     """(H, W) float: 1 where a pixel or one of its 8 neighbours is clipped (any channel at ``level``), so a
     bilinear sample never mixes a clipped pixel in."""
@@ -181,7 +196,10 @@ def _seen_texels(table: TexelTable, verts, normals, faces, camera: Camera, win, 
     row = uv[:, 1].floor().long() - win.top
     inside = torch.nonzero((col >= 0) & (col < win.width) & (row >= 0) & (row < win.height)).squeeze(1)
     zb = depth[row[inside], col[inside]]
-    keep = inside[torch.isfinite(zb) & (zt[inside] <= zb + options.depth_tol)]
+    zi, ci = zt[inside], cos[inside]
+    slope = (1 - ci.square()).clamp_min(0).sqrt() / ci  # tan of the view angle
+    tol = options.depth_tol + 2 * zi / float(camera.proj[0, 0, 0] * camera.size[1] / 2) * slope
+    keep = inside[torch.isfinite(zb) & (zi <= zb + tol)]
     if keep.numel() == 0:
         return None
     return sel[keep], uv[keep], cos[keep]
@@ -234,7 +252,7 @@ def frame_samples(table: TexelTable, verts: torch.Tensor, normals: torch.Tensor,
     lum = s.mean(1)
     shade = (lum / (0.5 * lum.median().clamp_min(1e-4))).clamp(0, 1)
     clipped = _bilinear(_clipped(image, options.clip_level)[None], uv)[:, 0] > 0
-    w = cos.square() * edge * shade * (~clipped)
+    w = cos.square() * edge * shade * (~clipped) * _registration(win, depth, mask) ** 4
     good = w > 1e-4
     return TexelSamples(sel[good], (rgb / s)[good], rgb[good], w[good])
 
