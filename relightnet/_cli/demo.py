@@ -28,6 +28,7 @@ def run(args: argparse.Namespace) -> int:
         f"  light curves raw/smoothed/true:              {p['lights_plot']}",
         f"  dressed avatar in place of a walking person: {p['replace_avatar']} (plate: {p['replace_plate']})",
         f"  motion transfer, source | avatar:            {p['motion_side_by_side']}",
+        f"  capture, source | captured person | truth:   {p['capture_side_by_side']}",
         f"  2D vs 3D vs ground truth report:             {p['compare']}/report.md",
         f"  preset light previews:                       {out}/lights/*.png",
     ]

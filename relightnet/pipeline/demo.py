@@ -16,7 +16,12 @@
 6. ``motion/``: motion transfer (:mod:`.motion_demo`): a generated source person walks
    (``source.mp4``), the avatar performs the fitted walk in the target (``avatar.mp4``;
    ``avatar --motion-from``), ``side_by_side.mp4`` shows source | avatar; the fit's PA-MPJPE
-   against the source's truth in ``summary.json``.
+   against the source's truth in ``summary.json``;
+7. ``capture/``: capture (:mod:`.capture_demo`): a generated person turning under one light
+   (``source/source.mp4``) is captured (``person.avatar.npz``) and walks in the target under the light
+   estimated there (``avatar.mp4``; ``avatar --avatar``), beside the truth (the same person under the
+   target's true light, ``truth.mp4``): ``side_by_side.mp4`` shows source | captured | truth; the seen
+   share, the texture's error and the PSNR against the truth in ``summary.json``.
 """
 
 from __future__ import annotations
@@ -76,6 +81,7 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     from ..temporal.plot import light_curves_png
     from .avatar import avatar
     from .backends import TorchPredictor
+    from .capture_demo import capture_demo
     from .motion_demo import motion_transfer_demo
     from .walk_target import replaced_person_demo
 
@@ -85,11 +91,11 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     model = load_model()
     paths: dict = {}
 
-    logger.info("demo 1/6: generating the target clip (%d frames at %d²)", frames, size)
+    logger.info("demo 1/7: generating the target clip (%d frames at %d²)", frames, size)
     sample = generate_sequence(SynthConfig(res=size, n_dirs=n_dirs), "test", DEMO_CLIP, frames, body=body)
     paths.update(_write_target(out, sample))
 
-    logger.info("demo 2/6: avatar lit by the target's estimated light")
+    logger.info("demo 2/7: avatar lit by the target's estimated light")
     res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk", body=body,
                  target_masks=paths["masks"], plate=paths["plate"], n_dirs=n_dirs, progress=progress)
     paths["avatar"], paths["avatar_lights"] = res.video, res.lights_file
@@ -103,25 +109,32 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
         f.write(png)
     paths["lights_plot"] = out / "lights.png"
 
-    logger.info("demo 3/6: the dressed avatar in place of a walking person (clean plate with a known truth)")
+    logger.info("demo 3/7: the dressed avatar in place of a walking person (clean plate with a known truth)")
     replaced = replaced_person_demo(out / "replace", size, frames, body, n_dirs, progress=progress)
     paths.update({k: v for k, v in replaced.items() if isinstance(v, Path)})
 
-    logger.info("demo 4/6: motion transfer: the avatar performs a generated person's walk in the target")
+    logger.info("demo 4/7: motion transfer: the avatar performs a generated person's walk in the target")
     moved = motion_transfer_demo(out / "motion", paths["target"], paths["masks"], paths["plate"], size, frames, body,
                                  TorchPredictor(model), n_dirs, sample.meta["fps"], progress)
     paths.update({k: v for k, v in moved.items() if isinstance(v, Path)})
 
-    logger.info("demo 5/6: 2D vs 3D comparison on %d generated sequences", compare_clips)
+    logger.info("demo 5/7: capture: a generated person captured under one light performs in the target")
+    captured = capture_demo(out / "capture", paths["target"], paths["masks"], paths["plate"],
+                            torch.from_numpy(sample.arrays["light"]), size, frames, body, TorchPredictor(model), n_dirs,
+                            sample.meta["fps"], progress)
+    paths.update({k: v for k, v in captured.items() if isinstance(v, Path)})
+
+    logger.info("demo 6/7: 2D vs 3D comparison on %d generated sequences", compare_clips)
     paths["compare"] = _run_compare(out / "compare", body, compare_clips, compare_size, compare_frames,
                                     n_dirs, progress)
 
-    logger.info("demo 6/6: preset light previews")
+    logger.info("demo 7/7: preset light previews")
     paths["lights"] = render_presets(out / "lights", size=128)
     summary = {"target_clip": {"split": "test", "index": DEMO_CLIP, "frames": frames, "size": size,
                                "light": sample.meta["lights"]}, "light_error": errors,
                "replaced_person": {k: v for k, v in replaced.items() if not isinstance(v, Path)},
-               "motion_transfer": {k: v for k, v in moved.items() if not isinstance(v, Path)}}
+               "motion_transfer": {k: v for k, v in moved.items() if not isinstance(v, Path)},
+               "capture": {k: v for k, v in captured.items() if not isinstance(v, Path)}}
     with atomic_write(out / "summary.json", "w") as f:
         f.write(json.dumps(summary, indent=1) + "\n")
     paths["summary"] = out / "summary.json"

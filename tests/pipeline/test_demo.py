@@ -34,5 +34,10 @@ def test_demo_runs_on_embedded_defaults(tmp_path, capsys):
     moved = list(read_video(out / "motion" / "side_by_side.mp4"))
     assert len(moved) == 5 and moved[0].shape == (256, 512, 3)
     assert 0 < summary["motion_transfer"]["fit_pa_mpjpe_mm"] < 150  # a fit, not noise: a person's scale is ~1 m
+    # capture: the generated person captured under one light, walking in the target beside the truth
+    cap = list(read_video(out / "capture" / "side_by_side.mp4"))
+    assert len(cap) == 5 and cap[0].shape == (256, 768, 3)
+    assert 0.3 < summary["capture"]["capture_seen_share"] <= 1 and summary["capture"]["capture_albedo_error"] < 1
+    assert summary["capture"]["capture_psnr_db"] > 15
     report = (out / "compare" / "report.md").read_text()
     assert "| 3D | true L_t |" in report and video_info(out / "compare" / "side_by_side.mp4").n_frames == 4
