@@ -10,6 +10,7 @@ PSNR against the true background over the pixels the person covered and uncovere
 
     python benchmarks/bench_avatar_look.py                     # 1280x720, 8 and 24 frames, 2 threads
     python benchmarks/bench_avatar_look.py --frames 8 40 --runs 3
+    python benchmarks/bench_avatar_look.py --only-outfit --avatar me.avatar.npz   # a captured person beside the outfit
 """
 
 from __future__ import annotations
@@ -62,8 +63,15 @@ def main() -> None:
     ap.add_argument("--frames", type=int, nargs=2, default=(8, 24))
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=1)
+    ap.add_argument("--avatar", help="also time a captured person (an avatar file from `relightnet capture`)")
+    ap.add_argument("--only-outfit", action="store_true", help="time only the outfit (and --avatar) variants")
     ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.only_outfit:
+        for k in [k for k in VARIANTS if k != "outfit casual"]:
+            del VARIANTS[k]
+    if a.avatar:
+        VARIANTS["captured person (--avatar)"] = ["--avatar", str(Path(a.avatar).resolve())]
     if a.child:
         target, frames, extra, out = a.child
         print(json.dumps(child(target, int(frames), json.loads(extra), a.threads, out)))
@@ -113,6 +121,8 @@ def main() -> None:
     print(f"avatar job at {W}x{H}, {a.threads} threads, given light, 64 PRT directions; clips of {n0} and {n1} frames")
     print(table(["variant", "frames/s (steady)", "ms/frame", "CPU ms/frame", "setup s", f"wall s ({n1} frames)"],
                 rows))
+    if "psnr_segment" not in res:
+        return
     print(f"\nclean plate PSNR over the pixels covered then uncovered ({n_max} frames): "
           f"{psnr_true:.1f} dB with the true masks, {res['psnr_segment']:.1f} dB with the segmentation's "
           f"(the job's); inpainted share {cp.inpainted_share:.3f}")

@@ -7,7 +7,7 @@ import logging
 
 from ..errors import InputError
 from ..names import VIDEO_SMOOTHING, smoothing_help
-from .argtypes import pos_int
+from .argtypes import pos_float, pos_int
 from .options import add_command, add_model_args
 from .paths import in_path, out_file
 
@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from ..capture.texture import TextureOptions
-    from ..fit import FitBody
+    from ..fit import FitBody, FitOptions
     from ..pipeline.backends import make_predictor
     from ..pipeline.capture_job import CaptureOptions, capture_file
     from ..segment import PersonModels
@@ -37,7 +37,8 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     texture = TextureOptions(size=args.texture_size)  # a bad size fails before the model is loaded
     predictor = make_predictor(args.backend, args.checkpoint, args.device)
-    opts = CaptureOptions(texture=texture, offsets=False if args.no_offsets else None, smoothing=args.smoothing)
+    opts = CaptureOptions(texture=texture, fit=FitOptions(fov_deg=args.fov), offsets=False if args.no_offsets else None,
+                          smoothing=args.smoothing)
     fb = FitBody()
     rep = capture_file(src, out, predictor, opts, preview, PersonModels(threads=args.threads or 0), fb=fb)
     logger.info("wrote %s: %.1f%% of the surface seen over %d frame(s)%s", rep.out, 100 * rep.avatar.seen_share,
@@ -76,6 +77,9 @@ def register(sub) -> None:
     p.add_argument("--no-offsets", action="store_true", help="keep the bare fitted body (no geometry beyond it)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
                    help="the source light over time: " + smoothing_help(VIDEO_SMOOTHING, "auto"))
+    p.add_argument("--fov", type=pos_float, default=60.0,
+                   help="field of view (degrees) across the longer side when the source has no EXIF focal length "
+                   "(default: 60); the captured height follows it (a narrower lens read as 60° makes a taller person)")
     p.add_argument("--threads", type=pos_int, default=None, help="torch and ONNX Runtime threads (default: all)")
     add_model_args(p)
     p.set_defaults(func=run)

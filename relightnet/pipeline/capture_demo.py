@@ -50,6 +50,7 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
     """
     from ..capture import albedo_error, light_pair, turning_person
     from ..capture.texture import TextureOptions
+    from ..fit import FitOptions
     from ..io import write_side_by_side
     from ..render.frame import TexturedAlbedo
     from .avatar import avatar
@@ -61,8 +62,9 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
     src_size = max(size, 256)
     truth = turning_person(out / "source", body, light_pair()[0], n_frames=n_frames, size=(src_size, src_size),
                            seed=SOURCE_SEED, texture_size=512, fps=fps)
+    # The source's camera is the default one (35°): given, as a user gives --fov for a lens they know.
     rep = capture_file(truth.video, out / "person.avatar.npz", model,
-                       CaptureOptions(texture=TextureOptions(size=512, n_dirs=n_dirs)))
+                       CaptureOptions(texture=TextureOptions(size=512, n_dirs=n_dirs), fit=FitOptions(fov_deg=35.0)))
     moved = avatar(target, out / "avatar.mp4", model=model, motion="walk", body=body, target_masks=target_masks,
                    plate=plate, n_dirs=n_dirs, progress=progress, captured=rep.out)
     params, _ = open_motion("walk", body, fps)(n_frames)

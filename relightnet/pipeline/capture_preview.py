@@ -30,7 +30,7 @@ def neutral_light() -> torch.Tensor:
 def turntable_views(captured, size: int = 384, angles=VIEW_ANGLES, light: torch.Tensor | None = None
                     ) -> torch.Tensor:
     """(N, size, size·3/4, 3) linear renders of a :class:`~relightnet.capture.CapturedBody` turned by ``angles``
-    (degrees) in the A-pose, over black."""
+    (degrees) in the A-pose, over black, framed to the person's height."""
     from ..body import pose_preset
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
@@ -42,9 +42,14 @@ def turntable_views(captured, size: int = 384, angles=VIEW_ANGLES, light: torch.
         pose[:, body.joint_index(name)] = torch.tensor(rv)
     pose[:, 0, 1] = torch.tensor([math.radians(a) for a in angles])
     size_hw = (int(size), int(size) * 3 // 4)
-    frames = render_body_frames(captured, {"pose": pose, "trans": torch.zeros(n, 3)},
-                                neutral_light() if light is None else light, captured.albedo,
-                                camera=default_camera(size_hw), n_dirs=64, visible_only=True)
+    params = {"pose": pose, "trans": torch.zeros(n, 3)}
+    with torch.no_grad():
+        ys = captured({"pose": pose[:1], "trans": torch.zeros(1, 3)}).verts[0, :, 1]
+    top, bottom = float(ys.max()), float(ys.min())
+    h = max(top - bottom, 0.3)  # the default camera frames 1.7 m from 3 m: a taller or shorter person alike
+    camera = default_camera(size_hw, distance=3.0 * h / 1.7, target=(0.0, (top + bottom) / 2, 0.0))
+    frames = render_body_frames(captured, params, neutral_light() if light is None else light, captured.albedo,
+                                camera=camera, n_dirs=64, visible_only=True)
     return torch.stack([f.render.image[0] for f in frames])
 
 
