@@ -35,6 +35,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..model.evaluate import baseline_from_train, evaluate, format_ablation, format_table, write_report
 
     out = out_dir(args.out)
+    if args.capture:
+        return _evaluate_capture(args, out)
     if args.fit:
         return _evaluate_fit(args, out)
     if args.ship:
@@ -105,6 +107,27 @@ def _evaluate_fit(args: argparse.Namespace, out: Path) -> int:
     with atomic_write(out / "fit_metrics.json", "w") as f:
         json.dump(result, f, indent=2)
     print(text)  # the command's own output (stdout), not a log message
+    return 0
+
+
+def _evaluate_capture(args: argparse.Namespace, out: Path) -> int:
+    from ..pipeline.backends import make_predictor
+    from ..pipeline.capture_eval import evaluate_capture, format_capture_report
+
+    unused = [o for o, given in (("--data", args.data), ("--photos", args.photos), ("--light", args.light),
+                                 ("--clips", args.clips), ("--ablation", args.ablation), ("--fit", args.fit),
+                                 ("--ship", args.ship), ("--no-baseline", args.no_baseline),
+                                 ("--split", args.split != "test"), ("--as-photo", args.as_photo)) if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used with --capture (it generates its own people)")
+    predictor = make_predictor("torch", args.checkpoint, args.device)
+    result = evaluate_capture(predictor, out, args.capture_clips, args.capture_frames, args.capture_res,
+                              args.capture_texture,
+                              progress=lambda i, r: logger.info("clip %d (seed %d): albedo RMSE %.3f, IoU %.3f, "
+                                                                "re-render %.1f dB", i, r["seed"], r["albedo_rmse"],
+                                                                r["iou_offset"], r["psnr"]))
+    print(format_capture_report(result))  # the command's own output (stdout), not a log message
+    logger.info("wrote %s and %s", out / "capture_report.md", out / "capture_metrics.json")
     return 0
 
 
@@ -236,7 +259,8 @@ def register(sub) -> None:
 def _register_evaluate(sub) -> None:
     """The ``evaluate`` command's parser."""
     p = add_command(sub, "evaluate", "Evaluate a model on a dataset split against trivial baselines, or on real "
-                    "photos of people (--photos); or the motion-capture fit on generated clips (--fit).",
+                    "photos of people (--photos); or the motion-capture fit (--fit) or the avatar capture "
+                    "(--capture) on generated clips.",
                     "  relightnet evaluate --data data/synth --out reports/shipped\n"
                     "  relightnet evaluate --checkpoint runs/small/last.pt --data data/synth --split val --out r/\n"
                     "  relightnet evaluate --checkpoint runs/medium/last.pt --ablation runs/medium_unoccluded/last.pt "
@@ -246,6 +270,7 @@ def _register_evaluate(sub) -> None:
                     "  relightnet evaluate --photos photos/ --out reports/photos_shipped\n"
                     "  relightnet evaluate --photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n"
                     "  relightnet evaluate --fit --fit-clips 3 --fit-frames 12 --out reports/fit\n"
+                    "  relightnet evaluate --capture --capture-clips 2 --capture-frames 48 --out reports/capture\n"
                     "  relightnet evaluate --ship shipped runs/next/last.pt --data data/clothed --clips data/seq_small "
                     "--photos photos/ --out reports/ship\n")
     add_model_args(p, backend=False)
@@ -278,7 +303,16 @@ def _register_evaluate(sub) -> None:
                    help="the ship rule instead: both models (checkpoints, or 'shipped') scored on --data (as photos "
                         "and as rendered), --clips (compare) and --photos; the candidate ships when it keeps the "
                         "floors and lowers the mean relative light error (ship.md, ship.json)")
+    p.add_argument("--capture", action="store_true",
+                   help="the capture report instead: 'relightnet capture' of generated people turning under two "
+                        "lights (albedo error, seen share, light invariance, silhouette IoU, a relit re-render in a "
+                        "new pose, time, memory; capture_report.md, capture_metrics.json)")
     p.add_argument("--fit-clips", type=pos_int, default=3, help="with --fit: clips (default: 3)")
     p.add_argument("--fit-frames", type=pos_int, default=12, help="with --fit: frames per clip (default: 12)")
     p.add_argument("--fit-res", type=work_size, default=256, help="with --fit: clip size (default: 256)")
+    p.add_argument("--capture-clips", type=pos_int, default=2, help="with --capture: people (default: 2)")
+    p.add_argument("--capture-frames", type=pos_int, default=48, help="with --capture: frames per film (default: 48)")
+    p.add_argument("--capture-res", type=work_size, default=256, help="with --capture: frame size (default: 256)")
+    p.add_argument("--capture-texture", type=pos_int, default=512,
+                   help="with --capture: texture side (default: 512)")
     p.set_defaults(func=run_evaluate)
