@@ -76,7 +76,7 @@ def register(sub) -> None:
     p.add_argument("--texture-size", type=pos_int, default=1024, help="texture side in texels (default: 1024)")
     p.add_argument("--no-offsets", action="store_true", help="keep the bare fitted body (no geometry beyond it)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
-                   help="the source light over time: " + smoothing_help(VIDEO_SMOOTHING, "auto"))
+                   help=smoothing_help(VIDEO_SMOOTHING, "auto"))
     p.add_argument("--fov", type=pos_float, default=60.0,
                    help="field of view (degrees) across the longer side when the source has no EXIF focal length "
                    "(default: 60); the captured height follows it (a narrower lens read as 60° makes a taller person)")

@@ -40,8 +40,9 @@ def test_the_report_is_written_and_its_figures_are_in_range(run):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the shipped CNN underestimates these clips' light (the de-lit texture comes "
-                   "out ~1.4x too bright and ~11% of its texels clip at 1), so de-lighting loses to the raw colours")
+@pytest.mark.xfail(strict=True, reason="the shipped CNN reads these clips' light ~1.4x too dim and differently from "
+                   "frame to frame, so de-lighting with it still loses to the raw colours (with the true light it wins: "
+                   "tests/capture/test_texture.py)")
 def test_the_delit_texture_is_closer_to_the_truth_than_the_raw_colours(run):
     row = run[1]["clips"][0]
     assert row["albedo_rmse"] < row["albedo_rmse_raw"]
