@@ -7,7 +7,7 @@ key                       shape, dtype      meaning
 ``version``               () int32          :data:`VERSION`
 ``body_model``            () str            ``"anny"`` (the UV layout and the vertex order)
 ``num_verts``             () int32          V of the body the offsets belong to
-``texture``               (S, S, 3) float16 linear albedo, UV layout, row 0 = v = 1, in [0, MAX_ALBEDO]
+``texture``               (S, S, 3) float16 linear RGB albedo in the body's UV layout, row 0 = v = 1
 ``confidence``            (S, S) float16    sum of the frames' sample weights (0: never seen)
 ``filled``                (S, S) int8       0 seen, 1 from the mirror image, 2 inpainted
 ``offsets``               (V,) float32      metres along the posed normal (:func:`apply_offsets`)
@@ -33,7 +33,7 @@ from ..checks import InputError, check_shape
 from ..io.arrays import read_npz
 from ..io.atomic import atomic_write
 
-__all__ = ["VERSION", "AVATAR_SUFFIX", "MAX_ALBEDO", "MAX_OFFSET", "CapturedAvatar", "save_avatar", "load_avatar"]
+__all__ = ["VERSION", "AVATAR_SUFFIX", "MAX_OFFSET", "CapturedAvatar", "save_avatar", "load_avatar"]
 
 #: The file format's version; a reader refuses any other.
 VERSION = 1
@@ -42,10 +42,6 @@ AVATAR_SUFFIX = ".avatar.npz"
 _FORMAT = "relightnet-avatar"
 #: Largest texture side a file may hold (a 4096² texture is 100 MB of float16).
 _MAX_SIZE = 4096
-#: Largest albedo kept: the texture is on the source light estimate's scale (a light read too dim makes the
-#: albedo brighter, and the target's light estimate, read by the same network, makes up for it), so it is not cut
-#: at 1.
-MAX_ALBEDO = 4.0
 #: Largest offset a file may hold, metres (a coat or a skirt stands a few centimetres off the body).
 MAX_OFFSET = 0.5
 
@@ -153,7 +149,7 @@ def load_avatar(path: str | Path, num_verts: int | None = None) -> CapturedAvata
         if not lo - 1e-6 <= phen[j] <= hi + 1e-6:
             raise InputError(f"{name}: key 'phenotype': {n} = {phen[j]:.3g} is outside [{lo:.3g}, {hi:.3g}]")
     return CapturedAvatar(
-        texture=_f32(_array(raw, "texture", name, (s, s, 3))).clamp_(0, MAX_ALBEDO),
+        texture=_f32(_array(raw, "texture", name, (s, s, 3))).clamp_(0, 1),
         confidence=_f32(_array(raw, "confidence", name, (s, s))),
         filled=torch.from_numpy(_array(raw, "filled", name, (s, s)).astype(np.int8)),
         offsets=_f32(offsets), phenotype=_f32(phen),

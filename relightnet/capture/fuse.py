@@ -16,7 +16,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
-from .avatar_file import MAX_ALBEDO, CapturedAvatar
+from .avatar_file import CapturedAvatar
 from .fill import fill_unseen, mirror_texels
 from .metrics import seen_share
 from .offsets import apply_offsets
@@ -133,7 +133,7 @@ def _finish(fusion: TextureFusion, table, atlas, fb, result, offsets, used: int,
                 100 * float((how == 2).float().mean()))
     V = fb.body.num_verts
     avatar = CapturedAvatar(
-        texture=_texture(filled, table).clamp(0, MAX_ALBEDO),
+        texture=_texture(filled, table).clamp(0, 1),
         confidence=_texture(fusion.total[:, None], table)[..., 0],
         filled=_texture(how[:, None].float(), table, 2.0)[..., 0].to(torch.int8),
         offsets=torch.zeros(V) if offsets is None else offsets.detach().float().cpu(),

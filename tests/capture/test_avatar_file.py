@@ -11,7 +11,7 @@ from relightnet.checks import InputError
 
 def _avatar(v=50, s=16):
     g = torch.Generator().manual_seed(0)
-    return CapturedAvatar(2 * torch.rand(s, s, 3, generator=g), torch.rand(s, s, generator=g),  # above 1: kept
+    return CapturedAvatar(torch.rand(s, s, 3, generator=g), torch.rand(s, s, generator=g),
                           torch.randint(0, 3, (s, s), generator=g).to(torch.int8), 0.02 * torch.rand(v, generator=g),
                           torch.tensor([0.5, 0.78, 0.5, 0.5, 0.37, 0.5]), 0.9, 12)
 
