@@ -1,11 +1,19 @@
-"""3D-path rendering: shading and compositing primitives, the frame renderer, whole render jobs."""
+"""3D-path rendering: shading and compositing primitives, the frame renderer, whole render jobs.
 
-from .frame import RenderOutput, TexturedAlbedo, light_in_world, render_mesh
-from .jobs import BodyFrame, LoadedMesh, fit_camera, load_mesh, render_body_frames, render_mesh_file
-from .shading import Shade, composite, composite_covered, shade, shading
+The names load on first use (:func:`relightnet.lazy.lazy_package`): the shading primitives do not
+pull in the frame renderer's ray tracer."""
 
-__all__ = [
-    "RenderOutput", "TexturedAlbedo", "light_in_world", "render_mesh",
-    "BodyFrame", "LoadedMesh", "fit_camera", "load_mesh", "render_body_frames", "render_mesh_file",
-    "Shade", "composite", "composite_covered", "shade", "shading",
-]
+from __future__ import annotations
+
+from ..lazy import lazy_package
+
+#: public name → the module of this package that defines it
+_EXPORTS = {
+    "RenderOutput": "frame", "TexturedAlbedo": "frame", "light_in_world": "frame", "render_mesh": "frame",
+    "BodyFrame": "jobs", "LoadedMesh": "jobs", "fit_camera": "jobs", "load_mesh": "jobs",
+    "render_body_frames": "jobs", "render_mesh_file": "jobs",
+    "Shade": "shading", "composite": "shading", "composite_covered": "shading", "shade": "shading",
+    "shading": "shading",
+}
+
+__all__ = lazy_package(__name__, _EXPORTS)
