@@ -38,7 +38,7 @@ def ort_model(outputs: list[str]) -> bytes:
     """The shipped graph with a free batch (and H, W), cut to ``outputs``."""
     import onnx
 
-    m = load_onnx()
+    m = onnx.ModelProto.FromString(load_onnx().SerializeToString())  # onnx's message, to mix in its tensors
     for dim, name in zip(m.graph.input[0].type.tensor_type.shape.dim, "BHW", strict=False):
         dim.dim_param = name
     for t in m.graph.initializer:  # Identity_2's Reshape: (1, 256, 256, 1) -> (-1, 256, 256, 1)

@@ -29,6 +29,7 @@ from torch import nn
 from ..checks import InputError, ShapeError
 from ..segment.models import POSE_FILE
 from .onnx_ops import BUILDERS, SUPPORTED_OPS
+from .onnx_proto import EXTERNAL, attribute_value, model_from_bytes, to_array
 
 __all__ = ["cut_to_outputs", "GraphModule", "Tap", "POSE_TAPS", "load_onnx", "pose_encoder", "find_stride_taps"]
 
@@ -55,16 +56,16 @@ POSE_TAPS = (Tap("t12_0", 2, 64), Tap("t24_0", 4, 144), Tap("t40_0", 8, 192), Ta
 
 
 def load_onnx(path=POSE_FILE):
-    """An ONNX file as a ``ModelProto``: weights inside the file only (external data is refused)."""
-    import onnx
-    from google.protobuf.message import DecodeError
-
+    """An ONNX file as a model message with ``onnx.ModelProto``'s field names (:mod:`.onnx_proto`, read
+    without importing ``onnx``): weights inside the file only (external data is refused)."""
     try:
-        model = onnx.load(str(path), load_external_data=False)
-    except (OSError, DecodeError) as err:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as err:
         raise InputError(f"{path}: not a readable ONNX file ({type(err).__name__})") from None
+    model = model_from_bytes(data, str(path))
     for t in model.graph.initializer:
-        if t.data_location == onnx.TensorProto.EXTERNAL:
+        if t.data_location == EXTERNAL:
             raise InputError(f"{path}: initializer {t.name!r} lives in an external file (refused)")
     return model
 
@@ -73,9 +74,7 @@ class _Builder:
     """Reads a graph's constants and layouts for the op builders (``onnx_ops.Context``)."""
 
     def __init__(self, graph, module: GraphModule) -> None:
-        from onnx import numpy_helper
-
-        self.arrays = {t.name: numpy_helper.to_array(t) for t in graph.initializer}
+        self.arrays = {t.name: to_array(t) for t in graph.initializer}
         self.module, self.perms, self.used = module, {}, []
 
     def _name(self, node, i: int) -> str | None:
@@ -110,18 +109,21 @@ class _Builder:
 
 
 def cut_to_outputs(model, outputs: Sequence[str]) -> None:
-    """Cut ``model`` (an ``onnx.ModelProto``, in place) to the nodes ``outputs`` need, with ``outputs``
-    (any tensors of the graph) as its float outputs: ONNX Runtime runs every node of a graph."""
-    import onnx
-
-    sources = {t.name for t in model.graph.initializer} | {i.name for i in model.graph.input}
-    nodes = [model.graph.node[i] for i in _needed(list(model.graph.node), outputs, sources)]
-    kept = [onnx.NodeProto() for _ in nodes]
-    for k, n in zip(kept, nodes, strict=True):
-        k.CopyFrom(n)
-    del model.graph.node[:], model.graph.output[:]
-    model.graph.node.extend(kept)
-    model.graph.output.extend(onnx.helper.make_tensor_value_info(n, onnx.TensorProto.FLOAT, None) for n in outputs)
+    """Cut ``model`` (an ``onnx.ModelProto`` or a :func:`load_onnx` model, in place) to the nodes
+    ``outputs`` need, with ``outputs`` (any tensors of the graph) as its float outputs of unknown
+    shape: ONNX Runtime runs every node of a graph."""
+    graph = model.graph
+    sources = {t.name for t in graph.initializer} | {i.name for i in graph.input}
+    order = _needed(list(graph.node), outputs, sources)
+    kept = [type(graph.node[i])() for i in order]
+    for k, i in zip(kept, order, strict=True):
+        k.CopyFrom(graph.node[i])
+    del graph.node[:], graph.output[:]
+    graph.node.extend(kept)
+    for name in outputs:
+        out = graph.output.add()
+        out.name = name
+        out.type.tensor_type.elem_type = 1  # FLOAT
 
 
 def _needed(nodes, taps: Sequence[str], sources: set[str]) -> list[int]:
@@ -255,9 +257,7 @@ class GraphModule(nn.Module):
 
 
 def _attributes(node) -> dict:
-    from onnx import helper
-
-    return {a.name: helper.get_attribute_value(a) for a in node.attribute}
+    return {a.name: attribute_value(a) for a in node.attribute}
 
 
 def find_stride_taps(model, size: int = 256) -> tuple[Tap, ...]:

@@ -43,8 +43,7 @@ def pose():
 
 def _session(model, outputs, dynamic=False):
     """An ONNX Runtime session of ``model`` returning ``outputs`` (intermediate tensors made outputs)."""
-    m = onnx.ModelProto()
-    m.CopyFrom(model)
+    m = onnx.ModelProto.FromString(model.SerializeToString())  # load_onnx's message, as onnx's own
     if dynamic:
         for dim, name in zip(m.graph.input[0].type.tensor_type.shape.dim, ("B", "H", "W"), strict=False):
             dim.dim_param = name
