@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["exposure_arg", "nonneg_int", "pos_int", "pos_float", "work_size", "image_size", "key_value_arg",
+__all__ = ["exposure_arg", "nonneg_int", "pos_int", "pos_float", "quality", "work_size", "image_size", "key_value_arg",
            "phenotype_arg"]
 
 
@@ -38,6 +38,11 @@ def pos_int(text: str) -> int:
 def pos_float(text: str) -> float:
     """A finite number > 0."""
     return _parsed(text, float, lambda v: 0 < v < float("inf"), "a positive number")
+
+
+def quality(text: str) -> int:
+    """A JPEG/WebP quality: an integer from 1 to 100."""
+    return _parsed(text, int, lambda v: 1 <= v <= 100, "an integer from 1 to 100")
 
 
 def _int_in(text: str, lo: int, hi: int, step: int, expected: str) -> int:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import logging
 
+from ..errors import InputError
 from ..names import STREAMING_SMOOTHING, smoothing_help
-from .argtypes import pos_float
+from .argtypes import pos_float, quality
 from .inputs import load_single_light, read_photo
 from .options import LIGHT_HELP, add_command, add_mask_source_arg, add_model_args
 from .paths import in_path, out_dir, out_file
@@ -15,7 +16,9 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = out_file(args.out, suffixes=(".png",), inputs=(args.image, args.mask, args.light, args.checkpoint))
+    from ..io.probe import IMAGE_OUT_SUFFIXES  # torch-free
+
+    out = out_file(args.out, suffixes=IMAGE_OUT_SUFFIXES, inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     from ..io.probe import check_image_file
 
@@ -23,6 +26,9 @@ def run(args: argparse.Namespace) -> int:
     light = load_single_light(args.light)  # a bad light fails before the photo is decoded and segmented
     # then: a bad photo fails before the heavy imports (and the person is found in it)
     image, mask, alpha = read_photo(args.image, args.mask, args.mask_source)
+    if alpha is not None and out.suffix.lower() in (".jpg", ".jpeg"):
+        raise InputError(f"--out {out}: {args.image} is a cut-out (it has alpha) and a JPEG has none; "
+                         "write .png or .webp")
     from ..io import write_image
     from ..io.icc import photo_profile
     from ..pipeline.backends import make_predictor
@@ -39,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     relit, kept = res.image, {"prediction": res.prediction, "albedo": res.albedo, "light": res.light}
     del res  # from here each full-size map is freed once written
     # a cut-out stays a cut-out; a Display-P3 photo gives a Display-P3 file (io.icc)
-    write_image(out, relit, srgb=False, alpha=alpha, icc=photo_profile(args.image))
+    write_image(out, relit, srgb=False, alpha=alpha, icc=photo_profile(args.image), quality=args.quality)
     del relit
     if maps is not None:
         _save_maps(maps, kept)
@@ -94,6 +100,7 @@ _HARD_EDGES = ("paste the person with the mask as it is (default: a soft matte i
 def register(sub) -> None:
     p = add_command(sub, "relight-image", "Relight a photo of a person with any light (2D path: the CNN).",
                     "  relightnet relight-image person.jpg --light sunset --out relit.png    # mask: segmentation\n"
+                    "  relightnet relight-image person.jpg --light sunset --out relit.jpg --quality 90\n"
                     "  relightnet relight-image person.png --mask mask.png --light sunset --out relit.png\n"
                     "  relightnet relight-image person.jpg --light light.npy --out relit.png --save-maps maps/\n"
                     "  relightnet relight-image person.png --mask m.png --light studio.exr --absolute --out r.png\n")
@@ -102,7 +109,8 @@ def register(sub) -> None:
                    "has one, else the person segmentation (--mask-source)")
     add_mask_source_arg(p)
     p.add_argument("--light", required=True, help=LIGHT_HELP)
-    p.add_argument("--out", required=True, help="relit image (PNG)")
+    p.add_argument("--out", required=True, help="relit image: .png (lossless), .jpg/.jpeg or .webp (--quality)")
+    p.add_argument("--quality", type=quality, default=92, help="JPEG/WebP quality, 1 to 100 (default: 92)")
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
     p.add_argument("--absolute", action="store_true",
                    help="use the light at its own scale (default: keep the photo's exposure)")

@@ -1,4 +1,4 @@
-"""File I/O: atomic writes, 8-bit images (PNG), HDR environment maps (EXR/HDR), videos (PyAV).
+"""File I/O: atomic writes, 8-bit images (PNG, JPEG, WebP), HDR environment maps (EXR/HDR), videos (PyAV).
 
 Every writer goes through :func:`atomic_write`, so an interrupted run never
 leaves a truncated file behind.
@@ -7,11 +7,11 @@ The names below are loaded from their modules on first use, so that the torch-fr
 (:mod:`.probe`, :mod:`.limits`) can refuse an oversized file before torch is imported.
 """
 
-from importlib import import_module
+from ..lazy import lazy_package
 
-#: Where each public name lives (loaded on first access).
+#: Where each public name lives (loaded on first access, :func:`relightnet.lazy.lazy_package`).
 _WHERE = {
-    "atomic_write": "atomic", "PHOTO_SUFFIXES": "probe",
+    "atomic_write": "atomic", "PHOTO_SUFFIXES": "probe", "IMAGE_OUT_SUFFIXES": "probe",
     "ENVMAP_SUFFIXES": "envmap", "read_envmap": "envmap", "write_envmap": "envmap",
     "to_uint8": "image", "read_image": "image",
     "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
@@ -21,17 +21,4 @@ _WHERE = {
     "write_side_by_side": "side_by_side",
 }
 
-__all__ = list(_WHERE)
-
-
-def __getattr__(name: str):
-    """Load a public name from its module on first use (PEP 562)."""
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__all__ = lazy_package(__name__, _WHERE)

@@ -16,11 +16,14 @@ from pathlib import Path
 from ..errors import InputError
 from .limits import check_pixels
 
-__all__ = ["PHOTO_SUFFIXES", "header_size", "check_image_file", "check_png_chunks", "MAX_PNG_METADATA"]
+__all__ = ["PHOTO_SUFFIXES", "IMAGE_OUT_SUFFIXES", "header_size", "check_image_file", "check_png_chunks", "MAX_PNG_METADATA"]
 
 #: The file types read as a photo (lower case): what FFmpeg decodes as one still image. HEIC/HEIF
 #: are read where the FFmpeg build demuxes them; a file it cannot read is refused in one line.
 PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".webp", ".avif", ".heic", ".heif", ".tif", ".tiff", ".bmp")
+#: The file types an image is written as (:func:`relightnet.io.write_image`): PNG lossless, JPEG and
+#: WebP at a quality.
+IMAGE_OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".webp")
 
 _HEAD = 1 << 16
 #: Most bytes of text and metadata (tEXt, zTXt, iTXt, iCCP, eXIf; decompressed) a PNG may carry.

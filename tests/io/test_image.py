@@ -42,6 +42,39 @@ def test_float_linear_is_srgb_encoded_and_read_back_linear(tmp_path):
     torch.testing.assert_close(read_image(raw), img, rtol=0, atol=0.5 / 255 + 1e-6)
 
 
+def test_png_pixels_do_not_depend_on_the_compression_settings(tmp_path):
+    """The fast PNG settings change the file's compression only: the pixels are FFmpeg's defaults'."""
+    from relightnet.io.image import PNG_OPTIONS, _encode
+
+    g = torch.Generator().manual_seed(1)
+    img = (torch.rand(64, 96, 3, generator=g) * torch.linspace(0, 1, 96)[:, None]).mul(255).round().to(torch.uint8)
+    ours = write_image(tmp_path / "fast.png", img)
+    default = tmp_path / "default.png"
+    default.write_bytes(_encode("png", av.VideoFrame.from_ndarray(img.numpy(), format="rgb24")))
+    assert PNG_OPTIONS and ours.read_bytes() != default.read_bytes()
+    assert torch.equal(read_image(ours), read_image(default))
+
+
+@pytest.mark.parametrize("suffix", [".jpg", ".jpeg", ".webp"])
+def test_lossy_outputs_keep_the_picture_and_the_profile(tmp_path, suffix):
+    from PIL import Image
+
+    from relightnet.io.icc import read_icc
+
+    from .icc_profiles import display_p3
+
+    y, x = torch.meshgrid(torch.linspace(0, 1, 48), torch.linspace(0, 1, 64), indexing="ij")
+    img = torch.stack([x, y, (x + y) / 2], -1)  # smooth: a lossy codec keeps it within a few levels
+    path = write_image(tmp_path / f"a{suffix}", img, srgb=False, quality=95)
+    back = read_image(path)
+    assert back.shape == img.shape and (back - img).abs().mean() < 2 / 255 and (back - img).abs().max() < 12 / 255
+    assert Image.open(path).format == ("WEBP" if suffix == ".webp" else "JPEG")
+    small = write_image(tmp_path / f"b{suffix}", img, srgb=False, quality=20)
+    assert small.stat().st_size < path.stat().st_size  # the quality is applied
+    tagged = write_image(tmp_path / f"p{suffix}", img, srgb=False, icc=display_p3())
+    assert Image.open(tagged).info.get("icc_profile") == display_p3() == read_icc(tagged)
+
+
 def test_gray_and_out_of_range_values(tmp_path):
     img = torch.tensor([[-1.0, 0.5, 2.0]]).reshape(1, 3, 1)
     back = read_image(write_image(tmp_path / "g.png", img, srgb=False))
@@ -54,8 +87,12 @@ def test_gray_and_out_of_range_values(tmp_path):
 def test_write_and_read_errors(tmp_path):
     with pytest.raises(ShapeError, match="image"):
         write_image(tmp_path / "a.png", torch.zeros(4, 4, 2))
-    with pytest.raises(InputError, match=r"\.png"):
-        write_image(tmp_path / "a.jpg", torch.zeros(4, 4, 3))
+    with pytest.raises(InputError, match=r"\.png, \.jpg, \.jpeg, \.webp"):
+        write_image(tmp_path / "a.bmp", torch.zeros(4, 4, 3))
+    with pytest.raises(InputError, match="a.jpg: a JPEG has no alpha"):
+        write_image(tmp_path / "a.jpg", torch.zeros(4, 4, 3), alpha=torch.ones(4, 4))
+    with pytest.raises(InputError, match="quality"):
+        write_image(tmp_path / "a.jpg", torch.zeros(4, 4, 3), quality=0)
     with pytest.raises(InputError, match="NaN"):
         write_image(tmp_path / "a.png", torch.full((4, 4, 3), float("nan")))
     with pytest.raises(InputError, match="does not exist"):

@@ -77,6 +77,12 @@ def test_cli_soft_edges_change_the_border_band_only(photo, tmp_path):
     band = border_band(mask, band_radius(120, 150)).numpy()
     assert np.array_equal(soft[~band], hard[~band])
     assert not np.array_equal(soft[band], hard[band])
+    # the same relight as JPEG and WebP: the picture within a lossy codec's error, the quality applied
+    for name in ("r.jpg", "r.webp", "low.jpg"):
+        q = "30" if name.startswith("low") else "95"
+        assert main(args + ["--out", str(tmp_path / name), "--quality", q]) == 0
+        assert np.abs(read_image(tmp_path / name).numpy() - soft.numpy()).mean() < (0.05 if q == "30" else 0.02)
+    assert (tmp_path / "low.jpg").stat().st_size < (tmp_path / "r.jpg").stat().st_size
 
 
 def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
@@ -123,6 +129,10 @@ def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys
     assert main(["relight-image", str(cut), "--light", "sunset", "--out", str(out)]) == 0
     assert "alpha channel of" in capsys.readouterr().err  # the cut-out's alpha was the mask
     torch.testing.assert_close(read_alpha(out), read_alpha(cut))  # ... and the output keeps it
+    assert main(["relight-image", str(cut), "--light", "sunset", "--out", str(tmp_path / "r.jpg")]) == 1
+    assert "a JPEG has none" in capsys.readouterr().err and not (tmp_path / "r.jpg").exists()
+    assert main(["-q", "relight-image", str(cut), "--light", "sunset", "--out", str(tmp_path / "r.webp")]) == 0
+    torch.testing.assert_close(read_alpha(tmp_path / "r.webp"), read_alpha(cut), atol=2 / 255, rtol=0)
     # A light negative nearly everywhere is refused before any work; one from behind the person
     # lights too little of them (a warning); one of a higher order than the model's is truncated.
     neg = tmp_path / "neg.npy"
