@@ -76,16 +76,19 @@ def paste_from_box(x: torch.Tensor, box: CropBox, h: int, w: int) -> torch.Tenso
     return out
 
 
-def paste_rows(x: torch.Tensor, box: CropBox, h: int, w: int, r0: int, r1: int) -> torch.Tensor:
+def paste_rows(x: torch.Tensor, box: CropBox, h: int, w: int, r0: int, r1: int,
+               cols: tuple[int, int] | None = None) -> torch.Tensor:
     """Rows ``r0:r1`` of :func:`paste_from_box` ``(x, box, h, w)`` without the others: (B, C, s, s) →
-    (B, C, r1 - r0, W), so a large photo's maps can be pasted one band of rows at a time.
+    (B, C, r1 - r0, W), so a large photo's maps can be pasted one band of rows at a time; ``cols``
+    (c0, c1) keeps columns ``c0:c1`` only: (B, C, r1 - r0, c1 - c0), the same values.
 
     The bilinear resize is torch's (``align_corners=False``): across, ``F.interpolate`` on the source
     rows the band needs; down, the same source positions and weights, computed here (equal to
     float32 rounding of the source position: within ~1e-5 of the maps' values)."""
-    out = x.new_zeros(*x.shape[:-2], r1 - r0, w)
+    c0, c1 = (0, w) if cols is None else cols
+    out = x.new_zeros(*x.shape[:-2], r1 - r0, c1 - c0)
     t, l, s, n = box.top, box.left, box.size, x.shape[-2]
-    ys, ye, xs, xe = max(t, r0, 0), min(t + s, r1, h), max(l, 0), min(l + s, w)
+    ys, ye, xs, xe = max(t, r0, 0), min(t + s, r1, h), max(l, c0, 0), min(l + s, c1, w)
     if ys >= ye or xs >= xe:
         return out
     scale = torch.tensor(n, dtype=torch.float32) / s
@@ -97,7 +100,7 @@ def paste_rows(x: torch.Tensor, box: CropBox, h: int, w: int, r0: int, r1: int) 
     across = F.interpolate(x[..., lo:hi, :], size=(hi - lo, s), mode="bilinear", align_corners=False)
     across = across[..., xs - l : xe - l]
     band = across.index_select(-2, i0 - lo).mul_(1 - l1)
-    out[..., ys - r0 : ye - r0, xs:xe] = band.addcmul_(across.index_select(-2, i1 - lo), l1)
+    out[..., ys - r0 : ye - r0, xs - c0 : xe - c0] = band.addcmul_(across.index_select(-2, i1 - lo), l1)
     return out
 
 
@@ -129,14 +132,25 @@ class CropMaps:
         """(H, W) of the photo."""
         return int(self.mask.shape[-2]), int(self.mask.shape[-1])
 
-    def rows(self, r0: int, r1: int, albedo: bool = True):
+    def rows(self, r0: int, r1: int, albedo: bool = True, cols: tuple[int, int] | None = None):
         """``(albedo (1, 3, r, W) or None, transport (1, K, r, W), mask (1, 1, r, W))`` of rows ``r0:r1``,
-        the maps zero outside the person's mask (times the mask, as :meth:`pasted`)."""
+        the maps zero outside the person's mask (times the mask, as :meth:`pasted`); ``cols`` (c0, c1):
+        columns ``c0:c1`` only (width c1 - c0)."""
         h, w = self.size
-        m = self.mask[:, :, r0:r1]
-        t = paste_rows(self.transport, self.box, h, w, r0, r1).mul_(m)
-        a = paste_rows(self.albedo, self.box, h, w, r0, r1).mul_(m) if albedo else None
+        c0, c1 = (0, w) if cols is None else cols
+        m = self.mask[:, :, r0:r1, c0:c1]
+        t = paste_rows(self.transport, self.box, h, w, r0, r1, cols).mul_(m)
+        a = paste_rows(self.albedo, self.box, h, w, r0, r1, cols).mul_(m) if albedo else None
         return a, t, m
+
+    def span(self) -> tuple[int, int, int, int] | None:
+        """``(r0, r1, c0, c1)``: the rows and columns of the photo holding every pixel of the mask above 0
+        (ends exclusive), or None for an empty mask. Outside them the maps are zero."""
+        m = self.mask[0, 0] > 0
+        rows, cols = torch.nonzero(m.any(1)), torch.nonzero(m.any(0))
+        if len(rows) == 0:
+            return None
+        return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
     def pasted(self) -> Prediction:
         """The :class:`Prediction` at the photo's resolution (maps zero outside the mask)."""

@@ -4,7 +4,9 @@ The CNN's maps are predicted at its working size; a large photo needs them at it
 where a 12.5 MP frame's albedo and K = 9 transport alone take 600 MB. :func:`relight_over_photo`
 never holds them whole: the maps of a band of :data:`~relightnet.model.photo_albedo.ROW_BAND` rows are
 pasted (:meth:`~relightnet.model.inference.CropMaps.rows`), relit and composited over the photo,
-and the band's result is written into the output before the next band is pasted. The two numbers
+and the band's result is written into the output before the next band is pasted. Only the rows and
+columns the person's mask spans are computed (:meth:`~relightnet.model.inference.CropMaps.span`):
+every other pixel is the photo's. The two numbers
 the whole person decides (the exposure of the light and the person's mean shading, which bounds the photo albedo)
 come from a first pass that sums the person's transport, Σ m·T_k: the mean shading under any
 light L is that sum times L (shading is linear in the light), so both are found without a full
@@ -51,15 +53,28 @@ class BandRelit:
 
 def transport_sum(maps: CropMaps) -> tuple[torch.Tensor, float]:
     """``(Σ m·T_k (K,) float64, Σ m)`` over the photo: the person's transport weighted by its mask
-    (T is already zero outside it), summed one band of rows at a time."""
-    h, _ = maps.size
+    (T is already zero outside it), summed one band of rows at a time over the mask's span."""
     total = torch.zeros(maps.transport.shape[1], dtype=torch.float64)
     mass = 0.0
-    for r in range(0, h, ROW_BAND):
-        _, t, m = maps.rows(r, min(r + ROW_BAND, h), albedo=False)
+    span = maps.span()
+    if span is None:
+        return total, mass
+    r0, r1, c0, c1 = span
+    for r in range(r0, r1, ROW_BAND):
+        _, t, m = maps.rows(r, min(r + ROW_BAND, r1), albedo=False, cols=(c0, c1))
         total += (t * m).sum((0, 2, 3), dtype=torch.float64)
         mass += float(m.sum(dtype=torch.float64))
     return total, mass
+
+
+def _photo_as(image: torch.Tensor, dtype: torch.dtype) -> torch.Tensor:
+    """(3, H, W) photo (sRGB, float or uint8) -> (H, W, 3) of ``dtype``: what every pixel outside the
+    person is in the output (float in [0, 1] as given; uint8 rounded, as the bands round theirs)."""
+    x = image.permute(1, 2, 0)  # a new tensor in each case: the output never shares the photo's memory
+    if dtype == torch.uint8:
+        return x.clone(memory_format=torch.contiguous_format) if x.dtype == torch.uint8 \
+            else x.float().clamp(0, 1).mul(255).round().to(torch.uint8)
+    return x.float().div(255) if x.dtype == torch.uint8 else x.to(dtype).clone(memory_format=torch.contiguous_format)
 
 
 def is_gray(image: torch.Tensor) -> bool:
@@ -113,13 +128,14 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     if keep_exposure:
         new = new * exposure_scale(transport_level(total, ref, mass), transport_level(total, new, mass))
     mean = ((total @ ref.double()) / max(mass, 1e-8)).to(new).view(1, 3, 1, 1)  # the person's mean shading
-    out = torch.empty(h, w, 3, dtype=dtype)
-    albedo_out = torch.empty(3, h, w) if keep_albedo else None
+    out = _photo_as(image, dtype)  # the person's span is relit below; the rest stays the photo
+    albedo_out = torch.zeros(3, h, w) if keep_albedo else None
     lit, gray = 0.0, is_gray(image)
-    for r in range(0, h, ROW_BAND):
-        r1 = min(r + ROW_BAND, h)
-        a, t, m = maps.rows(r, r1)
-        photo = image[None, :, r:r1]
+    r0, r1, c0, c1 = maps.span() or (0, 0, 0, 0)
+    for r in range(r0, r1, ROW_BAND):
+        rb = min(r + ROW_BAND, r1)
+        a, t, m = maps.rows(r, rb, cols=(c0, c1))
+        photo = image[None, :, r:rb, c0:c1]
         photo = photo.float() / 255 if photo.dtype == torch.uint8 else photo.to(t)
         if detail:
             a = photo_albedo_rows(srgb_to_linear(photo), shading_map(t, ref), a, mean)
@@ -132,9 +148,9 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
         if dtype == torch.uint8:
             check_finite(band, "relit image")
             band = band.clamp_(0, 1).mul_(255).round_()
-        out[r:r1] = band
+        out[r:rb, c0:c1] = band
         if albedo_out is not None:
-            albedo_out[:, r:r1] = a[0]
+            albedo_out[:, r:rb, c0:c1] = a[0]
     if soft_edges:
         soft_composite(out, edge_matte(image, maps.mask[0, 0]))
     return BandRelit(out, new, lit / max(mass, 1.0), albedo_out)

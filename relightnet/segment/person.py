@@ -25,7 +25,7 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError, check_shape
-from .models import INPUT_SIZE, PersonModels
+from .models import INPUT_SIZE, PersonModels, PoseOutput
 
 __all__ = ["PersonMask", "CROP_SCALE", "candidate_crops", "find_person", "crop_around", "crop_pixels", "segment_crop",
            "refine_person", "segment_person", "mask_box"]
@@ -135,14 +135,29 @@ def candidate_crops(image: torch.Tensor, models: PersonModels) -> list[tuple[flo
 def find_person(image: torch.Tensor, models: PersonModels) -> PersonMask | None:
     """Stages 1 and 2 once: the best candidate's :class:`PersonMask`, or None when no crop shows a person.
 
+    The best is the most confident read whose mask has a region; among reads within
+    :data:`PRESENCE_TIE` of it, the largest mask. The pose model reads every candidate, but a mask is
+    made at the photo's resolution only for the reads that can win (most confident first).
+
     Args:
         image: (3, H, W) sRGB in [0, 1].
     """
-    found = [r for r in (segment_crop(image, c, models) for c in candidate_crops(image, models)) if r is not None]
+    h, w = _check_image(image, "image")
+    reads = [(i, *r) for i, r in enumerate(_read_crop(image, c, models) for c in candidate_crops(image, models))
+             if r[1].presence >= MIN_PRESENCE]
+    reads.sort(key=lambda r: -r[2].presence)  # stable: equal presences keep the candidates' order
+    found: list[tuple[int, PersonMask]] = []
+    for i, pixels, out in reads:
+        if found and out.presence < found[0][1].score - PRESENCE_TIE:
+            break  # no read from here on can be the best or tie with it
+        res = _crop_result(h, w, pixels, out)
+        if res is not None:
+            found.append((i, res))
     if not found:
         return None
-    best = max(r.score for r in found)
-    return max((r for r in found if r.score >= best - PRESENCE_TIE), key=lambda r: float(r.mask.sum()))
+    best = found[0][1].score
+    tied = [r for _, r in sorted(found, key=lambda f: f[0]) if r.score >= best - PRESENCE_TIE]
+    return max(tied, key=lambda r: float(r.mask.sum()))  # the first of equal masks, in the candidates' order
 
 
 def _square_crop(image: torch.Tensor, x0: int, y0: int, side: int) -> torch.Tensor:
@@ -155,19 +170,16 @@ def _square_crop(image: torch.Tensor, x0: int, y0: int, side: int) -> torch.Tens
     return out
 
 
-def segment_crop(image: torch.Tensor, crop: tuple[float, float, float], models: PersonModels) -> PersonMask | None:
-    """Stage 2: the person's mask and landmarks from the pose model on one square crop.
-
-    Args:
-        image: (3, H, W) sRGB in [0, 1].
-        crop: (cx, cy, side) in image pixels (:func:`crop_around`).
-
-    Returns:
-        :class:`PersonMask` in image coordinates, or None when the model sees no person there.
-    """
-    h, w = _check_image(image, "image")
+def _read_crop(image: torch.Tensor, crop: tuple[float, float, float], models: PersonModels):
+    """The pose model on one square crop: ``((x0, y0, side) whole pixels, PoseOutput)``."""
     x0, y0, s = crop_pixels(crop)
-    out = models.pose(_to_input(_square_crop(image, x0, y0, s)))
+    return (x0, y0, s), models.pose(_to_input(_square_crop(image, x0, y0, s)))
+
+
+def _crop_result(h: int, w: int, pixels: tuple[int, int, int], out: PoseOutput) -> PersonMask | None:
+    """A pose read of the crop at ``pixels`` (x0, y0, side) as a :class:`PersonMask` of an (H, W) image,
+    or None when it sees no person (its presence or its mask)."""
+    x0, y0, s = pixels
     if out.presence < MIN_PRESENCE:
         return None
     # Logits are resized (not probabilities) so that the 0.5 outline is interpolated smoothly.
@@ -187,6 +199,20 @@ def segment_crop(image: torch.Tensor, crop: tuple[float, float, float], models: 
     lm[:, 2] = lm[:, 2] * k
     return PersonMask(torch.from_numpy(region).float(), prob, (x0 + s / 2, y0 + s / 2, float(s)), lm,
                       torch.from_numpy(out.world).float(), out.presence)
+
+
+def segment_crop(image: torch.Tensor, crop: tuple[float, float, float], models: PersonModels) -> PersonMask | None:
+    """Stage 2: the person's mask and landmarks from the pose model on one square crop.
+
+    Args:
+        image: (3, H, W) sRGB in [0, 1].
+        crop: (cx, cy, side) in image pixels (:func:`crop_around`).
+
+    Returns:
+        :class:`PersonMask` in image coordinates, or None when the model sees no person there.
+    """
+    h, w = _check_image(image, "image")
+    return _crop_result(h, w, *_read_crop(image, crop, models))
 
 
 def refine_person(image: torch.Tensor, res: PersonMask, models: PersonModels, times: int = 1) -> PersonMask:

@@ -87,3 +87,26 @@ def test_a_gray_photo_gives_a_gray_person_under_a_coloured_light(predict, photo)
     coloured = relight_over_photo(predict.crop(img, mask), img, preset_light("sunset"))
     spread = coloured.image.amax(-1) - coloured.image.amin(-1)
     assert float(spread[mask > 0].mean()) > 0.05  # a coloured photo keeps its colour
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.uint8])
+def test_only_the_persons_span_is_computed_and_the_photo_is_left_alone(predict, photo, dtype):
+    """Pixels outside the rows and columns the mask spans are the photo's; a photo given as a view of
+    channels-last pixels (as read from a file) is not written to; the span matches the mask."""
+    img, mask = photo
+    hwc = (img * 255).round().to(torch.uint8).permute(1, 2, 0).contiguous()
+    view = hwc.permute(2, 0, 1) if dtype == torch.uint8 else hwc.float().div(255).permute(2, 0, 1)
+    before = view.clone()
+    crop = predict.crop(view, mask)
+    assert crop.span() == (150, 600, 10, 60)
+    res = relight_over_photo(crop, view, torch.tensor([[1.0, 0.9, 0.8]] + [[0.0] * 3] * 8), dtype=dtype,
+                             soft_edges=True)
+    assert torch.equal(view, before)
+    outside = torch.ones(600, 70, dtype=torch.bool)
+    outside[150:, 10:60] = False
+    assert res.image.shape == (600, 70, 3) and res.image.dtype == dtype
+    from relightnet.segment.matte import band_radius, border_band
+
+    far = outside & ~border_band(mask, band_radius(600, 70))  # the soft matte may reach into its band only
+    assert torch.equal(res.image[far], before.permute(1, 2, 0)[far])
+    assert not torch.equal(res.image[~outside], before.permute(1, 2, 0)[~outside])
