@@ -144,7 +144,7 @@ def _size(path: Path) -> str:
     from relightnet.io import video_info
 
     i = video_info(path)
-    return f"{i.width}×{i.height}"
+    return f"{i.size[1]}×{i.size[0]}"
 
 
 def main() -> None:
