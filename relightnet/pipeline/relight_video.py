@@ -24,7 +24,6 @@ import torch
 
 from ..checks import InputError
 from ..io import VideoWriter, frame_times
-from ..io.pipelined import ReadAhead, WriteBehind
 from ..names import STREAMING_SMOOTHING
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
@@ -99,16 +98,14 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     smoother = state = None
     n = 0
     empty: list[int] = []
-    # decoding and segmentation run a frame or two ahead, encoding behind (io.pipelined): the cores overlap
-    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer, \
-            ReadAhead(pairs) as ahead, WriteBehind(writer.write) as behind:
-        for t, img, mask in tqdm(ahead, total=n_masks or None, desc="relight-video", unit="frame",
+    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
+        for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
                                  disable=not progress):
             time = float(times[t]) if times is not None and t < len(times) else None
             if gate is not None:
                 gate(t, mask)
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
-                behind.put(img.permute(1, 2, 0), time=time)
+                writer.write(img.permute(1, 2, 0), time=time)
                 empty.append(t)
                 n += 1
                 continue
@@ -125,8 +122,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             elapsed = t / info.fps if time is None else time - float(times[0])
             new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * elapsed)
             # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-            behind.put(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8,
-                                          soft_edges=soft_edges).image, time=time)
+            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8,
+                                            soft_edges=soft_edges).image, time=time)
             del pred, img, mask  # the next frame is decoded and predicted without this one's
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
