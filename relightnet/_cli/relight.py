@@ -16,12 +16,10 @@ logger = logging.getLogger("relightnet.relight")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io.probe import IMAGE_OUT_SUFFIXES  # torch-free
+    from ..io.probe import IMAGE_OUT_SUFFIXES, check_image_file  # torch-free
 
     out = out_file(args.out, suffixes=IMAGE_OUT_SUFFIXES, inputs=(args.image, args.mask, args.light, args.checkpoint))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
-    from ..io.probe import check_image_file
-
     check_image_file(args.image, "an image")  # an oversized or broken photo is refused before torch loads
     light = load_single_light(args.light)  # a bad light fails before the photo is decoded and segmented
     # then: a bad photo fails before the heavy imports (and the person is found in it)

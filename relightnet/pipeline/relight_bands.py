@@ -51,12 +51,13 @@ class BandRelit:
     albedo: torch.Tensor | None = None
 
 
-def transport_sum(maps: CropMaps) -> tuple[torch.Tensor, float]:
+def transport_sum(maps: CropMaps, span: tuple[int, int, int, int] | None = None) -> tuple[torch.Tensor, float]:
     """``(Σ m·T_k (K,) float64, Σ m)`` over the photo: the person's transport weighted by its mask
-    (T is already zero outside it), summed one band of rows at a time over the mask's span."""
+    (T is already zero outside it), summed one band of rows at a time over the mask's span
+    (``span``: :meth:`CropMaps.span <relightnet.model.inference.CropMaps.span>`, found here when None)."""
     total = torch.zeros(maps.transport.shape[1], dtype=torch.float64)
     mass = 0.0
-    span = maps.span()
+    span = maps.span() if span is None else span
     if span is None:
         return total, mass
     r0, r1, c0, c1 = span
@@ -123,7 +124,8 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     check_shape(image, [3, h, w], name="image")
     check_finite(light, "light")
     ref = (maps.light[0] if reference is None else reference).to(maps.transport)
-    total, mass = transport_sum(maps)
+    span = maps.span()
+    total, mass = transport_sum(maps, span)
     new = light.to(maps.transport)
     if keep_exposure:
         new = new * exposure_scale(transport_level(total, ref, mass), transport_level(total, new, mass))
@@ -131,7 +133,7 @@ def relight_over_photo(maps: CropMaps, image: torch.Tensor, light: torch.Tensor,
     out = _photo_as(image, dtype)  # the person's span is relit below; the rest stays the photo
     albedo_out = torch.zeros(3, h, w) if keep_albedo else None
     lit, gray = 0.0, is_gray(image)
-    r0, r1, c0, c1 = maps.span() or (0, 0, 0, 0)
+    r0, r1, c0, c1 = span or (0, 0, 0, 0)
     for r in range(r0, r1, ROW_BAND):
         rb = min(r + ROW_BAND, r1)
         a, t, m = maps.rows(r, rb, cols=(c0, c1))
