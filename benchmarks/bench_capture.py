@@ -16,19 +16,12 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 import torch
+from common import cpu_name
 
 from relightnet.pipeline.backends import make_predictor
 from relightnet.pipeline.capture_eval import evaluate_capture, format_capture_report
-
-
-def _cpu() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines() if Path("/proc/cpuinfo").is_file() else ():
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return "unknown CPU"
 
 
 def main() -> None:
@@ -41,7 +34,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="also write capture_report.md and capture_metrics.json here")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    print(f"{_cpu()}, {args.threads} threads; {args.clips} people, {args.frames} frames at {args.res}², "
+    print(f"{cpu_name()}, {args.threads} threads; {args.clips} people, {args.frames} frames at {args.res}², "
           f"texture {args.texture}²", flush=True)
 
     def show(i, r):

@@ -22,15 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
-
-from common import table
-
-
-def _cpu() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return "unknown CPU"
+from common import cpu_name, table
 
 
 def main() -> None:
@@ -67,7 +59,7 @@ def main() -> None:
             sq, n = sq + float(np.square(diff).sum()), n + diff.size
     psnr = 10 * math.log10(255.0 ** 2 / (sq / n))
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"{Path(args.video).name}: {len(iou_cap)} frames, CPU {_cpu()}, {args.threads} threads, "
+    print(f"{Path(args.video).name}: {len(iou_cap)} frames, CPU {cpu_name()}, {args.threads} threads, "
           f"texture {args.texture_size}²")
     print(table(["figure", "value"], [
         ["reprojection PSNR inside the hand-made masks (dB)", f"{psnr:.1f}"],

@@ -43,7 +43,13 @@ from .backends import as_predictor
 from .clean_plate import check_camera_start, check_stand_in, stand_in_frames
 from .outfits import avatar_look
 from .scene import load_body, open_motion
-from .video_lights import estimate_video_evidence, lights_fingerprint, read_light_estimates, write_video_lights
+from .video_lights import (
+    VideoEstimates,
+    estimate_video_evidence,
+    lights_fingerprint,
+    read_light_estimates,
+    write_video_lights,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -72,11 +78,9 @@ class _TargetLight:
     """The estimate and smooth stages' result: lights (T, K, 3) for the target's frames."""
 
     smoothed: torch.Tensor
-    raw: torch.Tensor | None = None
+    estimates: VideoEstimates | None = None  # the CNN's, per frame
     outliers: torch.Tensor | None = None
     switches: torch.Tensor | None = None
-    evidence: object = None
-    prior: torch.Tensor | None = None
     fingerprint: str = ""
     reused: bool = False
     method: str = ""  # the smoothing used (``auto`` resolved)
@@ -155,16 +159,17 @@ def _light_stages(model, target, target_masks, mask_source, model_name, smoothin
     cached = read_light_estimates(lights_file, fp)
     if cached is not None:
         logger.info("reusing the light estimates in %s", lights_file)
-    raw, ev, prior = cached if cached is not None else estimate_video_evidence(predict, target, target_masks,
-                                                                               progress, mask_source)
+    est = cached if cached is not None else estimate_video_evidence(predict, target, target_masks, progress,
+                                                                    mask_source)
     # resolved once, there: smoothed with it, recorded as used (a too short clip: none)
-    smoothed, outliers, switches, method = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, fps)
+    smoothed, outliers, switches, method = smooth_video_lights(est.raw, smoothing, est.evidence, est.prior,
+                                                               predict.solve_reg, fps, colour=est.colour)
     if plate_light is not None:
         from ..sh.plate import combine_person_plate
 
         smoothed = combine_person_plate(smoothed, plate_light.light.to(smoothed), plate_light.view)
         method = f"{method}+plate"
-    return _TargetLight(smoothed, raw, outliers, switches, ev, prior, fp, cached is not None, method)
+    return _TargetLight(smoothed, est, outliers, switches, fp, cached is not None, method)
 
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
@@ -310,7 +315,7 @@ def avatar(
     if light is None:
         lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
                             progress, plate_light)
-        n = lit.raw.shape[0]
+        n = lit.estimates.raw.shape[0]
     else:
         n = count_frames(target)  # from the container, else by decoding (streaming)
         lit = _TargetLight(_given_light(light, n))
@@ -320,11 +325,12 @@ def avatar(
         backgrounds, camera, params = stand_in_frames(target, out, n, body_model, target_masks, mask_source, params)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
-    write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.raw, lit.outliers, lit.switches,
-                       lit.evidence, lit.prior, method, title=f"{Path(target).name}: light of the target, {method}")
+    write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.estimates, lit.outliers, lit.switches,
+                       method, title=f"{Path(target).name}: light of the target, {method}")
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
                                 occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True, box=True)
     written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,
                              progress, plate or target)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
-    return AvatarResult(written, out, lights_file, plot, lit.raw, smoothed, lit.reused, lit.outliers, lit.switches)
+    raw = None if lit.estimates is None else lit.estimates.raw
+    return AvatarResult(written, out, lights_file, plot, raw, smoothed, lit.reused, lit.outliers, lit.switches)

@@ -70,10 +70,11 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
     """(T, K, 3) the smoothed light of every frame, estimated from the person (a frame without one takes its
     neighbours' through the smoothing; the first frames' before any person, the first estimate)."""
     from ..sh.light_solve import stack_evidence
-    from ..temporal import smooth_video_lights
+    from ..temporal import frame_colour, smooth_video_lights
 
-    raw, evs, priors, have = [], [], [], []
+    raw, evs, priors, have, colours = [], [], [], [], []
     for img, mask in zip(frames, masks):
+        colours.append(frame_colour(img))
         if mask is None:
             raw.append(None)
             continue
@@ -89,7 +90,8 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
     if len(have) != len(raw) or raw_t.shape[0] < 2:
         return smooth_video_lights(raw_t, "hermite" if raw_t.shape[0] >= 2 else "none", fps=fps).smoothed
     ev, prior = stack_evidence(evs, priors)
-    return smooth_video_lights(raw_t, smoothing, ev, prior, predictor.solve_reg, fps).smoothed
+    return smooth_video_lights(raw_t, smoothing, ev, prior, predictor.solve_reg, fps,
+                               colour=torch.stack(colours)).smoothed
 
 
 def capture_file(source, out, predictor, options: CaptureOptions = CaptureOptions(), preview=None,

@@ -27,6 +27,7 @@ from ..sh.io import resize_sh
 from ..sh.light_solve import stack_evidence
 from ..temporal import jitter, light_distance, light_error
 from ..temporal.registry import smooth_video_lights
+from ..temporal.switches import frame_colour
 from . import metrics as M
 from .backends import as_predictor
 from .relight_image import relight_prediction
@@ -182,8 +183,9 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         if tick is not None:
             tick()
     raw = torch.stack(raw)
+    colour = torch.stack([frame_colour(comp[t]) for t in range(T)])  # the switches seen in the frames
     smoothed, outliers, switches, _ = smooth_video_lights(raw, smoothing, *stack_evidence(evs, priors),
-                                                       predict.solve_reg, CLIP_FPS)
+                                                       predict.solve_reg, CLIP_FPS, colour=colour)
     lights = {"true": true, "raw": raw, "smoothed": resize_sh(smoothed, lmax)}
     preds, photos = _stack_predictions(preds), torch.stack(photos)
     maps = {k: torch.stack(v) for k, v in maps.items()}

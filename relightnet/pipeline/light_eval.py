@@ -126,6 +126,7 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
     """
     from ..data.dataset import SynthDataset
     from ..temporal.registry import smooth_video_lights
+    from ..temporal.switches import frame_colour
     from .backends import as_predictor
 
     predict = as_predictor(predictor)
@@ -144,7 +145,9 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
             priors.append(prior)
         raw = torch.stack(lights)
         ev, prior = stack_evidence(evs, priors)
-        smoothed = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, meta.get("fps", 30.0))[0]
+        colour = torch.stack([frame_colour(x) for x in it["image_composite"]])
+        smoothed = smooth_video_lights(raw, smoothing, ev, prior, predict.solve_reg, meta.get("fps", 30.0),
+                                       colour=colour)[0]
         switches = meta.get("switch_frames") or []
         out.append({"raw": raw, "smoothed": smoothed, "true": it["light"].float(),
                     "switch": int(switches[0]) if switches else None})

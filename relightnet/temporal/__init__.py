@@ -1,8 +1,9 @@
 """Light smoothing over time: offline regression (polynomial, Hermite spline, Savitzky–Golay)
 with outlier correction and switch splitting, causal filters for streaming/ONNX (EMA,
-one-euro, FIR, outlier gate), shot pooling of the light solve, the irradiance light distance,
-and quality metrics. :mod:`relightnet.temporal.registry` implements the methods of the one
-torch-free table, :data:`relightnet.names.SMOOTHING_METHODS` (what ``--smoothing`` accepts).
+one-euro, FIR, outlier gate), shot pooling of the light solve, switches seen in the frames'
+colour, the irradiance light distance, and quality metrics. :mod:`relightnet.temporal.registry`
+implements the methods of the one torch-free table, :data:`relightnet.names.SMOOTHING_METHODS`
+(what ``--smoothing`` accepts).
 """
 
 from .causal import (
@@ -40,9 +41,11 @@ from .offline import (
     smooth_savgol,
 )
 from .pooling import (
+    CHANGE_EXPLAINED,
     POOL_SECONDS,
     SWITCH_NOISE,
     PooledSolve,
+    changing_segments,
     pool_shot_lights,
     pool_window,
     pooled_step,
@@ -58,6 +61,7 @@ from .registry import (
     smooth_video_lights,
 )
 from .smoothers import hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
+from .switches import COLOUR_STEP, colour_switches, frame_colour, merge_switches
 
 __all__ = [
     "EMAFilter", "FIRFilter", "OneEuroFilter", "OutlierGate", "ema_matrix", "ema_sequence", "ema_step", "fir_sequence",
@@ -70,5 +74,7 @@ __all__ = [
     "smoothing_matrix",
     "MIN_FIT_FRAMES", "VideoSmoothing", "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence",
     "smooth_video_lights",
-    "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "pool_shot_lights", "pool_window", "pooled_step", "pooling_weights",
+    "CHANGE_EXPLAINED", "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "changing_segments", "pool_shot_lights",
+    "pool_window", "pooled_step", "pooling_weights",
+    "COLOUR_STEP", "colour_switches", "frame_colour", "merge_switches",
 ]

@@ -7,8 +7,12 @@ their evidence and share one solve, so a constant light gives a constant estimat
 the person turns, while a light switch splits the shot:
 
 - offline (:func:`pool_shot_lights`): per-frame solves → :func:`~relightnet.temporal.offline.detect_switches`
-  → one joint solve per segment (``window=None``) or per sliding window of frames inside the
-  segment (``window`` frames, triangular weights, for light that changes slowly);
+  → one joint solve per segment (``window=None``: the frames' errors average out over the whole
+  segment, so a person turning under a constant light cannot move the light), or per sliding
+  window of frames inside the segment (``window`` frames, triangular weights), or — what the
+  video jobs use — one solve per segment unless its light changes (:func:`changing_segments`:
+  a change that is low-order in time explains most of the frames' scatter), that segment then
+  pooled over ``change_window`` frames so that the change is followed;
 - causal (:class:`PooledSolve`, one step with explicit state, loop-free, so it lives inside the
   exported ONNX graph): an outlier gate on the per-frame light (:func:`~relightnet.temporal.gate.gate_step`:
   isolated outliers are dropped, a jump that persists ``persist`` frames restarts the pool) and
@@ -23,18 +27,29 @@ import torch
 from ..checks import InputError, check_shape
 from ..sh.light_solve import Evidence, pool_evidence, solve_light
 from .causal import CausalFilter, check_alpha, check_positive, filter_weights
+from .distance import light_distance
 from .gate import gate_step
 from .offline import detect_switches
+from .smoothers import poly_matrix
+from .switches import colour_switches, merge_switches
 
-__all__ = ["POOL_SECONDS", "SWITCH_NOISE", "pool_window", "pooling_weights", "pool_shot_lights", "pooled_step",
-           "PooledSolve"]
+__all__ = ["POOL_SECONDS", "SWITCH_NOISE", "CHANGE_EXPLAINED", "pool_window", "pooling_weights", "changing_segments",
+           "pool_shot_lights", "pooled_step", "PooledSolve"]
 
-#: How far (seconds) the video jobs pool a frame's evidence to either side, inside its segment: a
-#: constant light stays constant, a light that turns (a camera pan) is still followed. 2 s, not 1 s:
-#: a constant light's pooled drift p90 4.2% → 1.6% on generated clips, while on turning clips the
-#: estimate's error did not change (the per-frame error dominates); the window's own cost on a light
-#: turning up to 60°/s is p90 0.13 vs 0.07 (``benchmarks/bench_pooling.py``, BENCHMARKS.md).
+#: How far (seconds) the video jobs pool a frame's evidence to either side in a segment whose light
+#: changes (:func:`changing_segments`): a light that turns (a camera pan) is followed. 2 s, not 1 s:
+#: on turning clips the estimate's error did not change (the per-frame error dominates); the window's
+#: own cost on a light turning up to 60°/s is p90 0.13 vs 0.07 (``benchmarks/bench_pooling.py``).
 POOL_SECONDS = 2.0
+
+#: A segment's light changes when a quadratic in time fitted to its per-frame lights leaves at most
+#: ``1 − CHANGE_EXPLAINED`` of their scatter about the segment's mean (light distance squared). A
+#: network's per-frame errors are themselves slow (they follow the person's turn): on real footage
+#: of a person turning under a constant light a quadratic explains 10–20% of the scatter over the
+#: whole clip and up to 40% over 2 s; on generated clips under a constant light up to 84% of a
+#: 24-frame clip, where the window and the whole segment give the same light anyway. Three quarters
+#: keeps a constant light constant and still follows a light that turns steadily over the segment.
+CHANGE_EXPLAINED = 0.75
 
 
 #: A light switch in a shot is a jump between the means of 5 frames before and after it of at
@@ -51,13 +66,16 @@ def pool_window(fps: float, seconds: float = POOL_SECONDS) -> int:
     return max(1, round(fps * seconds))
 
 
-def pooling_weights(switches: torch.Tensor, window: int | None = None) -> torch.Tensor:
+def pooling_weights(switches: torch.Tensor, window: int | None = None, windowed: torch.Tensor | None = None
+                    ) -> torch.Tensor:
     """(T, T) weights: how much frame t's evidence counts for frame u.
 
     Args:
         switches: (T,) bool, True on the first frame of each new segment.
         window: None: every frame of the segment counts the same; else frames closer than
             ``window`` count with triangular weights ``1 − |u − t| / window``.
+        windowed: (T,) bool, or None (every frame): the frames u whose weights are the window's;
+            the others keep their whole segment's.
 
     Returns:
         (T, T) float64, zero across segment boundaries.
@@ -70,20 +88,66 @@ def pooling_weights(switches: torch.Tensor, window: int | None = None) -> torch.
     if int(window) != window or window < 1:
         raise InputError(f"pooling window: expected a positive number of frames, got {window!r}")
     t = torch.arange(switches.shape[0], dtype=torch.float64)
-    return same * (1 - (t[:, None] - t[None, :]).abs() / window).clamp_min(0)
+    tri = same * (1 - (t[:, None] - t[None, :]).abs() / window).clamp_min(0)
+    if windowed is None:
+        return tri
+    check_shape(windowed, [switches.shape[0]], name="windowed frames")
+    return torch.where(windowed.bool()[:, None], tri, same)
+
+
+def changing_segments(lights: torch.Tensor, switches: torch.Tensor, explained: float = CHANGE_EXPLAINED
+                      ) -> torch.Tensor:
+    """Which segments' light changes over time (the rest are taken as one constant light).
+
+    A segment of at least 4 frames changes when the least-squares quadratic in time through its
+    lights (:func:`~relightnet.temporal.smoothers.poly_matrix`) explains at least ``explained`` of
+    their scatter about the segment's mean (:func:`~relightnet.temporal.distance.light_distance`
+    squared, summed over the frames).
+
+    Args:
+        lights: (T, K, 3) per-frame lights.
+        switches: (T,) bool, True on the first frame of each new segment.
+        explained: the share in (0, 1).
+
+    Returns:
+        (T,) bool, True on every frame of a changing segment.
+    """
+    dims = check_shape(lights, ["T", "K", 3], name="lights")
+    check_shape(switches, [dims["T"]], name="switches")
+    if not 0 < explained < 1:
+        raise InputError(f"explained share: expected a number in (0, 1), got {explained!r}")
+    x = lights.double()
+    starts = [0] + [int(i) for i in torch.nonzero(switches).flatten() if int(i) > 0] + [dims["T"]]
+    out = torch.zeros(dims["T"], dtype=torch.bool)
+    for a, b in zip(starts[:-1], starts[1:], strict=True):
+        if b - a < 4:
+            continue
+        seg = x[a:b]
+        fit = (poly_matrix(b - a, 2) @ seg.flatten(1)).view_as(seg)
+        about_mean = light_distance(seg, seg.mean(0, keepdim=True)).square().sum()
+        left = light_distance(seg, fit).square().sum()
+        out[a:b] = bool(about_mean > 0) and bool(left <= (1 - explained) * about_mean)
+    return out
 
 
 def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg: float = 1e-2,
-                     window: int | None = None, switches="auto") -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+                     window: int | None = None, switches="auto", change_window: int | None = None,
+                     colour: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """Lights of a whole video from its per-frame evidence (offline).
 
     Args:
         evidence: per-frame :class:`Evidence`, ``M`` (T, 3, K, K), ``r`` (T, 3, K).
         prior: (T, K, 3) per-frame prior lights (the hybrid's head), pooled with the same weights; or None.
         reg: the solve's λ (the network's ``solve_reg``).
-        window: see :func:`pooling_weights`.
+        window: see :func:`pooling_weights` (None: one light per segment).
+        change_window: with ``window`` None: the segments whose light changes
+            (:func:`changing_segments` of the per-frame lights) are pooled over this window of frames
+            instead (None: every segment keeps one light).
         switches: ``"auto"`` (detected on the per-frame lights: :func:`~relightnet.temporal.offline.detect_switches`
-            with :data:`SWITCH_NOISE`), ``None`` (one segment) or a (T,) bool tensor.
+            with :data:`SWITCH_NOISE`, and with ``colour`` also the steps of the frames' colour:
+            :func:`~relightnet.temporal.switches.colour_switches`), ``None`` (one segment) or a (T,)
+            bool tensor.
+        colour: (T, 3) the frames' mean linear colours (:func:`~relightnet.temporal.frame_colour`), or None.
 
     Returns:
         ``(pooled (T, K, 3), per_frame (T, K, 3), switches (T,) bool)``.
@@ -92,12 +156,18 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
     per_frame = solve_light(evidence, prior, reg)
     if isinstance(switches, str) and switches == "auto":
         switches = detect_switches(per_frame.double(), eps=None, noise=SWITCH_NOISE)
+        if colour is not None:
+            check_shape(colour, [dims["T"], "C"], name="frame colours")
+            switches = merge_switches(switches, colour_switches(colour, noise=SWITCH_NOISE))
     elif switches is None:
         switches = torch.zeros(dims["T"], dtype=torch.bool)
     else:
         switches = torch.as_tensor(switches, dtype=torch.bool)
         check_shape(switches, [dims["T"]], name="switches")
-    w = pooling_weights(switches, window)
+    if window is None and change_window is not None:
+        w = pooling_weights(switches, change_window, changing_segments(per_frame, switches))
+    else:
+        w = pooling_weights(switches, window)
     pooled_prior = None
     if prior is not None:
         pooled_prior = (w @ prior.double().flatten(1) / w.sum(1, keepdim=True)).view_as(prior).float()

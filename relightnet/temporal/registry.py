@@ -20,13 +20,14 @@ from typing import NamedTuple
 import torch
 from torch import nn
 
-from ..checks import InputError, sh_order_from_count
+from ..checks import InputError, check_shape, sh_order_from_count
 from ..names import SMOOTHING_METHODS, VIDEO_SMOOTHING, smoothing_names
 from .causal import EMAFilter, FIRFilter, OneEuroFilter, run_causal
 from .distance import light_distance
 from .gate import OutlierGate
-from .offline import SmoothResult, smooth_lights
+from .offline import SmoothResult, detect_switches, smooth_lights
 from .pooling import PooledSolve, pool_shot_lights, pool_window
+from .switches import colour_switches, merge_switches
 
 __all__ = ["resolve_smoothing", "check_smoothing", "make_smoother", "smooth_sequence", "smooth_video_lights",
            "VideoSmoothing", "PassThrough", "MIN_FIT_FRAMES"]
@@ -116,8 +117,9 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
         method: a method name or ``auto`` (:func:`resolve_smoothing`).
         evidence, prior: the light solve's per-frame evidence (``M`` (T, 3, K, K), ``r`` (T, 3, K))
             and priors (T, K, 3), for ``pooled`` (:func:`~relightnet.temporal.pool_shot_lights`,
-            ``reg`` the network's λ, sliding window of :func:`~relightnet.temporal.pool_window` at ``fps``
-            unless ``window=`` is given).
+            ``reg`` the network's λ: one light per segment, a segment whose light changes pooled over
+            the window of :func:`~relightnet.temporal.pool_window` at ``fps``; ``window=`` frames: a
+            sliding window everywhere).
         gate: for a causal method, the options of an :class:`~relightnet.temporal.gate.OutlierGate`
             put in front of it (``eps``, ``persist``, ...); its status gives the outliers and switches.
         **opts: the method's options; the offline regressions take ``outlier_eps``, ``switches``, ...
@@ -130,13 +132,15 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
     return _smooth(lights, resolve_smoothing(method, evidence is not None), evidence, prior, reg, fps, gate, **opts)
 
 
-def _smooth(lights, name, evidence, prior, reg, fps, gate, **opts):
-    """:func:`smooth_sequence` with a resolved method name."""
+def _smooth(lights, name, evidence, prior, reg, fps, gate, colour=None, **opts):
+    """:func:`smooth_sequence` with a resolved method name (``colour``: the frames' colours, for switches)."""
     _check_options(name, opts)
     none = torch.zeros(lights.shape[0], dtype=torch.bool)
     if name == "pooled":
-        window = opts.pop("window", pool_window(fps))
-        smoothed, _, switches = pool_shot_lights(evidence, prior, reg, window=window)
+        # One light per segment, a changing segment's pooled over the window; ``window=`` slides it everywhere.
+        window = opts.pop("window", None)
+        smoothed, _, switches = pool_shot_lights(evidence, prior, reg, window=window, change_window=pool_window(fps),
+                                                 colour=colour)
         return SmoothResult(smoothed, none, light_distance(lights, smoothed.to(lights)), switches)
     if name == "none":
         return SmoothResult(lights.clone(), none, torch.zeros(lights.shape[0], dtype=lights.dtype), none)
@@ -163,19 +167,24 @@ class VideoSmoothing(NamedTuple):
 
 
 def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
-                        fps: float = 30.0) -> VideoSmoothing:
+                        fps: float = 30.0, colour: torch.Tensor | None = None) -> VideoSmoothing:
     """Smooth a video's (T, K, 3) per-frame lights the way every offline video job does
     (``avatar``, ``compare``, ``evaluate --light``); the method is resolved here, once.
 
     ``method`` is ``auto`` or any method of :data:`relightnet.names.SMOOTHING_METHODS`.
     ``pooled`` shares the light across frames: the per-frame evidence of the light solve
     (``evidence``, ``prior``: ``M`` (T, 3, K, K), ``r`` (T, 3, K), (T, K, 3); ``reg`` the network's
-    λ) of the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular weights,
-    at the video's ``fps``) and between the same detected light switches is solved jointly;
+    λ) of all the frames between the same detected light switches is solved jointly, one light per
+    segment — unless the segment's light changes (:func:`~relightnet.temporal.changing_segments`),
+    then over the frames within :data:`~relightnet.temporal.pooling.POOL_SECONDS` (triangular
+    weights, at the video's ``fps``);
     ``hermite``/``poly``/``savgol`` are robust regressions with 3-MAD outlier correction and
     automatic switch detection (fewer than :data:`MIN_FIT_FRAMES` frames: the raw lights, with a
     warning, and ``none`` is the method returned); the causal filters run over the sequence with
     their default options; ``auto`` is ``pooled`` when there is evidence, else ``hermite``.
+    ``colour`` (T, 3), the frames' mean linear colours (:func:`~relightnet.temporal.frame_colour`),
+    adds the steps of the frames' colour to the switches of ``pooled`` and the regressions
+    (:func:`~relightnet.temporal.colour_switches`).
 
     Returns:
         :class:`VideoSmoothing` ``(smoothed (T, K, 3), outliers (T,), switches (T,), method)``.
@@ -183,5 +192,8 @@ def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, 
     name = resolve_smoothing(method, evidence is not None, frames=raw.shape[0])  # checks the name too
     robust = not SMOOTHING_METHODS[name].causal
     opts = {"outlier_eps": "3mad", "switches": "auto"} if robust else {}
-    res = _smooth(raw, name, evidence, prior, reg, fps, None, **opts)
+    if robust and colour is not None:
+        check_shape(colour, [raw.shape[0], "C"], name="frame colours")
+        opts["switches"] = merge_switches(detect_switches(raw.double()), colour_switches(colour))
+    res = _smooth(raw, name, evidence, prior, reg, fps, None, colour=colour, **opts)
     return VideoSmoothing(res.smoothed, res.outliers, res.switches, name)

@@ -131,3 +131,59 @@ def test_a_switch_half_way_through_a_short_shot_is_found():
     pooled, per_frame, switches = pool_shot_lights(ev, None, 1e-6)
     assert not switches.any() and float(frame_noise(per_frame)) > 0
     assert not detect_switches(per_frame.double(), eps=None, noise=SWITCH_NOISE).any()
+
+
+def test_a_turning_light_is_a_changing_segment_and_a_noisy_constant_one_is_not():
+    from relightnet.sh import rotate_sh_up
+    from relightnet.temporal import CHANGE_EXPLAINED, changing_segments
+
+    base = _light(8)
+    turning = torch.stack([rotate_sh_up(base, 0.05 * t) for t in range(40)])
+    noisy = base + 0.3 * torch.randn(40, 9, 3, generator=torch.Generator().manual_seed(0))
+    none = torch.zeros(40, dtype=torch.bool)
+    assert changing_segments(turning, none).all()
+    assert not changing_segments(noisy, none).any()
+    both = torch.cat([noisy, turning])
+    sw = torch.zeros(80, dtype=torch.bool)
+    sw[40] = True
+    flags = changing_segments(both, sw)
+    assert not flags[:40].any() and flags[40:].all()
+    assert not changing_segments(turning[:3], none[:3]).any()  # too short to tell
+    assert 0 < CHANGE_EXPLAINED < 1
+
+
+def test_the_video_jobs_pool_a_constant_light_over_the_whole_shot_and_follow_a_turning_one():
+    from relightnet.sh import rotate_sh_up
+    from relightnet.temporal import smooth_video_lights
+
+    a = _light(9)
+    ev = _frames([a] * 90, noise=0.3, seed=2)
+    per_frame = solve_light(ev, None, 1e-6)
+    res = smooth_video_lights(per_frame, "pooled", ev, None, 1e-6, fps=30.0)
+    assert res.method == "pooled" and not res.switches.any()
+    assert torch.allclose(res.smoothed, res.smoothed[:1].expand_as(res.smoothed))  # one light: no drift
+    whole = pool_shot_lights(ev, None, 1e-6, switches=None)[0]
+    torch.testing.assert_close(res.smoothed, whole)
+    lights = [rotate_sh_up(a, 0.05 * t) for t in range(90)]  # ~260° over the shot
+    ev = _frames(lights, noise=0.05, seed=3)
+    res = smooth_video_lights(solve_light(ev, None, 1e-6), "pooled", ev, None, 1e-6, fps=10.0)
+    truth = torch.stack(lights)
+    err = float((light_distance(res.smoothed, truth) / light_norm(truth)).mean())
+    shot = pool_shot_lights(ev, None, 1e-6, switches=None)[0]
+    assert err < 0.5 * float((light_distance(shot, truth) / light_norm(truth)).mean())
+
+
+def test_a_switch_seen_in_the_frames_colour_splits_the_shot():
+    """The lights alone scatter too much to show the step; the frames' colour shows it at its frame."""
+    from relightnet.temporal import smooth_video_lights
+
+    a, b = _light(10), _light(10) * 0.8
+    ev = _frames([a] * 30 + [b] * 30, noise=1.5, seed=4)
+    per_frame = solve_light(ev, None, 1e-6)
+    colour = torch.cat([torch.full((30, 3), 0.4), torch.full((30, 3), 0.32)]).double()
+    plain = smooth_video_lights(per_frame, "pooled", ev, None, 1e-6, fps=30.0)
+    seen = smooth_video_lights(per_frame, "pooled", ev, None, 1e-6, fps=30.0, colour=colour)
+    assert not plain.switches.any()
+    assert seen.switches.nonzero().flatten().tolist() == [30]
+    err = lambda x, y: float(light_distance(x, y) / light_norm(y))  # noqa: E731
+    assert err(seen.smoothed[0], a) < err(plain.smoothed[0], a) and err(seen.smoothed[-1], b) < err(plain.smoothed[-1], b)
