@@ -87,7 +87,8 @@ def run_video(args: argparse.Namespace) -> int:
     model = make_predictor(args.backend, args.checkpoint, args.device)
     relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
-                  mask_source=args.mask_source, alpha=args.alpha, soft_edges=not args.hard_edges)
+                  mask_source=args.mask_source, alpha=args.alpha, soft_edges=not args.hard_edges,
+                  steady=not args.no_carry)
     return 0
 
 
@@ -136,5 +137,8 @@ def register(sub) -> None:
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo instead of each frame divided by the predicted shading")
     p.add_argument("--hard-edges", action="store_true", help=_HARD_EDGES)
+    p.add_argument("--no-carry", action="store_true",
+                   help="relight every frame from its own prediction alone (default: the CNN's maps are carried "
+                        "from frame to frame along the optical flow, so the person does not flicker)")
     add_model_args(p)
     p.set_defaults(func=run_video)

@@ -85,6 +85,11 @@ class _TargetLight:
     reused: bool = False
     method: str = ""  # the smoothing used (``auto`` resolved)
 
+    @property
+    def raw(self) -> torch.Tensor | None:
+        """(T, K, 3) the CNN's per-frame lights, or None (a light given)."""
+        return None if self.estimates is None else self.estimates.raw
+
 
 def _plate_frames(plate, target, size):
     """uint8 (H, W, 3) frames to composite over: the target's, a clean-plate video's, or one image."""
@@ -315,7 +320,7 @@ def avatar(
     if light is None:
         lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
                             progress, plate_light)
-        n = lit.estimates.raw.shape[0]
+        n = lit.raw.shape[0]
     else:
         n = count_frames(target)  # from the container, else by decoding (streaming)
         lit = _TargetLight(_given_light(light, n))
@@ -332,5 +337,4 @@ def avatar(
     written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,
                              progress, plate or target)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
-    raw = None if lit.estimates is None else lit.estimates.raw
-    return AvatarResult(written, out, lights_file, plot, raw, smoothed, lit.reused, lit.outliers, lit.switches)
+    return AvatarResult(written, out, lights_file, plot, lit.raw, smoothed, lit.reused, lit.outliers, lit.switches)

@@ -31,6 +31,7 @@ from ..temporal.registry import check_smoothing, make_smoother, resolve_smoothin
 from .backends import as_predictor
 from .relight_bands import relight_over_photo
 from .relight_image import to_model_order
+from .steady_maps import MapCarry
 
 logger = logging.getLogger(__name__)
 
@@ -54,7 +55,8 @@ def person_in_most(shares, min_share: float = PERSON_SHARE) -> bool:
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
                   smoothing: str = "auto", progress: bool = True, detail: bool = True,
-                  mask_source: str = "segment", alpha: float = 0.3, soft_edges: bool = True) -> int:
+                  mask_source: str = "segment", alpha: float = 0.3, soft_edges: bool = True,
+                  steady: bool = True) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -78,6 +80,9 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         alpha: ``ema``'s weight of the newest frame, in (0, 1].
         soft_edges: each frame's person composited with a soft matte in its border band
             (:func:`~relightnet.segment.matte.soft_composite`); False pastes with the mask as it is.
+        steady: carry the CNN's maps from frame to frame along the optical flow
+            (:class:`~relightnet.pipeline.steady_maps.MapCarry`), so the relit person does not flicker more
+            than the footage; False relights every frame from its own prediction alone.
 
     Returns:
         The number of frames written.
@@ -93,9 +98,9 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     info, n_masks, pairs = video_masks(video, masks, mask_source, allow_empty=True)
     # Segmented (no masks given): a clip with nobody in its first seconds is refused then, not at its end.
     gate = _person_gate(video, info.fps) if masks is None and mask_source == "segment" else None
-    light = to_model_order(light, predict.lmax)
     times = frame_times(video)  # None: the file states no times, the frames follow at its average rate
-    smoother = state = None
+    relight = _FrameRelighter(predict, to_model_order(light, predict.lmax), turntable_deg_per_s, smoothing, alpha,
+                              MapCarry() if steady else None, detail=detail, soft_edges=soft_edges)
     n = 0
     empty: list[int] = []
     with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
@@ -107,24 +112,14 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
                 writer.write(img.permute(1, 2, 0), time=time)
                 empty.append(t)
-                n += 1
-                continue
-            try:  # the maps stay at the working size: pasted band by band
-                pred = predict.crop(img, mask)
-            except InputError as e:  # a frame the CNN cannot take (e.g. blank, for its mask head): name it
-                raise InputError(f"{video}: frame {t}: {e}") from None
-            if smoother is None:  # auto: pooled or ema, whether the network solves its light
-                smoother = _smoother(smoothing, pred.evidence is not None, predict, alpha)
-            kw = {"evidence": pred.evidence, "prior": pred.light_head} if getattr(smoother, "uses_evidence", False) \
-                else {}
-            y, state = smoother(pred.light, state, torch.tensor([state is None]), **kw)
-            src = y[0]
-            elapsed = t / info.fps if time is None else time - float(times[0])
-            new = rotate_sh_up(light, math.radians(turntable_deg_per_s) * elapsed)
-            # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-            writer.write(relight_over_photo(pred, img, new, detail=detail, reference=src, dtype=torch.uint8,
-                                            soft_edges=soft_edges).image, time=time)
-            del pred, img, mask  # the next frame is decoded and predicted without this one's
+                relight.lost()
+            else:
+                elapsed = t / info.fps if time is None else time - float(times[0])
+                try:
+                    writer.write(relight(img, mask, elapsed), time=time)
+                except InputError as e:  # a frame the CNN cannot take (e.g. blank, for its mask head): name it
+                    raise InputError(f"{video}: frame {t}: {e}") from None
+            del img, mask  # the next frame is decoded and predicted without this one's
             n += 1
         if n and len(empty) == n:  # raised inside the writer's block: no output is left
             raise InputError(f"{masks or video}: every mask is empty: no person to relight")
@@ -132,6 +127,38 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         logger.warning("%d frame(s) with an empty mask were written unchanged (first: frame %d)", len(empty), empty[0])
     logger.info("wrote %s (%d frames)", Path(out), n)
     return n
+
+
+class _FrameRelighter:
+    """One frame of :func:`relight_video` at a time: the CNN's maps (carried along the flow by ``carry``,
+    :class:`~relightnet.pipeline.steady_maps.MapCarry`, or None), the source light smoothed causally, the
+    new light turned by the turntable, the frame relit → (H, W, 3) uint8. :meth:`lost`: a frame without
+    the person (the carry starts afresh after it; the light's smoothing goes on)."""
+
+    def __init__(self, predict, light: torch.Tensor, turntable_deg_per_s: float, smoothing: str, alpha: float,
+                 carry, detail: bool, soft_edges: bool) -> None:
+        self.predict, self.light, self.turn = predict, light, math.radians(turntable_deg_per_s)
+        self.smoothing, self.alpha, self.carry = smoothing, alpha, carry
+        self.detail, self.soft_edges = detail, soft_edges
+        self.smoother = self.state = None
+
+    def lost(self) -> None:
+        if self.carry is not None:
+            self.carry.reset()
+
+    def __call__(self, img: torch.Tensor, mask: torch.Tensor | None, elapsed: float) -> torch.Tensor:
+        pred = self.predict.crop(img, mask)  # the maps stay at the working size: pasted band by band
+        if self.carry is not None:
+            pred = self.carry(img, pred)
+        if self.smoother is None:  # auto: pooled or ema, whether the network solves its light
+            self.smoother = _smoother(self.smoothing, pred.evidence is not None, self.predict, self.alpha)
+        kw = {"evidence": pred.evidence, "prior": pred.light_head} \
+            if getattr(self.smoother, "uses_evidence", False) else {}
+        y, self.state = self.smoother(pred.light, self.state, torch.tensor([self.state is None]), **kw)
+        new = rotate_sh_up(self.light, self.turn * elapsed)
+        # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
+        return relight_over_photo(pred, img, new, detail=self.detail, reference=y[0], dtype=torch.uint8,
+                                  soft_edges=self.soft_edges).image
 
 
 def _person_gate(video, fps: float):
