@@ -18,6 +18,12 @@ average of the masks would hold them, but it lags whatever moves. Here, for fram
    on its own): only the band of uncertain probabilities near the carried outline keeps its
    previous state, so a moving part is held back by at most that band. The largest region is kept.
 
+With the frames themselves (:func:`flow_carry`), the previous mask is carried along the optical
+flow instead (:mod:`.flow`, computed in the crop's window at :data:`FLOW_SIDE` pixels): the flow
+follows what the landmarks cannot — hair, a skirt, a hand — and where it is reliable the carried
+mask also enters the probability (weight :data:`MASK_CARRY`) before the hysteresis; where it is not
+(an occlusion, motion blur, a fast turn) the landmarks' motion carries the mask as above.
+
 The first frame, and a person found again after being lost, has no history: its mask is the
 probability above one half, as in a photo.
 """
@@ -29,7 +35,8 @@ import torch
 
 from ..checks import InputError, check_shape
 
-__all__ = ["STEADY_MARGIN", "landmark_motion", "carry_mask", "near_outline", "hysteresis"]
+__all__ = ["STEADY_MARGIN", "FLOW_SIDE", "MASK_CARRY", "landmark_motion", "carry_mask", "flow_carry", "near_outline",
+           "hysteresis"]
 
 #: The default hysteresis margin on the probability (0: no temporal filtering).
 STEADY_MARGIN = 0.15
@@ -39,6 +46,10 @@ MIN_VISIBILITY = 0.5
 MAX_SCALE = 1.25
 #: The previous state is kept only this many pixels (at most) from the carried outline (:func:`hysteresis`).
 REACH = 6
+#: The masks' flow is computed on the crop's window scaled to at most this many pixels a side.
+FLOW_SIDE = 256
+#: The weight of the flow-carried previous mask in the probability where the flow is fully reliable.
+MASK_CARRY = 0.5
 
 
 def landmark_motion(prev: torch.Tensor, cur: torch.Tensor, min_visibility: float = MIN_VISIBILITY,
@@ -96,6 +107,38 @@ def carry_mask(mask: torch.Tensor, motion: tuple[float, float, float, float],
         src = mask.numpy() > 0.5
         out[y0:y1, x0:x1] = src[np.ix_(ys.clip(0, H - 1), xs.clip(0, W - 1))] & inside
     return torch.from_numpy(out)
+
+
+def flow_carry(previous: np.ndarray, current: np.ndarray, mask: torch.Tensor, window: tuple[int, int, int, int],
+               side: int = FLOW_SIDE) -> tuple[np.ndarray, np.ndarray]:
+    """The previous frame's mask carried along the optical flow into a window of the current frame.
+
+    Args:
+        previous, current: (H, W) uint8 gray frames (:func:`~relightnet.segment.flow.gray_u8`).
+        mask: (H, W) the previous frame's mask.
+        window: (x0, y0, x1, y1) pixels of the current frame to carry into.
+        side: the flow is computed on the window scaled to at most this many pixels a side.
+
+    Returns:
+        ``(carried (h, w) float32 in [0, 1], reliability (h, w) float32)`` over the window.
+    """
+    import cv2
+
+    from .flow import backward_flow
+
+    x0, y0, x1, y1 = window
+    h, w = y1 - y0, x1 - x0
+    scale = min(1.0, side / max(h, w))
+    size = (max(8, round(w * scale)), max(8, round(h * scale)))
+    a, b = (cv2.resize(f[y0:y1, x0:x1], size, interpolation=cv2.INTER_AREA) for f in (previous, current))
+    flow = backward_flow(a, b)
+    fx = cv2.resize(flow.flow[..., 0], (w, h), interpolation=cv2.INTER_LINEAR) * (w / size[0])
+    fy = cv2.resize(flow.flow[..., 1], (w, h), interpolation=cv2.INTER_LINEAR) * (h / size[1])
+    rel = cv2.resize(flow.reliability, (w, h), interpolation=cv2.INTER_LINEAR)
+    gx, gy = np.meshgrid(np.arange(x0, x1, dtype=np.float32), np.arange(y0, y1, dtype=np.float32))
+    carried = cv2.remap(mask.numpy().astype(np.float32), gx + fx, gy + fy, cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    return carried.clip(0, 1), rel.clip(0, 1)
 
 
 def _dilate(a: np.ndarray, reach: int) -> np.ndarray:

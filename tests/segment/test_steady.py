@@ -137,3 +137,55 @@ def test_near_outline_is_the_square_holding_person_and_background():
         got = near_outline(torch.from_numpy(fg.astype(np.float32)), r)
         assert got.dtype == torch.bool and got.shape == (h, w)
         np.testing.assert_array_equal(got.numpy(), want)
+
+
+def _textured(cx: float, seed: int = 0) -> np.ndarray:
+    """(H, W) uint8 gray frame: a static textured background and a disc at x = cx with its own texture moving
+    with it (what optical flow follows)."""
+    g = torch.Generator().manual_seed(seed)
+    bg = torch.nn.functional.interpolate(torch.rand(1, 1, 12, 20, generator=g), size=(H, W), mode="bicubic",
+                                         align_corners=False)[0, 0]
+    fg = torch.nn.functional.interpolate(torch.rand(1, 1, 8, 8, generator=g), size=(80, 80), mode="bicubic",
+                                         align_corners=False)[0, 0] * 0.5 + 0.5
+    img = bg.clone() * 0.4
+    d = _disc(cx, 60) > 0.5
+    x0 = int(round(cx)) - 40
+    ys, xs = torch.nonzero(d, as_tuple=True)
+    img[ys, xs] = fg[(ys - 20).clamp(0, 79), (xs - x0).clamp(0, 79)]
+    return (img.clamp(0, 1) * 255).round().to(torch.uint8).numpy()
+
+
+def test_flow_carries_the_mask_with_what_moves():
+    from relightnet.segment.steady import flow_carry
+
+    prev, cur = _textured(90), _textured(96)
+    soft, rel = flow_carry(prev, cur, (_disc(90, 60) > 0.5).float(), (0, 0, W, H))
+    assert soft.shape == (H, W) and rel.shape == (H, W)
+    assert _iou(torch.from_numpy(soft), _disc(96, 60)) > 0.9  # moved 6 px with the disc, not left behind
+    assert _iou(torch.from_numpy(soft), _disc(90, 60)) < _iou(torch.from_numpy(soft), _disc(96, 60))
+
+
+def test_flicker_is_removed_and_motion_followed_with_the_frames():
+    g = torch.Generator().manual_seed(1)
+    xs = [60.0 + 4 * t for t in range(10)]
+    frames = [_textured(x) for x in xs]
+    probs = []
+    for x in xs:
+        base = _disc(x, 60)
+        band = (base - 0.5).abs() < 0.3
+        probs.append((base + band * (torch.rand(H, W, generator=g) - 0.5) * 0.3).clamp(0, 1))
+    prev, raw, steady = None, [], []
+    for t, (p, x) in enumerate(zip(probs, xs, strict=True)):
+        res = _result(p, _landmarks(x, 60))
+        raw.append(res.mask)
+        prev = steady_person(res, prev, 0.15, None if t == 0 else (frames[t - 1], frames[t]))
+        steady.append(prev.mask)
+    truth = [(_disc(x, 60) > 0.5).float() for x in xs]
+    iou_raw = np.mean([_iou(m, tr) for m, tr in zip(raw, truth, strict=True)])
+    iou_steady = np.mean([_iou(m, tr) for m, tr in zip(steady, truth, strict=True)])
+    assert iou_steady >= iou_raw - 0.01
+
+    def wrong(masks):
+        return np.mean([float(((m > 0.5) != (tr > 0.5)).float().mean()) for m, tr in zip(masks, truth, strict=True)])
+
+    assert wrong(steady) < wrong(raw)
