@@ -35,9 +35,12 @@ __all__ = ["CARRY", "MapCarry", "carry_positions"]
 CARRY = 0.9
 
 
-def _crop_at(gray: torch.Tensor, box: CropBox, size: int) -> torch.Tensor:
-    """(H, W) float gray → (size, size) float: the box's crop resized (antialiased bilinear)."""
-    crop = crop_to_box(gray[None, None], box)
+def _crop_at(image: torch.Tensor, box: CropBox, size: int) -> torch.Tensor:
+    """(H, W) map (float, or uint8 gray read as /255) → (size, size) float: the box's crop resized
+    (antialiased bilinear; only the box is converted to float)."""
+    crop = crop_to_box(image[None, None], box).float()
+    if image.dtype == torch.uint8:
+        crop = crop.div_(255)
     return F.interpolate(crop, size=(size, size), mode="bilinear", align_corners=False, antialias=True)[0, 0]
 
 
@@ -86,8 +89,8 @@ class MapCarry:
         prev, self._prev = self._prev, None
         if self.carry > 0 and prev is not None and prev[0].shape == gray.shape:
             p_gray, p_box, p_maps, p_mask = prev
-            cur = _crop_at(gray.float() / 255, maps.box, s)
-            seen = _crop_at(p_gray.float() / 255, maps.box, s)  # the previous frame through the current crop
+            cur = _crop_at(gray, maps.box, s)
+            seen = _crop_at(p_gray, maps.box, s)  # the previous frame through the current crop
             flow = backward_flow(seen, cur)
             pos = carry_positions(flow.flow, maps.box, p_box, s, int(p_maps.shape[-1]))
             k = maps.transport.shape[1]

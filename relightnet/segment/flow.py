@@ -49,11 +49,16 @@ def gray_u8(image) -> np.ndarray:
     x = torch.as_tensor(image)
     if x.dtype == torch.uint8 and x.ndim == 2:
         return np.ascontiguousarray(x.numpy())
-    if x.ndim == 3:
-        check_shape(x, [3, "H", "W"], name="frame")
-        x = 0.299 * x[0] + 0.587 * x[1] + 0.114 * x[2]
-    check_shape(x, ["H", "W"], name="frame")
-    return (x.clamp(0, 1) * 255).round().to(torch.uint8).numpy()
+    if x.ndim != 3:
+        check_shape(x, ["H", "W"], name="frame")
+        return (x.clamp(0, 1) * 255).round().to(torch.uint8).numpy()
+    h = check_shape(x, [3, "H", "W"], name="frame")["H"]
+    out = np.empty(tuple(x.shape[1:]), np.uint8)
+    for r in range(0, h, 256):  # bands of rows: a frame at the pixel limit takes no frame-sized float copy
+        b = x[:, r:r + 256]
+        g = (0.299 * b[0]).add_(b[1], alpha=0.587).add_(b[2], alpha=0.114)
+        out[r:r + 256] = g.clamp_(0, 1).mul_(255).round_().to(torch.uint8).numpy()
+    return out
 
 
 def _dis():

@@ -136,7 +136,7 @@ def flow_carry(previous: np.ndarray, current: np.ndarray, mask: torch.Tensor, wi
     fy = cv2.resize(flow.flow[..., 1], (w, h), interpolation=cv2.INTER_LINEAR) * (h / size[1])
     rel = cv2.resize(flow.reliability, (w, h), interpolation=cv2.INTER_LINEAR)
     gx, gy = np.meshgrid(np.arange(x0, x1, dtype=np.float32), np.arange(y0, y1, dtype=np.float32))
-    carried = cv2.remap(mask.numpy().astype(np.float32), gx + fx, gy + fy, cv2.INTER_LINEAR,
+    carried = cv2.remap(mask.numpy().astype(np.float32, copy=False), gx + fx, gy + fy, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
     return carried.clip(0, 1), rel.clip(0, 1)
 
