@@ -49,6 +49,7 @@ from .pooling import (
     pool_shot_lights,
     pool_window,
     pooled_step,
+    pooled_sums,
     pooling_weights,
 )
 from .registry import (
@@ -75,6 +76,6 @@ __all__ = [
     "MIN_FIT_FRAMES", "VideoSmoothing", "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence",
     "smooth_video_lights",
     "CHANGE_EXPLAINED", "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "changing_segments", "pool_shot_lights",
-    "pool_window", "pooled_step", "pooling_weights",
+    "pool_window", "pooled_step", "pooled_sums", "pooling_weights",
     "COLOUR_STEP", "colour_switches", "frame_colour", "merge_switches",
 ]

@@ -23,18 +23,18 @@ the person turns, while a light switch splits the shot:
 from __future__ import annotations
 
 import torch
+import torch.nn.functional as F
 
 from ..checks import InputError, check_shape
-from ..sh.light_solve import Evidence, pool_evidence, solve_light
+from ..sh.light_solve import Evidence, solve_light
 from .causal import CausalFilter, check_alpha, check_positive, filter_weights
 from .distance import light_distance
 from .gate import gate_step
 from .offline import detect_switches
-from .smoothers import poly_matrix
 from .switches import colour_switches, merge_switches
 
-__all__ = ["POOL_SECONDS", "SWITCH_NOISE", "CHANGE_EXPLAINED", "pool_window", "pooling_weights", "changing_segments",
-           "pool_shot_lights", "pooled_step", "PooledSolve"]
+__all__ = ["POOL_SECONDS", "SWITCH_NOISE", "CHANGE_EXPLAINED", "pool_window", "pooling_weights", "pooled_sums",
+           "changing_segments", "pool_shot_lights", "pooled_step", "PooledSolve"]
 
 #: How far (seconds) the video jobs pool a frame's evidence to either side in a segment whose light
 #: changes (:func:`changing_segments`): a light that turns (a camera pan) is followed. 2 s, not 1 s:
@@ -100,7 +100,7 @@ def changing_segments(lights: torch.Tensor, switches: torch.Tensor, explained: f
     """Which segments' light changes over time (the rest are taken as one constant light).
 
     A segment of at least 4 frames changes when the least-squares quadratic in time through its
-    lights (:func:`~relightnet.temporal.smoothers.poly_matrix`) explains at least ``explained`` of
+    lights explains at least ``explained`` of
     their scatter about the segment's mean (:func:`~relightnet.temporal.distance.light_distance`
     squared, summed over the frames).
 
@@ -123,7 +123,9 @@ def changing_segments(lights: torch.Tensor, switches: torch.Tensor, explained: f
         if b - a < 4:
             continue
         seg = x[a:b]
-        fit = (poly_matrix(b - a, 2) @ seg.flatten(1)).view_as(seg)
+        u = torch.linspace(-1, 1, b - a, dtype=torch.float64)
+        V = torch.stack([torch.ones_like(u), u, u * u], 1)  # the quadratic's basis: O(T), no (T, T) smoother
+        fit = (V @ torch.linalg.lstsq(V, seg.flatten(1)).solution).view_as(seg)
         about_mean = light_distance(seg, seg.mean(0, keepdim=True)).square().sum()
         left = light_distance(seg, fit).square().sum()
         out[a:b] = bool(about_mean > 0) and bool(left <= (1 - explained) * about_mean)
@@ -164,15 +166,56 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
     else:
         switches = torch.as_tensor(switches, dtype=torch.bool)
         check_shape(switches, [dims["T"]], name="switches")
+    windowed = None
     if window is None and change_window is not None:
-        w = pooling_weights(switches, change_window, changing_segments(per_frame, switches))
-    else:
-        w = pooling_weights(switches, window)
+        window, windowed = change_window, changing_segments(per_frame, switches)
+    t_len, k = dims["T"], dims["K"]
+    parts = [evidence.M.double().flatten(1), evidence.r.double().flatten(1), torch.ones(t_len, 1, dtype=torch.float64)]
+    if prior is not None:
+        parts.append(prior.double().flatten(1))
+    sums = pooled_sums(torch.cat(parts, 1), switches, window, windowed)  # float64, columns: M, r, Σw, prior
+    m_end = 3 * k * k
+    n_col = m_end + 3 * k
+    M, r = sums[:, :m_end].view(t_len, 3, k, k), sums[:, m_end:n_col].view(t_len, 3, k)
     pooled_prior = None
     if prior is not None:
-        pooled_prior = (w @ prior.double().flatten(1) / w.sum(1, keepdim=True)).view_as(prior).float()
-    pooled = solve_light(pool_evidence(evidence, w), pooled_prior, reg)  # pooled and solved in float64
+        pooled_prior = (sums[:, n_col + 1:] / sums[:, n_col:n_col + 1]).view_as(prior).float()
+    pooled = solve_light(Evidence(M, r), pooled_prior, reg)  # pooled and solved in float64
     return pooled.float(), per_frame, switches
+
+
+def pooled_sums(x: torch.Tensor, switches: torch.Tensor, window: int | None = None,
+                windowed: torch.Tensor | None = None) -> torch.Tensor:
+    """``pooling_weights(switches, window, windowed) @ x`` without the (T, T) weights: a whole segment's
+    sum, or a triangular window's (a convolution over the segment's frames), in O(T · window) memory.
+
+    Args:
+        x: (T, D) per-frame values (e.g. the flattened evidence).
+        switches, window, windowed: as for :func:`pooling_weights`.
+
+    Returns:
+        (T, D) float64.
+    """
+    dims = check_shape(x, ["T", "D"], name="pooled values")
+    check_shape(switches, [dims["T"]], name="switches")
+    if window is not None and (int(window) != window or window < 1):
+        raise InputError(f"pooling window: expected a positive number of frames, got {window!r}")
+    x = x.double()
+    out = torch.empty_like(x)
+    starts = [0] + [int(i) for i in torch.nonzero(switches).flatten() if int(i) > 0] + [dims["T"]]
+    tri = None
+    if window is not None:
+        j = torch.arange(1 - int(window), int(window), dtype=torch.float64)
+        tri = (1 - j.abs() / window).expand(dims["D"], 1, -1)
+    for a, b in zip(starts[:-1], starts[1:], strict=True):
+        whole = x[a:b].sum(0, keepdim=True).expand(b - a, -1)
+        if tri is None:
+            out[a:b] = whole
+            continue
+        slid = F.conv1d(x[a:b].T[None], tri, padding=int(window) - 1, groups=dims["D"])[0].T
+        rows = torch.ones(b - a, dtype=torch.bool) if windowed is None else windowed[a:b].bool()
+        out[a:b] = torch.where(rows[:, None], slid, whole)
+    return out
 
 
 def pooled_step(light: torch.Tensor, evidence: Evidence, prior: torch.Tensor | None, state: torch.Tensor,

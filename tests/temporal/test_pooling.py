@@ -187,3 +187,16 @@ def test_a_switch_seen_in_the_frames_colour_splits_the_shot():
     assert seen.switches.nonzero().flatten().tolist() == [30]
     err = lambda x, y: float(light_distance(x, y) / light_norm(y))  # noqa: E731
     assert err(seen.smoothed[0], a) < err(plain.smoothed[0], a) and err(seen.smoothed[-1], b) < err(plain.smoothed[-1], b)
+
+
+def test_pooled_sums_are_the_weights_times_the_frames_without_the_weights():
+    from relightnet.temporal import pooled_sums
+
+    g = torch.Generator().manual_seed(5)
+    x = torch.randn(40, 7, generator=g, dtype=torch.float64)
+    sw = torch.zeros(40, dtype=torch.bool)
+    sw[[13, 31]] = True
+    windowed = torch.zeros(40, dtype=torch.bool)
+    windowed[13:31] = True
+    for window, rows in ((None, None), (5, None), (5, windowed), (60, windowed)):
+        torch.testing.assert_close(pooled_sums(x, sw, window, rows), pooling_weights(sw, window, rows) @ x)
