@@ -4,9 +4,10 @@ Each frame of ``relight-video`` is relit by the ratio of its shading under the n
 shading under the source light, both from the CNN's per-pixel transport. The CNN sees every
 frame afresh, so where the person barely moves its transport still changes a little from frame to
 frame, and the relit person flickers more than the footage does. :class:`MapCarry` carries the
-previous frame's transport along the optical flow (:func:`relightnet.segment.flow.backward_flow`,
-computed at the CNN's working size inside the current frame's crop) and blends it into the new
-prediction where the flow is reliable and both frames show the person there:
+previous frame's transport (and albedo, which the photo albedo falls back on in the dark) along
+the optical flow (:func:`relightnet.segment.flow.backward_flow`, computed at the CNN's working
+size inside the current frame's crop) and blends them into the new prediction where the flow is
+reliable and both frames show the person there (the same for the albedo):
 
     T̃_t = T_t + c · w · (warp(T̃_{t−1}) − T_t)
 
@@ -69,8 +70,8 @@ def carry_positions(flow: np.ndarray, box: CropBox, previous_box: CropBox, size:
 class MapCarry:
     """Streaming carry of the CNN's transport along the flow (module docstring).
 
-    ``carry(image (3, H, W) float sRGB, maps: CropMaps) -> CropMaps`` (the transport replaced, the rest
-    as predicted); :meth:`reset` forgets the previous frame.
+    ``carry(image (3, H, W) float sRGB, maps: CropMaps) -> CropMaps`` (the transport and the albedo
+    replaced, the rest as predicted); :meth:`reset` forgets the previous frame.
     """
 
     def __init__(self, carry: float = CARRY) -> None:
