@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import InputError
-from ..segment.flow import backward_flow
+from ..segment.flow import backward_flow, warp_back
 
 __all__ = ["FlickerMeter"]
 
@@ -52,8 +52,6 @@ class FlickerMeter:
         self._prev = (src, out, m)
 
     def _pair(self, src0, out0, m0, src1, out1, m1) -> None:
-        import cv2
-
         both = m0 & m1
         nb = int(both.sum())
         if nb == 0:
@@ -63,12 +61,9 @@ class FlickerMeter:
         self._sum["src"] += float(np.abs(src1 - src0)[both].sum())
         self._n["both"] += nb * 3
         flow = backward_flow(np.moveaxis(src0, -1, 0), np.moveaxis(src1, -1, 0))
-        h, w = m1.shape
-        gx, gy = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
-        px, py = gx + flow.flow[..., 0], gy + flow.flow[..., 1]
 
         def warp(x):
-            return cv2.remap(x, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            return warp_back(x, flow.flow)
 
         ok = m1 & (flow.reliability > 0.5) & (warp(m0.astype(np.float32)) > 0.5)
         nw = int(ok.sum())

@@ -5,7 +5,8 @@ levels, run both ways: :func:`backward_flow` gives, for every pixel of the curre
 it was in the previous one, with a reliability in [0, 1] from the forward-backward check (a pixel
 carried back and forth by the two flows should land where it started; where the two disagree —
 an occlusion, a disocclusion, motion blur — it is not trusted) and from the colour constancy of
-the pixel along its flow. :func:`sample_along` reads a map of the previous frame at those places.
+the pixel along its flow. :func:`warp_back` (numpy) and :func:`sample_along` (torch maps at any
+positions) read a map of the previous frame at those places.
 What the video jobs carry along it: the CNN's maps (:mod:`relightnet.pipeline.steady_maps`).
 
 Conventions: images are (3, H, W) float sRGB in [0, 1], (H, W) float gray in [0, 1] or (H, W) uint8; a flow is (H, W, 2)
@@ -22,7 +23,7 @@ import torch.nn.functional as F
 
 from ..checks import InputError, check_shape
 
-__all__ = ["FLOW_TOLERANCE", "COLOUR_TOLERANCE", "Flow", "gray_u8", "backward_flow", "sample_along"]
+__all__ = ["FLOW_TOLERANCE", "COLOUR_TOLERANCE", "Flow", "gray_u8", "backward_flow", "warp_back", "sample_along"]
 
 #: Forward-backward disagreement (pixels of the flow's frames) at which a pixel's reliability falls to
 #: e^-1 ≈ 0.37: half a pixel plus 5% of the motion (a fast motion is measured less exactly).
@@ -67,11 +68,18 @@ def _dis():
     return cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
 
 
-def _sample_np(x: np.ndarray, pos: np.ndarray) -> np.ndarray:
-    """Bilinear samples of (H, W[, C]) ``x`` at (H, W, 2) pixel positions (x, y), borders replicated."""
+def warp_back(x: np.ndarray, flow: np.ndarray, origin: tuple[int, int] = (0, 0), zero_outside: bool = False
+              ) -> np.ndarray:
+    """The previous frame's ``x`` read where each pixel of the current one was: bilinear samples of
+    (H', W'[, C]) float32 ``x`` at ``origin`` + pixel + ``flow`` for every pixel of an (h, w, 2) flow
+    (``origin`` (x0, y0): where the flow's pixel (0, 0) is in ``x``'s frame). Outside ``x``: its border
+    repeated, or 0 with ``zero_outside``. Returns (h, w[, C]) float32."""
     import cv2
 
-    return cv2.remap(x, pos[..., 0], pos[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    h, w = flow.shape[:2]
+    gx, gy = np.meshgrid(np.arange(w, dtype=np.float32) + origin[0], np.arange(h, dtype=np.float32) + origin[1])
+    border = cv2.BORDER_CONSTANT if zero_outside else cv2.BORDER_REPLICATE
+    return cv2.remap(x, gx + flow[..., 0], gy + flow[..., 1], cv2.INTER_LINEAR, borderMode=border, borderValue=0.0)
 
 
 def backward_flow(previous, current, tolerance: float = FLOW_TOLERANCE,
@@ -99,10 +107,10 @@ def backward_flow(previous, current, tolerance: float = FLOW_TOLERANCE,
     h, w = b.shape
     grid = np.stack(np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32)), -1)
     there = grid + back
-    round_trip = back + _sample_np(fwd, there)  # ≈ 0 where the two flows agree
+    round_trip = back + warp_back(fwd, back)  # ≈ 0 where the two flows agree
     disagree = np.linalg.norm(round_trip, axis=-1)
     scale = tolerance + 0.05 * np.linalg.norm(back, axis=-1)
-    change = np.abs(_sample_np(a.astype(np.float32), there) - b.astype(np.float32)) / 255
+    change = np.abs(warp_back(a.astype(np.float32), back) - b.astype(np.float32)) / 255
     rel = np.exp(-np.square(disagree / scale) - np.square(change / colour_tolerance))
     inside = (there[..., 0] >= 0) & (there[..., 0] <= w - 1) & (there[..., 1] >= 0) & (there[..., 1] <= h - 1)
     return Flow(back, (rel * inside).astype(np.float32))

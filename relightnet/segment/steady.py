@@ -124,7 +124,7 @@ def flow_carry(previous: np.ndarray, current: np.ndarray, mask: torch.Tensor, wi
     """
     import cv2
 
-    from .flow import backward_flow
+    from .flow import backward_flow, warp_back
 
     x0, y0, x1, y1 = window
     h, w = y1 - y0, x1 - x0
@@ -135,9 +135,8 @@ def flow_carry(previous: np.ndarray, current: np.ndarray, mask: torch.Tensor, wi
     fx = cv2.resize(flow.flow[..., 0], (w, h), interpolation=cv2.INTER_LINEAR) * (w / size[0])
     fy = cv2.resize(flow.flow[..., 1], (w, h), interpolation=cv2.INTER_LINEAR) * (h / size[1])
     rel = cv2.resize(flow.reliability, (w, h), interpolation=cv2.INTER_LINEAR)
-    gx, gy = np.meshgrid(np.arange(x0, x1, dtype=np.float32), np.arange(y0, y1, dtype=np.float32))
-    carried = cv2.remap(mask.numpy().astype(np.float32, copy=False), gx + fx, gy + fy, cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    carried = warp_back(mask.numpy().astype(np.float32, copy=False), np.stack([fx, fy], -1), (x0, y0),
+                        zero_outside=True)
     return carried.clip(0, 1), rel.clip(0, 1)
 
 

@@ -52,3 +52,15 @@ def test_sample_along_reads_pixel_positions():
     right = sample_along(x, same + torch.tensor([1.0, 0.0]))  # each pixel reads its right neighbour
     torch.testing.assert_close(right[..., :3], x[..., 1:])
     assert (right[..., 3] < x[..., 3]).all()  # past the edge: zeros blended in
+
+
+def test_warp_back_reads_the_previous_frame_along_the_flow():
+    from relightnet.segment.flow import warp_back
+
+    x = np.arange(20, dtype=np.float32).reshape(4, 5)
+    flow = np.zeros((2, 3, 2), np.float32)
+    flow[..., 0] = 1.0  # each pixel was one to the right
+    np.testing.assert_array_equal(warp_back(x, flow, origin=(1, 1)), x[1:3, 2:5])
+    flow[..., 0] = 10.0  # outside: the border repeated, or zero
+    np.testing.assert_array_equal(warp_back(x, flow), np.stack([x[:2, 4]] * 3, 1))
+    assert not warp_back(x, flow, zero_outside=True).any()
