@@ -51,15 +51,15 @@ from relightnet.pipeline.backends import make_predictor  # noqa: E402
 from relightnet.pipeline.light_eval import clip_metrics  # noqa: E402
 from relightnet.pipeline.video_lights import estimate_video_evidence  # noqa: E402
 from relightnet.sh.metrics import dominant_direction  # noqa: E402
-from relightnet.temporal import light_distance, light_norm, pool_shot_lights, pool_window  # noqa: E402
+from relightnet.temporal import light_distance, light_drift, light_norm, pool_shot_lights, pool_window  # noqa: E402
 from relightnet.temporal.registry import smooth_video_lights  # noqa: E402
 
 
 def _smoothed(est, reg: float, fps: float) -> dict:
-    """The two ways side by side: ``{"window": (T, K, 3), "shot": ...}`` and the shot's switches."""
-    window, _, _ = pool_shot_lights(est.evidence, est.prior, reg, window=pool_window(fps))
+    """The two ways side by side: ``{"window": (T, K, 3), "shot": ...}`` and each one's switches."""
+    window, _, window_sw = pool_shot_lights(est.evidence, est.prior, reg, window=pool_window(fps))
     shot = smooth_video_lights(est.raw, "pooled", est.evidence, est.prior, reg, fps, colour=est.colour)
-    return {"window": window, "shot": shot.smoothed, "switches": shot.switches}
+    return {"window": window, "shot": shot.smoothed, "switches": {"window": window_sw, "shot": shot.switches}}
 
 
 def _switched(video: Path, out: Path, at: int, gain) -> Path:
@@ -97,23 +97,16 @@ def _real_rows(predict, real: Path, at: int, gain, work: Path) -> list:
         est = estimate_video_evidence(predict, video, m, progress=False)
         sm = _smoothed(est, predict.solve_reg, fps)
         for way in ("window", "shot"):
-            d = clip_metrics([{"raw": est.raw, "smoothed": sm[way], "switch": None}])["smoothed"]
-            drift = _drift_max(sm[way])
-            rows.append([f"real, constant light, {name}", way, f"{d['drift_p50']:.4f}", f"{d['drift_p90']:.4f}",
-                         f"{drift:.4f}", "–", "–"])
+            d = light_drift(sm[way]).double()
+            rows.append([f"real, constant light, {name}", way, f"{float(d.median()):.4f}",
+                         f"{float(d.quantile(0.9)):.4f}", f"{float(d.max()):.4f}", "–", "–"])
     est = estimate_video_evidence(predict, _switched(video, work / "switched.mp4", at, gain), masks, progress=False)
     sm = _smoothed(est, predict.solve_reg, fps)
-    window_sw = pool_shot_lights(est.evidence, est.prior, predict.solve_reg, window=pool_window(fps))[2]
-    for way, sw in (("window", window_sw), ("shot", sm["switches"])):
+    for way in ("window", "shot"):
         lag = clip_metrics([{"raw": est.raw, "smoothed": sm[way], "switch": at}])["smoothed"]["lag_median"]
         rows.append([f"real, switch at frame {at} (×{gain})", way, "–", "–", "–",
-                     str(sw.nonzero().flatten().tolist()), f"{lag:g}"])
+                     str(sm["switches"][way].nonzero().flatten().tolist()), f"{lag:g}"])
     return rows
-
-
-def _drift_max(lights: torch.Tensor) -> float:
-    mean = lights.mean(0, keepdim=True)
-    return float((light_distance(lights, mean) / light_norm(mean).clamp_min(1e-12)).max())
 
 
 def _turning_rows(predict, n: int, work: Path) -> list:
@@ -133,10 +126,8 @@ def _turning_rows(predict, n: int, work: Path) -> list:
         sm = {"raw": est.raw, **_smoothed(est, predict.solve_reg, 30.0)}
         for way in per:
             x = sm[way].double()
-            mean = x.mean(0, keepdim=True)
             err = light_distance(x, light.double()) / light_norm(light.double())
-            per[way].append((float((light_distance(x, mean) / light_norm(mean)).quantile(0.9)), float(err.median()),
-                             facing_correlation(x)))
+            per[way].append((float(light_drift(x).quantile(0.9)), float(err.median()), facing_correlation(x)))
     rows = []
     for way, v in per.items():
         a = np.array(v)

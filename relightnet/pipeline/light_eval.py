@@ -30,6 +30,7 @@ from ..checks import InputError
 from ..data.lights import LIGHT_SOURCES
 from ..sh.light_solve import stack_evidence
 from ..sh.metrics import chromaticity_error, direction_error, scale_invariant_light_error
+from ..temporal.metrics import light_drift
 
 __all__ = ["split_lights", "still_metrics", "clip_lights", "clip_metrics", "evaluate_light", "format_light_report"]
 
@@ -154,14 +155,6 @@ def clip_lights(predictor, data_dir, split: str = "test", smoothing: str = "auto
     return out
 
 
-def _drift(lights: torch.Tensor) -> torch.Tensor:
-    """(T,) ‖E_t − Ē‖ / ‖Ē‖ of a (T, K, 3) sequence (irradiance over the sphere)."""
-    from ..temporal.distance import light_distance, light_norm
-
-    mean = lights.mean(0, keepdim=True)
-    return light_distance(lights, mean) / light_norm(mean).clamp_min(1e-12)
-
-
 def _own_lag(est: torch.Tensor, step: int, plateau: int = 4) -> float:
     """Frames after ``step`` until ``est`` covers 90% of its own step (plateau means before/after)."""
     from ..temporal.metrics import step_lag
@@ -178,7 +171,7 @@ def clip_metrics(clips: list[dict]) -> dict:
     """Drift (constant clips) and lag (switch clips) of :func:`clip_lights`'s output, raw and smoothed."""
     res = {}
     for key in ("raw", "smoothed"):
-        const = [_drift(c[key]) for c in clips if c["switch"] is None]
+        const = [light_drift(c[key]) for c in clips if c["switch"] is None]
         lags = [_own_lag(c[key], c["switch"]) for c in clips if c["switch"] is not None]
         entry = {"clips_constant": len(const), "clips_switch": len(lags)}
         if const:

@@ -29,7 +29,7 @@ from .distance import (
     robust_scale,
 )
 from .gate import OutlierGate, gate_step
-from .metrics import jitter, light_error, outlier_scores, step_lag
+from .metrics import jitter, light_drift, light_error, outlier_scores, step_lag
 from .offline import (
     SmoothResult,
     detect_switches,
@@ -69,7 +69,7 @@ __all__ = [
     "fir_step", "fir_taps", "gate_step", "one_euro_step", "run_causal",
     "light_distance", "light_norm", "light_weights", "local_outlier_threshold", "outlier_threshold",
     "parse_eps", "robust_scale",
-    "jitter", "light_error", "outlier_scores", "step_lag",
+    "jitter", "light_drift", "light_error", "outlier_scores", "step_lag",
     "SmoothResult", "detect_switches", "frame_noise", "hermite_basis", "hermite_matrix", "poly_matrix",
     "running_median", "savgol_matrix", "smooth_hermite", "smooth_lights", "smooth_poly", "smooth_savgol",
     "smoothing_matrix",

@@ -1,4 +1,4 @@
-"""Quality measures of smoothed light sequences: jitter, error to the truth, step lag, outlier scores.
+"""Quality measures of smoothed light sequences: jitter, drift, error to the truth, step lag, outlier scores.
 
 All distances are :func:`~relightnet.temporal.distance.light_distance`, the L2 of
 the irradiance difference over the sphere (summed over RGB), unless ``space="coeff"``.
@@ -11,9 +11,9 @@ import math
 import torch
 
 from ..checks import InputError, ShapeError, check_shape
-from .distance import light_distance, light_weights
+from .distance import light_distance, light_norm, light_weights
 
-__all__ = ["jitter", "light_error", "step_lag", "outlier_scores"]
+__all__ = ["jitter", "light_drift", "light_error", "step_lag", "outlier_scores"]
 
 
 def _check_seq(x: torch.Tensor, name: str) -> None:
@@ -56,6 +56,14 @@ def jitter(lights: torch.Tensor, space: str = "light", mask: torch.Tensor | None
     if not bool(m.any()):
         raise InputError("mask: selects no centre frame")
     return (per * m).sum(-1) / m.sum()
+
+
+def light_drift(lights: torch.Tensor) -> torch.Tensor:
+    """How far each frame's light is from the sequence's mean, over the mean's level: a constant light's
+    estimate should not move ((T, K, 3) → (T,) ‖E_t − Ē‖ / ‖Ē‖, irradiance over the sphere)."""
+    check_shape(lights, ["T", "K", 3], name="lights")
+    mean = lights.mean(0, keepdim=True)
+    return light_distance(lights, mean) / light_norm(mean).clamp_min(1e-12)
 
 
 def light_error(est: torch.Tensor, truth: torch.Tensor, relative: bool = False) -> torch.Tensor:

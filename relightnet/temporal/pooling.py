@@ -46,7 +46,7 @@ POOL_SECONDS = 2.0
 #: ``1 − CHANGE_EXPLAINED`` of their scatter about the segment's mean (light distance squared). A
 #: network's per-frame errors are themselves slow (they follow the person's turn): on real footage
 #: of a person turning under a constant light a quadratic explains 10–20% of the scatter over the
-#: whole clip and up to 40% over 2 s; on generated clips under a constant light up to 84% of a
+#: whole clip and up to 43% over 2 s; on generated clips under a constant light up to 84% of a
 #: 24-frame clip, where the window and the whole segment give the same light anyway. Three quarters
 #: keeps a constant light constant and still follows a light that turns steadily over the segment.
 CHANGE_EXPLAINED = 0.75

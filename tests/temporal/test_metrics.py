@@ -70,3 +70,15 @@ def test_bad_inputs():
         jitter(torch.zeros(5, 9, 3), space="rgb")
     with pytest.raises(ShapeError):
         jitter(torch.zeros(5, 9, 3), mask=torch.ones(4, dtype=torch.bool))
+
+
+def test_light_drift_is_the_distance_from_the_mean_over_its_level():
+    from relightnet.temporal import light_drift
+
+    L = torch.zeros(9, 3)
+    L[0] = 1.0
+    const = L.expand(5, 9, 3)
+    assert torch.equal(light_drift(const), torch.zeros(5))
+    swing = torch.stack([L * 0.9, L * 1.1])  # ±10% of the level
+    torch.testing.assert_close(light_drift(swing), torch.full((2,), 0.1))
+    assert float(light_norm(L)) > 0
