@@ -16,8 +16,8 @@ _WHERE = {
     "to_uint8": "image", "read_image": "image",
     "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
     "VideoInfo": "video", "VideoWriter": "video", "count_frames": "video", "frame_times": "video",
-    "frames_with_masks": "video",
-    "read_masks": "video", "read_video": "video", "video_info": "video",
+    "frames_with_masks": "video_masks",
+    "read_masks": "video_masks", "read_video": "video", "video_info": "video",
     "write_side_by_side": "side_by_side",
 }
 

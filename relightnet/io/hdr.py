@@ -16,8 +16,9 @@ A phone records HDR video as 10-bit Y'CbCr with BT.2020 primaries and the HLG (A
 4. Tone mapping (:func:`tone_map`): display light divided by the HDR reference white
    :data:`REFERENCE_WHITE` (203 cd/m², ITU-R BT.2408), so reference white is SDR white 1.0 and all
    below the knee :data:`KNEE` is kept as it is; above it a shoulder (extended Reinhard on the
-   excess, slope 1 at the knee) brings the content's peak (:data:`HLG_PEAK`, or :data:`PQ_PEAK`
-   for PQ: the mastering display's metadata is not read) to 1.0; it acts on max(R, G, B), so a
+   excess, slope 1 at the knee) brings the content's peak (:func:`content_peak`: :data:`HLG_PEAK`, or
+   for PQ the clip's MaxCLL, else its mastering display's peak, else :data:`PQ_PEAK`) to 1.0, the
+   same for every frame of a clip (read from its first); it acts on max(R, G, B), so a
    colour keeps its hue and the ratios of its components. Reference white ends at 0.875 linear.
 5. sRGB encoding, rounded to 8 bits.
 
@@ -34,6 +35,7 @@ from __future__ import annotations
 
 import logging
 import math
+import struct
 from functools import lru_cache
 
 import numpy as np
@@ -44,8 +46,8 @@ from ..color import linear_to_srgb
 logger = logging.getLogger(__name__)
 
 __all__ = ["HLG_PEAK", "PQ_PEAK", "REFERENCE_WHITE", "KNEE", "BT2020_TO_BT709", "hlg_oetf", "hlg_inverse_oetf",
-           "hlg_ootf", "pq_eotf", "pq_inverse_eotf", "tone_map", "ycbcr_to_rgb", "hdr_transfer", "frame_to_rgb24",
-           "note_hdr", "tag_sdr", "sdr_frame"]
+           "hlg_ootf", "pq_eotf", "pq_inverse_eotf", "tone_map", "ycbcr_to_rgb", "hdr_transfer", "frame_to_linear",
+           "frame_to_rgb24", "sdr_from_linear", "hdr_metadata", "content_peak", "note_hdr", "tag_sdr", "sdr_frame"]
 
 HLG_PEAK = 1000.0  #: cd/m², the nominal peak of the HLG reference display (BT.2100)
 PQ_PEAK = 1000.0  #: cd/m², the peak a PQ clip is taken to be mastered at (brighter content clips)
@@ -190,12 +192,18 @@ def hdr_transfer(frame) -> str | None:
     return {_HLG: "hlg", _PQ: "pq"}.get(int(frame.color_trc or 0))
 
 
-def frame_to_rgb24(frame) -> np.ndarray:
-    """A decoded PyAV video frame as (H, W, 3) uint8 sRGB; an HLG or PQ frame tone-mapped to SDR
-    (module docstring), any other one as FFmpeg converts it (``to_ndarray(format="rgb24")``)."""
+def frame_to_linear(frame) -> tuple[torch.Tensor, str] | None:
+    """A decoded HLG or PQ PyAV frame as linear light (module docstring, steps 1 to 3, without the
+    clipping to BT.709's gamut), or None for any other frame (:func:`hdr_transfer`).
+
+    Returns:
+        ((3, H, W) float32 linear BT.709 display light relative to :data:`REFERENCE_WHITE` (1.0 =
+        203 cd/m²; a colour outside BT.709's gamut keeps its negative components), "hlg" or "pq").
+        The frame's display rotation is not applied.
+    """
     transfer = hdr_transfer(frame)
     if transfer is None:
-        return frame.to_ndarray(format="rgb24")
+        return None
     bits, h, w = frame.format.components[0].bits, frame.height, frame.width
     codes = np.empty((3, h, w), np.float32)  # Y', Cb, Cr planes, chroma upsampled, codes << (16 - bits)
     for i, plane in enumerate(frame.reformat(format="yuv444p16le").planes):
@@ -209,8 +217,58 @@ def frame_to_rgb24(frame) -> np.ndarray:
         light.mul_(ys.clamp_min_(0).pow_(0.2).mul_(HLG_PEAK / REFERENCE_WHITE))
     if int(frame.color_primaries or 0) == _BT2020:
         light = _affine(BT2020_TO_BT709, light)
-    out = tone_map(light.clamp_(min=0), (PQ_PEAK if transfer == "pq" else HLG_PEAK) / REFERENCE_WHITE)
-    return _lookup(_table("srgb8"), out).permute(1, 2, 0).contiguous().numpy()
+    return light, transfer
+
+
+def frame_to_rgb24(frame, peak: float | None = None) -> np.ndarray:
+    """A decoded PyAV video frame as (H, W, 3) uint8 sRGB; an HLG or PQ frame tone-mapped to SDR
+    (module docstring) with its content's ``peak`` in cd/m² (default: :func:`content_peak` of this
+    frame; a clip passes its first frame's), any other one as FFmpeg converts it
+    (``to_ndarray(format="rgb24")``)."""
+    linear = frame_to_linear(frame)
+    if linear is None:
+        return frame.to_ndarray(format="rgb24")
+    light = linear[0]
+    return sdr_from_linear(light, content_peak(frame) if peak is None else peak).permute(1, 2, 0).contiguous().numpy()
+
+
+def sdr_from_linear(light: torch.Tensor, peak: float) -> torch.Tensor:
+    """HDR linear light (:func:`frame_to_linear`; (3, ...) float32, overwritten) → (3, ...) uint8 sRGB, as
+    the reader shows it: clipped to BT.709's gamut, tone-mapped (:func:`tone_map`) to the content's
+    ``peak`` in cd/m² (at least :data:`REFERENCE_WHITE`), sRGB-encoded and rounded."""
+    out = tone_map(light.clamp_(min=0), max(peak, REFERENCE_WHITE) / REFERENCE_WHITE)
+    return _lookup(_table("srgb8"), out)
+
+
+def hdr_metadata(frame) -> tuple[int, int, float]:
+    """(MaxCLL, MaxFALL, mastering display peak) of a decoded PyAV frame's side data (an HEVC or AV1
+    stream's SEI / metadata OBUs: FFmpeg's AVContentLightMetadata and AVMasteringDisplayMetadata),
+    cd/m², 0 where the frame carries none."""
+    cll = fall = 0
+    master = 0.0
+    for data in frame.side_data:
+        kind, raw = str(data.type), bytes(data)
+        if kind.endswith("CONTENT_LIGHT_LEVEL") and len(raw) >= 8:
+            cll, fall = struct.unpack_from("<2I", raw)
+        elif kind.endswith("MASTERING_DISPLAY_METADATA") and len(raw) >= 88:
+            fields = struct.unpack_from("<22i", raw)  # 8 rationals of primaries and white, min, max, 2 flags
+            if fields[21] and fields[19] > 0:  # has_luminance, max_luminance's denominator
+                master = fields[18] / fields[19]
+    return cll, fall, master
+
+
+def content_peak(frame) -> float:
+    """The peak in cd/m² a clip's tone mapping brings to SDR white, from its (first) decoded frame:
+    :data:`HLG_PEAK` for HLG (scene-referred); for PQ its MaxCLL, else its mastering display's peak,
+    else :data:`PQ_PEAK` (:func:`hdr_metadata`; values outside [:data:`REFERENCE_WHITE`, 10000] are
+    not trusted)."""
+    if hdr_transfer(frame) != "pq":
+        return HLG_PEAK
+    cll, _, master = hdr_metadata(frame)
+    for nits in (cll, master):
+        if REFERENCE_WHITE <= nits <= 10000:
+            return float(nits)
+    return PQ_PEAK
 
 
 def note_hdr(frame, name) -> None:
@@ -218,9 +276,10 @@ def note_hdr(frame, name) -> None:
     transfer = hdr_transfer(frame)
     if transfer is not None:
         logger.warning("%s: an HDR video (%s, %s primaries): its frames are tone-mapped to SDR sRGB "
-                       "(reference white %g cd/m² as SDR white)", name, transfer.upper(),
+                       "(reference white %g cd/m² as SDR white, peak %g cd/m²; relight-video --hdr keeps "
+                       "it HDR)", name, transfer.upper(),
                        "BT.2020" if int(frame.color_primaries or 0) == _BT2020 else "BT.709",
-                       REFERENCE_WHITE)
+                       REFERENCE_WHITE, content_peak(frame))
 
 
 def tag_sdr(codec_context, yuv: bool) -> None:

@@ -14,7 +14,6 @@ PQ) is read tone-mapped to SDR (:mod:`relightnet.io.hdr`).
 from __future__ import annotations
 
 import contextlib
-import itertools
 import logging
 import math
 from array import array
@@ -28,15 +27,14 @@ import torch
 
 from ..checks import InputError, check_shape
 from .atomic import atomic_write, remove_stale, temp_path
-from .hdr import frame_to_rgb24, note_hdr, sdr_frame, tag_sdr
+from .hdr import content_peak, frame_to_rgb24, note_hdr, sdr_frame, tag_sdr
 from .image import limit_hint, open_limited, to_uint8, upright
 from .limits import check_pixels, check_video_expansion
 from .timestamps import MKV_CLOCK, MP4_CLOCK, PtsClock, timeline_origin
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["VideoInfo", "video_info", "count_frames", "frame_times", "read_video", "VideoWriter", "read_masks",
-           "frames_with_masks"]
+__all__ = ["VideoInfo", "video_info", "count_frames", "frame_times", "read_video", "VideoWriter"]
 
 _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), ".mkv": ("ffv1", "bgr0", {})}
 #: libx264's options for frames above 1080p (:data:`X264_LARGE_PIXELS`): the frames it holds (lookahead,
@@ -173,11 +171,13 @@ def read_video(path) -> Iterator[np.ndarray]:
 
     with contextlib.closing(_open(path)) as c:
         try:
+            peak = None
             for i, frame in enumerate(c.decode(video=0)):
                 if i == 0:
                     _count_checked(path, frame.width, frame.height)
                     note_hdr(frame, path)
-                yield upright(frame_to_rgb24(frame), frame.rotation)
+                    peak = content_peak(frame)  # one tone mapping for the clip: its first frame's metadata
+                yield upright(frame_to_rgb24(frame, peak), frame.rotation)
         except InputError:
             raise
         except (av.error.FFmpegError, ValueError) as e:
@@ -242,39 +242,56 @@ class VideoWriter:
         ``time`` seconds (None: one frame at ``fps`` after the previous one; class docstring)."""
         if isinstance(frame, torch.Tensor):
             frame = frame.detach().cpu()
-        if not (isinstance(frame, np.ndarray) and frame.dtype == np.uint8):
-            frame = to_uint8(torch.as_tensor(frame), srgb=self.srgb)
-            frame = frame.numpy() if isinstance(frame, torch.Tensor) else frame
+        frame = self._pixels(frame)
         check_shape(frame, ["H", "W", 3], name=f"{self.path}: frame")
         h, w = frame.shape[:2]
-        codec = _CODECS[self.path.suffix.lower()][0]
+        codec, pix_fmt = self._codec()[:2]
         if self._stream is None:
             self._open_stream(h, w)
         elif (h, w) != self._size:
             raise InputError(f"{self.path}: frame {self.n_frames} is {h}x{w}, expected {self._size[0]}x{self._size[1]}")
-        if codec == "libx264" and (h % 2 or w % 2):  # 4:2:0 chroma: even sides (the module docstring)
+        if pix_fmt.startswith("yuv420") and (h % 2 or w % 2):  # 4:2:0 chroma: even sides (the module docstring)
             frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
-        vf = sdr_frame(frame, gray=self._gray, yuv=codec == "libx264")
+        vf = self._frame(frame)
         vf.pts, vf.time_base = self._clock.pts(time), self._clock.tick
         self._timed = self._timed or time is not None
         for packet in self._stream.encode(vf):
             self._container.mux(packet)
         self.n_frames += 1
 
+    def _pixels(self, frame) -> np.ndarray:
+        """A frame given to :meth:`write` as the (H, W, 3) array :meth:`_frame` encodes: uint8 sRGB."""
+        if isinstance(frame, np.ndarray) and frame.dtype == np.uint8:
+            return frame
+        frame = to_uint8(torch.as_tensor(frame), srgb=self.srgb)
+        return frame.numpy() if isinstance(frame, torch.Tensor) else frame
+
+    def _frame(self, frame: np.ndarray):
+        """The PyAV frame of (H, W, 3) pixels from :meth:`_pixels` (even sides for 4:2:0)."""
+        return sdr_frame(frame, gray=self._gray, yuv=self._codec()[0] == "libx264")
+
+    def _codec(self) -> tuple[str, str, dict]:
+        """(encoder, pixel format, options) for this file's suffix."""
+        codec, pix_fmt, opts = _CODECS[self.path.suffix.lower()]
+        return codec, "gray" if self._gray else pix_fmt, opts
+
+    def _tag(self, codec_context) -> None:
+        """The colour tags of the stream (:func:`~relightnet.io.hdr.tag_sdr`)."""
+        tag_sdr(codec_context, yuv=self._codec()[0] == "libx264")
+
     def _open_stream(self, h: int, w: int) -> None:
         """The container and the video stream, for frames of (h, w), made at the first frame."""
         import av
 
-        codec, pix_fmt, opts = _CODECS[self.path.suffix.lower()]
-        pix_fmt = "gray" if self._gray else pix_fmt
-        even = codec == "libx264"  # yuv420p
+        codec, pix_fmt, opts = self._codec()
+        even = pix_fmt.startswith("yuv420")
         if even and (h % 2 or w % 2):
             logger.warning("%s: odd frame size %dx%d (width x height): padded to %dx%d (the last %s repeated) "
                            "for yuv420p", self.path, w, h, w + w % 2, h + h % 2,
                            " and ".join(n for n, odd in (("column", w % 2), ("row", h % 2)) if odd))
-        if even and h * w > X264_LARGE_PIXELS:
+        if codec == "libx264" and h * w > X264_LARGE_PIXELS:
             opts = {**opts, **X264_LARGE}
-        fmt = "mp4" if codec == "libx264" else "matroska"
+        fmt = "mp4" if self.path.suffix.lower() == ".mp4" else "matroska"
         rate = Fraction(self.fps).limit_denominator(1001)
         self._clock = PtsClock(MP4_CLOCK if fmt == "mp4" else MKV_CLOCK, rate, f"{self.path}")
         self._container = av.open(self._file, mode="w", format=fmt)
@@ -283,7 +300,7 @@ class VideoWriter:
         self._stream.width, self._stream.height = (w + w % 2, h + h % 2) if even else (w, h)
         self._stream.pix_fmt = pix_fmt
         self._stream.options = opts
-        tag_sdr(self._stream.codec_context, yuv=even)
+        self._tag(self._stream.codec_context)
         self._size = (h, w)
 
     def close(self) -> Path:
@@ -334,64 +351,3 @@ class VideoWriter:
             self.close()
         else:
             self.abort()
-
-
-def read_masks(masks) -> tuple[int, Iterator[torch.Tensor]]:
-    """Per-frame person masks from a folder of images (sorted by name) or from a mask video.
-
-    An image's alpha is the mask where it has transparency; otherwise white = person (see
-    :func:`~relightnet.io.read_mask`).
-
-    Returns:
-        (count, iterator of (H, W) float32 masks in {0, 1}); a mask video whose container stores
-        no frame count (mkv, webm) is counted by decoding it.
-    """
-    from .image import read_mask
-    from .probe import PHOTO_SUFFIXES
-
-    p = Path(masks)
-    if p.is_file() and p.suffix.lower() in PHOTO_SUFFIXES:
-        raise InputError(f"{p}: a single image; expected a folder of per-frame mask images or a mask video")
-    if p.is_dir():
-        files = sorted(f for f in p.iterdir() if f.suffix.lower() in PHOTO_SUFFIXES and not f.name.startswith("."))
-        if not files:
-            raise InputError(f"{p}: no mask images ({', '.join(PHOTO_SUFFIXES)}) in the folder")
-        return len(files), (read_mask(f) for f in files)
-    # white = person: the mean of R, G, B above 127, i.e. their sum above 381 (no float copy of the frame)
-    return count_frames(p), ((torch.from_numpy(f).sum(-1, dtype=torch.int16) > 381).float() for f in read_video(p))
-
-
-def frames_with_masks(video, masks, allow_empty: bool = False
-                      ) -> tuple[VideoInfo, int, Iterator[tuple[int, torch.Tensor, torch.Tensor]]]:
-    """Stream a video's frames with their masks, checking that they belong together.
-
-    Args:
-        video: the video file.
-        masks: a folder of mask images or a mask video (:func:`read_masks`).
-        allow_empty: pass empty masks (frames without the person) on instead of failing.
-
-    Returns:
-        (video info, mask count, iterator of (t, frame (3, H, W) float sRGB in [0, 1], mask (H, W))).
-        The counts are compared before any frame is decoded (both counted from the packets
-        really in the files, :func:`count_frames`); the iterator raises :class:`InputError`
-        when a mask's size differs from its frame, a mask is empty (unless ``allow_empty``),
-        or a damaged file decodes fewer frames than it holds.
-    """
-    info = video_info(video)
-    n_masks, mask_iter = read_masks(masks)
-    n_frames = count_frames(video)
-    if n_frames != n_masks:
-        raise InputError(f"{masks}: {n_masks} masks for {n_frames} video frames")
-
-    def pairs():
-        for t, (frame, mask) in enumerate(itertools.zip_longest(read_video(video), mask_iter)):
-            if frame is None or mask is None:
-                raise InputError(f"{masks}: {n_masks} masks but the video {video} has a different number of frames")
-            img = torch.from_numpy(frame).permute(2, 0, 1).float().div_(255)  # one float copy of the frame
-            if tuple(mask.shape) != tuple(img.shape[1:]):
-                raise InputError(f"{masks}: mask {t} is {tuple(mask.shape)}, frame is {tuple(img.shape[1:])}")
-            if not allow_empty and not mask.any():
-                raise InputError(f"{masks}: the mask of frame {t} (counting from 0) is empty")
-            yield t, img, mask
-
-    return info, n_masks, pairs()
