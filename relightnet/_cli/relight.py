@@ -88,7 +88,7 @@ def run_video(args: argparse.Namespace) -> int:
     relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
                   smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
                   mask_source=args.mask_source, alpha=args.alpha, soft_edges=not args.hard_edges,
-                  steady=not args.no_carry)
+                  steady=not args.no_carry, hdr=args.hdr)
     return 0
 
 
@@ -123,7 +123,8 @@ def register(sub) -> None:
     p = add_command(sub, "relight-video", "Relight a video of a person frame by frame (2D path), streaming.",
                     "  relightnet relight-video clip.mp4 --light sunset --out relit.mp4      # masks: segmentation\n"
                     "  relightnet relight-video clip.mp4 --masks masks/ --light sunset --out relit.mp4\n"
-                    "  relightnet relight-video clip.mp4 --masks masks.mp4 --light studio --turntable 30 --out t.mp4\n")
+                    "  relightnet relight-video clip.mp4 --masks masks.mp4 --light studio --turntable 30 --out t.mp4\n"
+                    "  relightnet relight-video iphone_hlg.mov --light sunset --hdr --out relit_hdr.mp4  # HDR kept\n")
     p.add_argument("video", help="input video (mp4, mkv, ...)")
     p.add_argument("--masks", help="folder of per-frame mask images (sorted) or a mask video (default: the person "
                    "segmentation, tracked from frame to frame; --mask-source)")
@@ -140,5 +141,8 @@ def register(sub) -> None:
     p.add_argument("--no-carry", action="store_true",
                    help="relight every frame from its own prediction alone (default: the CNN's maps are carried "
                         "from frame to frame along the optical flow, so the person does not flicker)")
+    p.add_argument("--hdr", action="store_true",
+                   help="keep an HDR video (HLG or PQ) HDR: 10-bit BT.2020 with its transfer, HEVC in .mp4, ffv1 in "
+                        ".mkv (default: tone-mapped to SDR, as the frames are read)")
     add_model_args(p)
     p.set_defaults(func=run_video)

@@ -24,6 +24,7 @@ import torch
 
 from ..checks import InputError
 from ..io import VideoWriter, frame_times
+from ..io.hdr_video import HdrClip, HdrVideoWriter
 from ..names import STREAMING_SMOOTHING
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up
@@ -56,7 +57,7 @@ def person_in_most(shares, min_share: float = PERSON_SHARE) -> bool:
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
                   smoothing: str = "auto", progress: bool = True, detail: bool = True,
                   mask_source: str = "segment", alpha: float = 0.3, soft_edges: bool = True,
-                  steady: bool = True) -> int:
+                  steady: bool = True, hdr: bool = False) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -83,6 +84,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         steady: carry the CNN's maps from frame to frame along the optical flow
             (:class:`~relightnet.pipeline.steady_maps.MapCarry`), so the relit person does not flicker more
             than the footage; False relights every frame from its own prediction alone.
+        hdr: keep an HLG or PQ video HDR (:class:`~relightnet.io.hdr_video.HdrClip`; an SDR one is refused
+            before any work); False writes the frames tone-mapped to SDR, as they are read.
 
     Returns:
         The number of frames written.
@@ -99,24 +102,28 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     # Segmented (no masks given): a clip with nobody in its first seconds is refused then, not at its end.
     gate = _person_gate(video, info.fps) if masks is None and mask_source == "segment" else None
     times = frame_times(video)  # None: the file states no times, the frames follow at its average rate
+    clip = HdrClip(video) if hdr else None  # an SDR video is refused here, before any work
     relight = _FrameRelighter(predict, to_model_order(light, predict.lmax), turntable_deg_per_s, smoothing, alpha,
-                              MapCarry() if steady else None, detail=detail, soft_edges=soft_edges)
+                              MapCarry() if steady else None, detail=detail, soft_edges=soft_edges,
+                              dtype=torch.uint8 if clip is None else torch.float32)
     n = 0
     empty: list[int] = []
-    with VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) as writer:
+    with (VideoWriter(out, fps=info.fps, srgb=False, audio_from=video) if clip is None else
+          HdrVideoWriter(out, clip.fmt, fps=info.fps, audio_from=video)) as writer:
         for t, img, mask in tqdm(pairs, total=n_masks or None, desc="relight-video", unit="frame",
                                  disable=not progress):
             time = float(times[t]) if times is not None and t < len(times) else None
             if gate is not None:
                 gate(t, mask)
             if mask is not None and not mask.any():  # the person is out of the frame: nothing to relight
-                writer.write(img.permute(1, 2, 0), time=time)
+                writer.write(img.permute(1, 2, 0) if clip is None else clip.carry(img, img), time=time)
                 empty.append(t)
                 relight.lost()
             else:
                 elapsed = t / info.fps if time is None else time - float(times[0])
                 try:
-                    writer.write(relight(img, mask, elapsed), time=time)
+                    relit = relight(img, mask, elapsed)
+                    writer.write(relit if clip is None else clip.carry(relit, img), time=time)
                 except InputError as e:  # a frame the CNN cannot take (e.g. blank, for its mask head): name it
                     raise InputError(f"{video}: frame {t}: {e}") from None
             del img, mask  # the next frame is decoded and predicted without this one's
@@ -136,10 +143,10 @@ class _FrameRelighter:
     the person (the carry starts afresh after it; the light's smoothing goes on)."""
 
     def __init__(self, predict, light: torch.Tensor, turntable_deg_per_s: float, smoothing: str, alpha: float,
-                 carry, detail: bool, soft_edges: bool) -> None:
+                 carry, detail: bool, soft_edges: bool, dtype: torch.dtype = torch.uint8) -> None:
         self.predict, self.light, self.turn = predict, light, math.radians(turntable_deg_per_s)
         self.smoothing, self.alpha, self.carry = smoothing, alpha, carry
-        self.detail, self.soft_edges = detail, soft_edges
+        self.detail, self.soft_edges, self.dtype = detail, soft_edges, dtype
         self.smoother = self.state = None
 
     def lost(self) -> None:
@@ -157,7 +164,7 @@ class _FrameRelighter:
         y, self.state = self.smoother(pred.light, self.state, torch.tensor([self.state is None]), **kw)
         new = rotate_sh_up(self.light, self.turn * elapsed)
         # Exposure reference and photo albedo: the smoothed source light, not this frame's raw estimate.
-        return relight_over_photo(pred, img, new, detail=self.detail, reference=y[0], dtype=torch.uint8,
+        return relight_over_photo(pred, img, new, detail=self.detail, reference=y[0], dtype=self.dtype,
                                   soft_edges=self.soft_edges).image
 
 

@@ -191,3 +191,43 @@ def test_the_carry_along_the_flow_steadies_a_still_person(tmp_path, masked_clip)
             meter.update(s, o, mask[..., 0] > 127)
         added[bool(flag)] = meter.result()["added_flicker"] - 1
     assert added[False] < 0.7 * added[True], added
+
+
+def test_hdr_is_kept_when_asked_and_refused_for_an_sdr_clip(tmp_path, masked_clip, capsys):
+    import torch
+
+    from relightnet.color import srgb_to_linear
+    from relightnet.io.hdr_video import (
+        HdrFormat,
+        HdrVideoWriter,
+        hdr_format,
+        linear_to_signal,
+        read_linear_video,
+        ycbcr_codes,
+    )
+
+    video, masks = masked_clip(tmp_path)
+    out = tmp_path / "relit.mkv"
+    assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--hdr",
+                 "--out", str(out)]) == 1
+    assert "not an HDR video" in capsys.readouterr().err and not out.exists()
+    hlg = tmp_path / "hlg.mkv"  # the clip as HLG, its bright block 1.8x reference white: past the tone-mapping knee
+    with HdrVideoWriter(hlg, HdrFormat("hlg"), fps=12) as w:
+        for f in read_video(video):
+            w.write(srgb_to_linear(torch.from_numpy(f).permute(2, 0, 1).float() / 255) * 4)
+    assert main(["-q", "relight-video", str(hlg), "--masks", str(masks), "--light", "sunset", "--hdr",
+                 "--out", str(out)]) == 0
+    assert hdr_format(out) == HdrFormat("hlg")
+    src, relit = list(read_linear_video(hlg)), list(read_linear_video(out))
+    assert len(relit) == 3 and float(src[0].amax()) > 1.5
+
+    def codes(x):
+        return ycbcr_codes(linear_to_signal(x, "hlg"))
+
+    for t, (a, b) in enumerate(zip(src, relit, strict=True)):
+        person = torch.zeros(a.shape[1:], dtype=torch.bool)
+        person[8:56, 14 + t:30 + t] = True
+        # outside the person (and a 3-pixel soft edge) the source's own HDR codes, to rounding (lossless ffv1)
+        band = torch.nn.functional.max_pool2d(person[None, None].float(), 7, 1, 3)[0, 0].bool()
+        assert (codes(a) - codes(b))[:, ~band].abs().max() <= 1
+        assert (b - a)[:, person].abs().mean() > 0.05  # the person relit, in HDR
