@@ -18,7 +18,7 @@ MAX_FUNCTION_LINES = 80
 #: names are subpackages (``relightnet/NAME/``) or top-level modules (``relightnet/NAME.py``).
 FLOORS: tuple[tuple[str, ...], ...] = (
     ("", "errors"),
-    ("checks", "color", "deprecation", "lazy", "names"),
+    ("checks", "color", "deprecation", "lazy", "names", "threads"),
     ("io",),
     ("raster",),
     ("sh",),

@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.capture_job import CaptureOptions, capture_file
     from ..segment import PersonModels
 
-    if args.threads:
+    if args.threads:  # the command owns its process: --threads holds for the whole run
         torch.set_num_threads(args.threads)
     texture = TextureOptions(size=args.texture_size)  # a bad size fails before the model is loaded
     predictor = make_predictor(args.backend, args.checkpoint, args.device)

@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from ..fit.job import FitOptions, fit_file, write_fit_masks, write_preview
     from ..segment import PersonModels
 
-    if args.threads:
+    if args.threads:  # the command owns its process: --threads holds for the whole run
         torch.set_num_threads(args.threads)
     opts = FitOptions(iters=args.iters, warm_iters=args.warm_iters, window=args.window, fit_shape=not args.no_shape,
                       smooth_sigma=0.0 if photo else args.smooth, fov_deg=args.fov)

@@ -6,12 +6,12 @@ driver import it without importing each other).
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 
 import numpy as np
 
 from ..checks import InputError
+from ..threads import torch_threads
 from .config import SynthConfig
 from .shards import shard_name, shard_plan, stack_samples, write_shard
 
@@ -21,19 +21,6 @@ __all__ = ["make_items", "make_shard", "make_and_write_shard", "fields_of"]
 def fields_of(arrays: dict) -> dict:
     """``{field: {"shape": per-item shape, "dtype"}}`` of stacked shard arrays (the manifest's ``fields``)."""
     return {k: {"shape": list(a.shape[1:]), "dtype": str(a.dtype)} for k, a in sorted(arrays.items()) if k != "meta"}
-
-
-@contextlib.contextmanager
-def _one_thread():
-    """Run torch single-threaded (reductions then do not depend on the machine's core count)."""
-    import torch
-
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(n)
 
 
 def _generate(cfg: SynthConfig, split: str, index: int, body):
@@ -52,7 +39,7 @@ def make_items(cfg: SynthConfig, split: str, indices, body=None) -> list:
     from .generate import prepare_assets
 
     body = body if body is not None else prepare_assets()
-    with _one_thread():
+    with torch_threads(1):  # reductions then do not depend on the machine's core count
         if not cfg.sequence_frames:
             from .generate import generate_samples
 
@@ -84,7 +71,7 @@ def make_and_write_shard(cfg: SynthConfig, split: str, index: int, out_dir, comp
     _, start, count = shard_plan(cfg, split)[index]
     body = body if body is not None else prepare_assets()
     samples = []
-    with _one_thread():
+    with torch_threads(1):  # reductions then do not depend on the machine's core count
         if cfg.sequence_frames:
             for j in range(count):
                 samples.append(_generate(cfg, split, start + j, body))

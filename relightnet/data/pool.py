@@ -64,6 +64,7 @@ def shard_task(task: ShardTask, tick=None, fault: str | None = None) -> dict:
 def _worker_init(ticks, fault, max_retries) -> None:
     import torch
 
+    # a pool worker's initialiser owns its process: one thread for good (the pool runs a process a core)
     torch.set_num_threads(1)
     with contextlib.suppress(RuntimeError):
         torch.set_num_interop_threads(1)

@@ -27,6 +27,7 @@ import torch
 from ..body.anny_model import PHENOTYPES
 from ..body.base import matrix_to_rotvec, rotvec_to_matrix
 from ..checks import InputError
+from ..threads import torch_threads
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free, rest_near
 from .camera import project_points
 from .init import initial_orientation, initial_translation, relative_turn
@@ -34,6 +35,7 @@ from .landmarks import landmark_weights
 from .observe import Observations, world_to_view_axes
 from .prior import FIT_BONES, limit_bounds, limit_penalty, rest_penalty
 from .terms import (
+                    SilhouetteTargets,
                     acceleration_term,
                     outline_matches,
                     person_scale,
@@ -85,40 +87,110 @@ class FitResult:
     seconds: float
 
 
+@dataclass(frozen=True, eq=False)
+class _Problem:
+    """What every window of one fit shares.
+
+    Attributes:
+        body: the :class:`FitBody`.
+        default_phenotype: (6,) the phenotype's defaults (:data:`relightnet.body.PHENOTYPES` order), which
+            the fitted shape (:data:`SHAPE_NAMES`) replaces in part.
+        intrinsics: ``(fx, fy, cx, cy)`` of the frames.
+        weights: the terms' :class:`FitWeights`.
+    """
+
+    body: FitBody
+    default_phenotype: torch.Tensor
+    intrinsics: tuple
+    weights: FitWeights
+
+
+@dataclass(frozen=True, eq=False)
+class _WindowEvidence:
+    """What one window of B frames is fitted to.
+
+    Attributes:
+        landmarks: (B, 33, 5) pixel landmarks (:attr:`Observations.landmarks`).
+        landmark_weights: (B, 33) each landmark's weight (0: unmapped or unseen).
+        world: (B, 33, 3) world landmarks in view-space axes, metres.
+        person_height: (B,) the person's height in pixels (the 2D terms' unit).
+        silhouette: the masks' distance maps and outlines at the working resolution, or None (no masks).
+    """
+
+    landmarks: torch.Tensor
+    landmark_weights: torch.Tensor
+    world: torch.Tensor
+    person_height: torch.Tensor
+    silhouette: SilhouetteTargets | None
+
+
+@dataclass(frozen=True, eq=False)
+class _Carried:
+    """What a window hands the next one (None in each field before the first window, but the shape).
+
+    Attributes:
+        shape_free: (S,) the unconstrained shape of :data:`SHAPE_NAMES` (fitted on the first window).
+        last_pose: (1, N, 3) the last frame's pose of :data:`FIT_BONES` (the warm start).
+        last_world: (33, 3) the last frame's world landmarks, view-space axes (the turn since it).
+        last_weights: (33,) the last frame's landmark weights.
+        points_before: (2, P, 3) the last two frames' fitted points (the acceleration term's history).
+    """
+
+    shape_free: torch.Tensor
+    last_pose: torch.Tensor | None = None
+    last_world: torch.Tensor | None = None
+    last_weights: torch.Tensor | None = None
+    points_before: torch.Tensor | None = None
+
+
 @dataclass
 class _Window:
-    sub: torch.Tensor
+    """The parameters one window optimises (updated in place by Adam).
+
+    Attributes:
+        pose: (B, N, 3) rotation vectors of :data:`FIT_BONES`.
+        trans: (B, 3) translations, view space, metres.
+        shape_free: (S,) the unconstrained shape (stepped on a shape-fitting window only).
+    """
+
+    pose: torch.Tensor
     trans: torch.Tensor
-    free: torch.Tensor
+    shape_free: torch.Tensor
 
 
-def _evidence(fb: FitBody, obs: Observations, start: int, stop: int) -> dict:
+def _window_evidence(body: FitBody, obs: Observations, start: int, stop: int) -> _WindowEvidence:
     o = obs.slice(start, stop)
-    w = landmark_weights(o.landmarks[..., 3], fb.landmarks.mapped)
-    ev = {"lm": o.landmarks, "w": w, "world": world_to_view_axes(o.world), "scale": person_scale(o.landmarks, w)}
+    weights = landmark_weights(o.landmarks[..., 3], body.landmarks.mapped)
     # this window's only (the next window's are made after these are dropped), from its masks at the working
     # resolution (stored so when the masks were packed for this window; resampled here otherwise)
-    ev["sil"] = silhouette_targets(o.masks.working()[0], size=obs.size, height=None) if o.masks is not None else None
-    return ev
+    silhouette = (silhouette_targets(o.masks.working()[0], size=obs.size, height=None)
+                  if o.masks is not None else None)
+    return _WindowEvidence(o.landmarks, weights, world_to_view_axes(o.world), person_scale(o.landmarks, weights),
+                           silhouette)
 
 
 #: The silhouette's outline points are matched to their nearest vertices every this many steps.
 MATCH_EVERY = 4
 
 
-def _frame_losses(fb, win, ev, rest, intr, wts: FitWeights, bounds, before, use_sil: bool, step: int = 0) -> tuple:
-    pts, sv = fb.points(win.sub, win.trans, rest)
-    e2d = reprojection_term(pts, ev["lm"], ev["w"], intr, ev["scale"])
-    total = wts.reprojection * e2d + wts.world * world_term(pts, ev["world"], ev["w"])
-    total = total + wts.limits * limit_penalty(win.sub, *bounds) + wts.rest * rest_penalty(win.sub)
-    if use_sil and ev["sil"] is not None:
-        px = project_points(sv, intr)
-        if step % MATCH_EVERY == 0 or "matches" not in ev:
-            ev["matches"] = outline_matches(px, ev["sil"])
-        total = total + wts.silhouette * silhouette_term(px, ev["sil"], ev["scale"], ev["matches"])
+def _frame_losses(problem: _Problem, win: _Window, ev: _WindowEvidence, rest, bounds, before,
+                  matches: torch.Tensor | None, step: int | None) -> tuple:
+    """``(total (B,), reprojection (B,), points (B, P, 3), matches)``: each frame's loss. ``step``: the
+    iteration (the outline is matched again every :data:`MATCH_EVERY` steps, and where ``matches`` is None);
+    None: no silhouette term. ``matches``: (B, M) the outline's nearest vertices of an earlier step, or None."""
+    wts = problem.weights
+    pts, verts = problem.body.points(win.pose, win.trans, rest)
+    e2d = reprojection_term(pts, ev.landmarks, ev.landmark_weights, problem.intrinsics, ev.person_height)
+    total = wts.reprojection * e2d + wts.world * world_term(pts, ev.world, ev.landmark_weights)
+    total = total + wts.limits * limit_penalty(win.pose, *bounds) + wts.rest * rest_penalty(win.pose)
+    if step is not None and ev.silhouette is not None:
+        px = project_points(verts, problem.intrinsics)
+        if step % MATCH_EVERY == 0 or matches is None:
+            matches = outline_matches(px, ev.silhouette)
+        total = total + wts.silhouette * silhouette_term(px, ev.silhouette, ev.person_height, matches)
     if wts.smooth > 0:
         total = total + wts.smooth * acceleration_term(pts, before)
-    return total, e2d, pts
+    return total, e2d, pts, matches
 
 
 #: Pixels of silhouette evidence one window holds at the frames' size (frames × H × W: its float32 distance
@@ -148,71 +220,77 @@ RELINEARISE_EVERY = 20
 PATIENCE = 6
 
 
-def _optimise(fb, win: _Window, ev, base, intr, wts, iters: int, fit_shape: bool, before, tol: float) -> tuple:
-    bounds = limit_bounds(win.sub.dtype)
-    params = [win.sub, win.trans] + ([win.free] if fit_shape else [])
+def _optimise(problem: _Problem, win: _Window, ev: _WindowEvidence, before, iters: int, fit_shape: bool,
+              tol: float) -> tuple:
+    """Adam on ``win`` (in place): ``(residual (B,), points (B, P, 3))`` at the end. ``before``:
+    :attr:`_Carried.points_before`."""
+    body, base = problem.body, problem.default_phenotype
+    bounds = limit_bounds(win.pose.dtype)
+    params = [win.pose, win.trans] + ([win.shape_free] if fit_shape else [])
     for p in params:
         p.requires_grad_(True)
-    opt = torch.optim.Adam([{"params": [win.sub], "lr": 0.03}, {"params": [win.trans], "lr": 0.01}])
-    opt_shape = torch.optim.Adam([win.free], lr=0.1) if fit_shape else None
-    n_global = iters // 4
+    opt = torch.optim.Adam([{"params": [win.pose], "lr": 0.03}, {"params": [win.trans], "lr": 0.01}])
+    opt_shape = torch.optim.Adam([win.shape_free], lr=0.1) if fit_shape else None
+    n_root_only = iters // 4
     with torch.no_grad():
-        rest = fb.rest(phenotype_from_free(win.free, base))
-    best, since, lin_at = float("inf"), 0, None
+        rest = body.rest(phenotype_from_free(win.shape_free, base))
+    best, since, linearised_at, matches = float("inf"), 0, None, None
     for i in range(iters):
-        shape_step = fit_shape and i >= n_global and i % SHAPE_EVERY == 0
+        shape_step = fit_shape and i >= n_root_only and i % SHAPE_EVERY == 0
         if shape_step:
-            if lin_at is None or i - lin_at >= RELINEARISE_EVERY:
-                free0, lin_at = win.free.detach().clone(), i
-                rest0, jac = fb.rest_linearised(free0, base)
-            rest = rest_near(rest0, jac, win.free - free0)
+            if linearised_at is None or i - linearised_at >= RELINEARISE_EVERY:
+                free_at, linearised_at = win.shape_free.detach().clone(), i
+                rest_at, jacobian = body.rest_linearised(free_at, base)
+            rest = rest_near(rest_at, jacobian, win.shape_free - free_at)
         opt.zero_grad(set_to_none=True)
-        total, _, _ = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=i >= n_global, step=i)
+        total, _, _, matches = _frame_losses(problem, win, ev, rest, bounds, before, matches,
+                                             step=i if i >= n_root_only else None)
         loss = total.sum()
         if shape_step:
             opt_shape.zero_grad(set_to_none=True)
-            loss = loss + wts.shape * win.free.square().sum()
+            loss = loss + problem.weights.shape * win.shape_free.square().sum()
         loss.backward()
-        if i < n_global:
-            win.sub.grad[:, 1:] = 0
+        if i < n_root_only:
+            win.pose.grad[:, 1:] = 0
         opt.step()
         if shape_step:
             opt_shape.step()
             with torch.no_grad():
-                rest = rest_near(rest0, jac, win.free - free0)
-        if i >= n_global and tol > 0 and not fit_shape:
+                rest = rest_near(rest_at, jacobian, win.shape_free - free_at)
+        if i >= n_root_only and tol > 0 and not fit_shape:
             value = float(loss.detach())
             best, since = (value, 0) if value < best * (1 - tol) else (best, since + 1)
             if since >= PATIENCE:
                 break
     with torch.no_grad():
-        rest = fb.rest(phenotype_from_free(win.free, base))
-        _, e2d, pts = _frame_losses(fb, win, ev, rest, intr, wts, bounds, before, use_sil=True)
+        rest = body.rest(phenotype_from_free(win.shape_free, base))
+        _, e2d, pts, _ = _frame_losses(problem, win, ev, rest, bounds, before, None, step=0)
     for p in params:
         p.requires_grad_(False)
     return e2d.sqrt(), pts
 
 
-def _start(fb: FitBody, ev: dict, base, free, intr, prev: dict | None) -> _Window:
+def _start(problem: _Problem, ev: _WindowEvidence, carried: _Carried) -> _Window:
     """Initial window. The first: the rest pose turned as the landmarks say. Later ones: the
-    previous window's last pose (``prev["sub"]``), its orientation turned by the torso's turn in
-    the world landmarks since that frame (``prev["world"]``, ``prev["w"]``; no absolute front/back
-    guess). The translation from the landmarks."""
-    B = ev["lm"].shape[0]
+    previous window's last pose (:attr:`_Carried.last_pose`), its orientation turned by the torso's
+    turn in the world landmarks since that frame (``last_world``, ``last_weights``; no absolute
+    front/back guess). The translation from the landmarks."""
+    body, B = problem.body, ev.landmarks.shape[0]
     with torch.no_grad():
-        rest = fb.rest(phenotype_from_free(free, base))
+        rest = body.rest(phenotype_from_free(carried.shape_free, problem.default_phenotype))
         zero = torch.zeros(1, len(FIT_BONES), 3)
-        rest_pts, _ = fb.points(zero, torch.zeros(1, 3), rest)
-        if prev is None:
-            sub = zero.expand(B, -1, -1).clone()
-            sub[:, 0] = initial_orientation(rest_pts[0], ev["world"], ev["w"])
+        rest_pts, _ = body.points(zero, torch.zeros(1, 3), rest)
+        if carried.last_pose is None:
+            pose = zero.expand(B, -1, -1).clone()
+            pose[:, 0] = initial_orientation(rest_pts[0], ev.world, ev.landmark_weights)
         else:
-            sub = prev["sub"].expand(B, -1, -1).clone()
-            turn = relative_turn(torch.cat([prev["world"][None], ev["world"]]), torch.cat([prev["w"][None], ev["w"]]))
-            sub[:, 0] = matrix_to_rotvec((turn @ rotvec_to_matrix(sub[:, 0])).double()).to(sub.dtype)
-        pts, _ = fb.points(sub, torch.zeros(B, 3), rest)
-        trans = initial_translation(pts, ev["lm"], ev["w"], intr)
-    return _Window(sub, trans, free.clone())
+            pose = carried.last_pose.expand(B, -1, -1).clone()
+            turn = relative_turn(torch.cat([carried.last_world[None], ev.world]),
+                                 torch.cat([carried.last_weights[None], ev.landmark_weights]))
+            pose[:, 0] = matrix_to_rotvec((turn @ rotvec_to_matrix(pose[:, 0])).double()).to(pose.dtype)
+        pts, _ = body.points(pose, torch.zeros(B, 3), rest)
+        trans = initial_translation(pts, ev.landmarks, ev.landmark_weights, problem.intrinsics)
+    return _Window(pose, trans, carried.shape_free.clone())
 
 
 def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None, iters: int = 120,
@@ -252,37 +330,36 @@ def fit_observations(obs: Observations, intrinsics, body: FitBody | None = None,
         raise InputError(f"fit: a window of {n} frames of {W}x{H} would hold {n * H * W * 4 / 2**30:.1f} GiB of "
                          f"silhouette masks; at most {max(MAX_WINDOW_PIXELS // (H * W), 1)} frames of this "
                          "size are fitted together (a smaller --window)")
-    t0, threads = time.perf_counter(), torch.get_num_threads()
-    fb = body if body is not None else FitBody()
-    torch.set_num_threads(1)
-    try:
-        subs, transs, res, phen = _fit_windows(fb, obs, intrinsics, iters, warm_iters, window, fit_shape, weights, tol)
-    finally:
-        torch.set_num_threads(threads)
-    return FitResult(subs, transs, phen, tuple(float(x) for x in intrinsics), tuple(obs.size), res,
+    t0 = time.perf_counter()
+    default_phenotype = torch.tensor([PHENOTYPES[name][2] for name in PHENOTYPES])
+    problem = _Problem(body if body is not None else FitBody(), default_phenotype, intrinsics, weights)
+    with torch_threads(1):
+        pose, trans, residual, phenotype = _fit_windows(problem, obs, iters, warm_iters, window, fit_shape, tol)
+    return FitResult(pose, trans, phenotype, tuple(float(x) for x in intrinsics), tuple(obs.size), residual,
                      ~obs.found.bool(), time.perf_counter() - t0)
 
 
-def _fit_windows(fb, obs, intrinsics, iters, warm_iters, window, fit_shape, weights, tol) -> tuple:
-    base = torch.tensor([PHENOTYPES[n][2] for n in PHENOTYPES])
+def _fit_windows(problem: _Problem, obs: Observations, iters: int, warm_iters: int, window: int, fit_shape: bool,
+                 tol: float) -> tuple:
+    """``(pose (T, N, 3), trans (T, 3), residual (T,), phenotype (6,))``, window after window."""
     free = torch.zeros(len(SHAPE_NAMES))
     for j, n in enumerate(SHAPE_NAMES):  # start at the defaults: sigmoid⁻¹ of their place in the range
         lo, hi, d = PHENOTYPES[n]
         free[j] = torch.logit(torch.tensor((d - lo) / (hi - lo)))
-    subs, transs, res, prev, before = [], [], [], None, None
+    poses, transs, residuals, carried = [], [], [], _Carried(free)
     for start in range(0, obs.n_frames, window):
         stop = min(start + window, obs.n_frames)
-        ev = _evidence(fb, obs, start, stop)
-        win = _start(fb, ev, base, free, intrinsics, prev)
+        ev = _window_evidence(problem.body, obs, start, stop)
+        win = _start(problem, ev, carried)
         first = start == 0
-        r, pts = _optimise(fb, win, ev, base, intrinsics, weights, iters if first else warm_iters,
-                           fit_shape and first, before, tol)
-        free = win.free.detach()
-        subs.append(win.sub.detach())
+        residual, pts = _optimise(problem, win, ev, carried.points_before, iters if first else warm_iters,
+                                  fit_shape and first, tol)
+        poses.append(win.pose.detach())
         transs.append(win.trans.detach())
-        res.append(r)
-        prev = {"sub": win.sub[-1:].detach(), "world": ev["world"][-1], "w": ev["w"][-1]}
-        before = pts[-2:].detach()
+        residuals.append(residual)
+        carried = _Carried(win.shape_free.detach(), win.pose[-1:].detach(), ev.world[-1], ev.landmark_weights[-1],
+                           pts[-2:].detach())
         del ev  # this window's silhouette evidence goes before the next window's is made
-        logger.debug("fit: frames %d-%d, residual %.4f", start, stop - 1, float(r.mean()))
-    return torch.cat(subs), torch.cat(transs), torch.cat(res), phenotype_from_free(free, base)[0].detach()
+        logger.debug("fit: frames %d-%d, residual %.4f", start, stop - 1, float(residual.mean()))
+    phenotype = phenotype_from_free(carried.shape_free, problem.default_phenotype)[0].detach()
+    return torch.cat(poses), torch.cat(transs), torch.cat(residuals), phenotype

@@ -11,6 +11,7 @@ rank 0 writes files.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
@@ -26,6 +27,7 @@ import torch
 from ..checks import InputError
 from ..color import linear_to_srgb
 from ..io.documents import clip, short
+from ..threads import torch_threads
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
@@ -317,15 +319,21 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
 
     Returns:
         The last logged metrics.
+
+    ``cfg.threads`` (when set) is torch's thread count for the run; the caller's count is restored afterwards.
     """
+    with torch_threads(cfg.threads) if cfg.threads else contextlib.nullcontext():
+        return _train(cfg, data_dir, out_dir, resume, device, stop_after, resume_from, candidate)
+
+
+def _train(cfg: TrainConfig, data_dir, out_dir, resume, device, stop_after, resume_from, candidate) -> dict:
+    """:func:`train`'s run, on the thread count it set."""
     rank, world = _dist_env()
     weights = LossWeights(**cfg.loss)
     if world > 1 and weights.round_trip:  # DDP marks a parameter ready once per backward
         raise InputError("train config loss.round_trip: a second pass per step is not supported under torchrun")
     if world > 1 and not torch.distributed.is_initialized():
         torch.distributed.init_process_group("nccl" if device.startswith("cuda") else "gloo")
-    if cfg.threads:
-        torch.set_num_threads(cfg.threads)
     out = Path(out_dir)
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)

@@ -16,6 +16,7 @@ its light solve's λ, ``predictor.size`` its working size (from the checkpoint's
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import logging
 import os
@@ -73,12 +74,13 @@ class TorchPredictor:
     """The CNN in PyTorch. Args: model (eval mode); size: working size (default: its training size,
     ``model.config.input_size``).
 
-    The model's weights are switched to channels-last memory format (in place; same results
-    to ~1e-5): about 1.5x faster convolutions on CPU.
+    The predictor runs the model with channels-last weights (same results to ~1e-5; about 1.5x
+    faster convolutions on CPU): the model itself where its weights are channels-last already, else
+    a copy made so (``model`` is left as it was given).
     """
 
     def __init__(self, model: RelightNet, size: int | None = None) -> None:
-        self.model = model.to(memory_format=torch.channels_last)
+        self.model = _channels_last(model)
         self.size = model.config.input_size if size is None else _check_size(size, model.config.multiple)
         self.lmax = model.config.lmax
         self.has_mask_head = bool(model.config.mask_head)
@@ -106,6 +108,14 @@ class TorchPredictor:
         from ..model.inference import estimate_light_evidence
 
         return estimate_light_evidence(self.model, image, mask, size=self.size)
+
+
+def _channels_last(model: torch.nn.Module) -> torch.nn.Module:
+    """``model`` where its 4-D weights and buffers are channels-last already, else a channels-last copy."""
+    tensors = [*model.parameters(), *model.buffers()]
+    if all(t.dim() != 4 or t.is_contiguous(memory_format=torch.channels_last) for t in tensors):
+        return model
+    return copy.deepcopy(model).to(memory_format=torch.channels_last)
 
 
 class OnnxPredictor:
@@ -244,7 +254,8 @@ def make_predictor(backend: str = "torch", checkpoint=None, device: str = "cpu",
     if backend == "torch":
         if checkpoint is not None and str(checkpoint).endswith(".onnx"):
             raise InputError(f"{checkpoint}: an ONNX model needs --backend onnx")
-        return TorchPredictor(load_model(checkpoint, device=device), size)
+        model = load_model(checkpoint, device=device).to(memory_format=torch.channels_last)  # its own: no copy
+        return TorchPredictor(model, size)
     if device != "cpu":
         raise InputError(f"device: the onnx backend runs on the CPU, got {device!r}")
     onnx_file = checkpoint is not None and str(checkpoint).endswith(".onnx")

@@ -53,6 +53,7 @@ import torch
 from ..checks import InputError, check_device
 from ..names import VIDEO_SMOOTHING
 from ..temporal.registry import check_smoothing
+from ..threads import torch_threads
 from .compare_clip import (
     CLIP_FIELDS,
     CLIP_FPS,
@@ -126,12 +127,8 @@ def _one_thread_geometry(cfg, split, index, T, assets):
     """:func:`clip_geometry` single-threaded, as the generator ran (bit-identical mesh and mask)."""
     from ..data.render_sample import clip_geometry
 
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
+    with torch_threads(1):
         return clip_geometry(cfg, split, index, T, assets)
-    finally:
-        torch.set_num_threads(n)
 
 
 def _check_options(smoothing, n_dirs, clips, bounces, source, size) -> None:

@@ -58,7 +58,7 @@ def test_a_clips_packed_evidence_is_the_old_full_size_evidence_bit_for_bit(tmp_p
     masks gave, bit for bit: the fit is unchanged."""
     from relightnet.fit.job import media_frames
     from relightnet.fit.masks import PackedMasks
-    from relightnet.fit.solve import _evidence
+    from relightnet.fit.solve import _window_evidence
     from relightnet.segment import PersonModels
     from relightnet.segment.video import track_person
 
@@ -71,7 +71,7 @@ def test_a_clips_packed_evidence_is_the_old_full_size_evidence_bit_for_bit(tmp_p
     assert bool(obs.found.all()) and old.shape == (5, 480, 384) and 0.03 < float(old.mean()) < 0.5
     assert obs.masks.nbytes < PackedMasks.from_masks(old).nbytes  # windows of 2 kept at the working resolution
     for a in range(0, 5, 2):  # windows of 2 frames, the last one short
-        new = _evidence(fit_body, obs, a, a + 2)["sil"]
+        new = _window_evidence(fit_body, obs, a, a + 2).silhouette
         ref = silhouette_targets(old[a:a + 2], size=obs.size)  # the same steps on the old float masks
         assert new.outside.shape[-2] < 480  # resampled
         assert torch.equal(new.outside, ref.outside) and torch.equal(new.outline, ref.outline)

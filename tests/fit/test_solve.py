@@ -52,6 +52,25 @@ def test_fit_restores_the_thread_setting(fit_body):
         torch.set_num_threads(before)
 
 
+def test_a_fit_that_fails_also_restores_the_thread_setting(fit_body, monkeypatch):
+    import relightnet.fit.solve as solve
+
+    def fail(*args):
+        assert torch.get_num_threads() == 1
+        raise RuntimeError("inside the fit")
+
+    obs, intr, _ = known_clip(fit_body, T=1)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    monkeypatch.setattr(solve, "_fit_windows", fail)
+    try:
+        with pytest.raises(RuntimeError, match="inside the fit"):
+            fit_observations(obs, intr, fit_body, iters=4, warm_iters=2, window=1)
+        assert torch.get_num_threads() == 2
+    finally:
+        torch.set_num_threads(before)
+
+
 def test_more_frames_than_the_fit_holds_are_refused_before_any_work(fit_body, tmp_path, monkeypatch):
     """What a fit keeps per frame for the whole video is bounded (fit.MAX_FRAME_BYTES of mask and a few KB), so
     the 2 GiB budget holds MAX_FIT_FRAMES frames; a longer video is refused from its packets' count."""

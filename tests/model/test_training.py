@@ -57,6 +57,16 @@ def test_resume_continues_bit_identically(tiny_dataset, tmp_path):
     assert load_checkpoint(tmp_path / "old" / "last.pt")["step"] == 4
 
 
+def test_the_callers_thread_count_is_restored_after_a_run(tiny_dataset, tmp_path):
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        train(TrainConfig(steps=1, batch_size=2, warmup=1, net=NET, threads=1), tiny_dataset, tmp_path / "run")
+        assert torch.get_num_threads() == 2  # the run had its one thread and gave the setting back
+    finally:
+        torch.set_num_threads(before)
+
+
 def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a checkpoint")

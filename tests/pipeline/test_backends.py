@@ -93,3 +93,25 @@ def test_crop_and_paste_are_public_and_inverse():
     back = paste_from_box(c, box, 20, 30)
     torch.testing.assert_close(back[..., 0:13, 5:21], x[..., 0:13, 5:21])
     assert (back[..., :, :5] == 0).all()
+
+
+def _layouts(model):
+    return [(n, t.data_ptr(), t.stride()) for n, t in [*model.named_parameters(), *model.named_buffers()]]
+
+
+def test_the_callers_model_is_left_as_it_was_and_the_prediction_is_the_channels_last_one():
+    """The predictor runs a channels-last copy: the caller's weights keep their memory format, storage and
+    values, and the prediction is bit for bit that of the model switched to channels-last."""
+    import copy
+
+    net = RelightNet(NetConfig(width=8, levels=2, input_size=32)).eval()
+    before, state = _layouts(net), {k: v.clone() for k, v in net.state_dict().items()}
+    img, mask = _photo()
+    got = as_predictor(net)(img, mask)
+    assert _layouts(net) == before and all(torch.equal(v, state[k]) for k, v in net.state_dict().items())
+    assert all(p.is_contiguous() for p in net.parameters()) and any(p.dim() == 4 for p in net.parameters())
+    want = TorchPredictor(copy.deepcopy(net).to(memory_format=torch.channels_last))(img, mask)
+    assert torch.equal(got.albedo, want.albedo) and torch.equal(got.transport, want.transport)
+    assert torch.equal(got.light, want.light)
+    switched = copy.deepcopy(net).to(memory_format=torch.channels_last)
+    assert TorchPredictor(switched).model is switched  # channels-last already: used as it is, no copy
