@@ -58,6 +58,16 @@ def check_shape(
 
     Raises:
         ShapeError: ``"{name}: expected (B, K, 3), got (2, 16)"``.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.checks import check_shape
+        >>> check_shape(torch.zeros(2, 9, 3), ["B", "K", 3], name="sh")
+        {'B': 2, 'K': 9}
+        >>> check_shape(torch.zeros(2, 16), ["B", "K", 3], name="sh")
+        Traceback (most recent call last):
+            ...
+        relightnet.errors.ShapeError: sh: expected (B, K, 3), got (2, 16)
     """
     shape = tuple(x.shape)
     bound: dict[str, int] = dict(dims or {})
@@ -137,7 +147,13 @@ def check_dtype(x: torch.Tensor, allowed: Iterable[torch.dtype], name: str = "te
 
 
 def sh_order_from_count(k: int, name: str = "sh") -> int:
-    """Return lmax for K = (lmax+1)² coefficients, or raise :class:`ShapeError`."""
+    """Return lmax for K = (lmax+1)² coefficients, or raise :class:`ShapeError`.
+
+    Example:
+        >>> from relightnet.checks import sh_order_from_count
+        >>> sh_order_from_count(9), sh_order_from_count(16)
+        (2, 3)
+    """
     lmax = math.isqrt(int(k)) - 1
     if k < 1 or (lmax + 1) ** 2 != k:
         raise ShapeError(f"{name}: expected K = (lmax+1)^2 coefficients (1, 4, 9, 16, ...), got {k}")
