@@ -16,7 +16,7 @@ import torch
 from ..checks import InputError
 from .checkpoint import FORMAT, _validated, _write
 from .network import NetConfig
-from .training import TrainConfig
+from .train_config import TrainConfig
 
 __all__ = ["convert_checkpoint"]
 
