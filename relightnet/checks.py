@@ -14,7 +14,9 @@ Dimension specs are lists of entries:
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import typing
 from collections.abc import Iterable, Mapping, Sequence
 
 import torch
@@ -32,6 +34,7 @@ __all__ = [
     "check_sh_count",
     "sh_order_from_count",
     "check_device",
+    "check_choices",
 ]
 
 
@@ -58,6 +61,16 @@ def check_shape(
 
     Raises:
         ShapeError: ``"{name}: expected (B, K, 3), got (2, 16)"``.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.checks import check_shape
+        >>> check_shape(torch.zeros(2, 9, 3), ["B", "K", 3], name="sh")
+        {'B': 2, 'K': 9}
+        >>> check_shape(torch.zeros(2, 16), ["B", "K", 3], name="sh")
+        Traceback (most recent call last):
+            ...
+        relightnet.errors.ShapeError: sh: expected (B, K, 3), got (2, 16)
     """
     shape = tuple(x.shape)
     bound: dict[str, int] = dict(dims or {})
@@ -137,7 +150,13 @@ def check_dtype(x: torch.Tensor, allowed: Iterable[torch.dtype], name: str = "te
 
 
 def sh_order_from_count(k: int, name: str = "sh") -> int:
-    """Return lmax for K = (lmax+1)² coefficients, or raise :class:`ShapeError`."""
+    """Return lmax for K = (lmax+1)² coefficients, or raise :class:`ShapeError`.
+
+    Example:
+        >>> from relightnet.checks import sh_order_from_count
+        >>> sh_order_from_count(9), sh_order_from_count(16)
+        (2, 3)
+    """
     lmax = math.isqrt(int(k)) - 1
     if k < 1 or (lmax + 1) ** 2 != k:
         raise ShapeError(f"{name}: expected K = (lmax+1)^2 coefficients (1, 4, 9, 16, ...), got {k}")
@@ -166,3 +185,51 @@ def check_device(device, name: str = "--device") -> torch.device:
     if dev.type not in ("cpu", "cuda"):
         raise InputError(f"{name} {device}: expected cpu or cuda[:N]")
     return dev
+
+
+def _literal_choices(hint) -> tuple | None:
+    """The values of a ``Literal[...]`` annotation (also inside ``Literal[...] | None``), else None."""
+    if typing.get_origin(hint) is typing.Literal:
+        return typing.get_args(hint)
+    for arg in typing.get_args(hint):
+        if typing.get_origin(arg) is typing.Literal:
+            return typing.get_args(arg)
+    return None
+
+
+def check_choices(config, where: str) -> None:
+    """Check every ``Literal[...]``-typed field of a dataclass instance against its choices.
+
+    A field typed ``Literal[...] | None`` may also be None.
+
+    Args:
+        config: a dataclass instance (a config).
+        where: what the user calls the config; starts the error message.
+
+    Raises:
+        InputError: ``"{where} {field}: expected one of 'a', 'b', got 'c'"``.
+
+    Example:
+        >>> import typing
+        >>> from dataclasses import dataclass
+        >>> from relightnet.checks import check_choices
+        >>> @dataclass
+        ... class Run:
+        ...     precision: typing.Literal["fp32", "bf16"] = "fp32"
+        >>> check_choices(Run("bf16"), "train config")
+        >>> check_choices(Run("fp8"), "train config")
+        Traceback (most recent call last):
+            ...
+        relightnet.errors.InputError: train config precision: expected one of 'fp32', 'bf16', got 'fp8'
+    """
+    hints = typing.get_type_hints(type(config))
+    for f in dataclasses.fields(config):
+        choices = _literal_choices(hints.get(f.name))
+        if choices is None:
+            continue
+        value = getattr(config, f.name)
+        if value is None and type(None) in typing.get_args(hints[f.name]):
+            continue
+        if not isinstance(value, str | int) or isinstance(value, bool) or value not in choices:
+            got = repr(value) if len(repr(value)) <= 60 else repr(value)[:57] + "..."
+            raise InputError(f"{where} {f.name}: expected one of {', '.join(map(repr, choices))}, got {got}")

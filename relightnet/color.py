@@ -29,6 +29,12 @@ def linear_to_srgb(x: torch.Tensor) -> torch.Tensor:
 
     Returns:
         (...) encoded values, same dtype.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.color import linear_to_srgb
+        >>> [round(v, 4) for v in linear_to_srgb(torch.tensor([0.0, 0.002, 0.18, 1.0])).tolist()]
+        [0.0, 0.0258, 0.4614, 1.0]
     """
     x = torch.as_tensor(x)
     hi = 1.055 * x.clamp_min(0.0031308) ** (1 / 2.4) - 0.055
@@ -45,6 +51,13 @@ def srgb_to_linear(x: torch.Tensor) -> torch.Tensor:
 
     Returns:
         (...) linear values, same dtype.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.color import linear_to_srgb, srgb_to_linear
+        >>> x = torch.linspace(0, 1, 11, dtype=torch.float64)
+        >>> torch.allclose(srgb_to_linear(linear_to_srgb(x)), x)
+        True
     """
     x = torch.as_tensor(x)
     hi = ((x.clamp_min(0.04045) + 0.055) / 1.055) ** 2.4
@@ -72,6 +85,11 @@ def luminance(rgb):
 
     A tensor gives a tensor of its dtype and device; anything else becomes a tensor first
     (``torch.as_tensor``).
+
+    Example:
+        >>> from relightnet.color import luminance
+        >>> round(luminance([1.0, 1.0, 1.0]).item(), 4), round(luminance([0.0, 1.0, 0.0]).item(), 4)
+        (1.0, 0.7152)
     """
     rgb = torch.as_tensor(rgb)
     return rgb @ torch.tensor(LUMA, dtype=rgb.dtype, device=rgb.device)

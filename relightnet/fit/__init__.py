@@ -11,8 +11,8 @@ it all for a photo or video file; :mod:`.metrics` measures a fit against the tru
 
 Example:
     >>> from relightnet.fit import fit_file  # doctest: +SKIP
-    >>> out = fit_file("walk.mp4")
-    >>> out.motion.pose.shape  # (T, 104, 3)
+    >>> out = fit_file("walk.mp4")  # doctest: +SKIP
+    >>> out.motion.pose.shape  # (T, 104, 3)  # doctest: +SKIP
 """
 
 from .body_model import SHAPE_NAMES, FitBody, phenotype_from_free, rest_near

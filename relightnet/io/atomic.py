@@ -148,8 +148,10 @@ def atomic_write(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
         InputError: the destination folder does not exist or is not a folder.
 
     Example:
-        >>> with atomic_write("light.json", "w") as f:  # doctest: +SKIP
-        ...     f.write("{}")
+        >>> with atomic_write("light.json", "w") as f:
+        ...     _ = f.write("{}")
+        >>> Path("light.json").read_text()
+        '{}'
     """
     if mode not in ("wb", "w"):
         raise ValueError(f"mode: expected 'wb' or 'w', got {mode!r}")

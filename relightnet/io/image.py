@@ -176,6 +176,19 @@ def write_image(path: str | os.PathLike, img, srgb: bool = True, alpha=None, icc
 
     Returns:
         The path written.
+
+    Example:
+        An 8-bit PNG round trip (uint8 pixels are written as they are):
+
+        >>> import torch
+        >>> from relightnet.io import read_image, write_image
+        >>> img = torch.zeros(4, 6, 3, dtype=torch.uint8)
+        >>> img[:, :3] = 255
+        >>> write_image("half.png", img).name
+        'half.png'
+        >>> back = read_image("half.png")
+        >>> back.shape, back[0, 0].tolist(), back[0, 5].tolist()
+        (torch.Size([4, 6, 3]), [1.0, 1.0, 1.0], [0.0, 0.0, 0.0])
     """
     path = Path(path)
     kind = path.suffix.lower()

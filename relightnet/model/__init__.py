@@ -1,4 +1,19 @@
-"""The 2D path's CNN: network, losses, checkpoints, training loop, inference on real images."""
+"""The 2D path's CNN: network, losses, checkpoints, training loop, inference on real images.
+
+Example:
+    A small network (the shipped one is :func:`load_model`) on one normalised 32 × 32 input:
+
+    >>> import torch
+    >>> from relightnet.model import NetConfig, RelightNet, normalize_input
+    >>> net = RelightNet(NetConfig(width=8, max_width=16, levels=2, light_hidden=16)).eval()
+    >>> x = normalize_input(torch.rand(1, 3, 32, 32), torch.ones(1, 1, 32, 32))
+    >>> x.shape
+    torch.Size([1, 4, 32, 32])
+    >>> with torch.no_grad():
+    ...     pred = net(x)
+    >>> pred.albedo.shape, pred.transport.shape, pred.light.shape, pred.mask.shape
+    (torch.Size([1, 3, 32, 32]), torch.Size([1, 9, 32, 32]), torch.Size([1, 9, 3]), torch.Size([1, 1, 32, 32]))
+"""
 
 from .checkpoint import SHIPPED, load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
 from .exposure import exposure_level, exposure_scale, match_exposure, transport_level

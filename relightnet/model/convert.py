@@ -16,7 +16,7 @@ import torch
 from ..checks import InputError
 from .checkpoint import FORMAT, _validated, _write
 from .network import NetConfig
-from .training import TrainConfig
+from .train_config import TrainConfig
 
 __all__ = ["convert_checkpoint"]
 
@@ -65,7 +65,9 @@ def convert_checkpoint(src, dst) -> Path:
     if not src.is_file():
         raise InputError(f"{src}: checkpoint not found")
     try:
-        with torch.serialization.safe_globals([*_numpy_globals(), NetConfig, TrainConfig]):
+        # TrainConfig was defined in .training before .train_config: older pickles name it there.
+        allowed = [*_numpy_globals(), NetConfig, TrainConfig, (TrainConfig, "relightnet.model.training.TrainConfig")]
+        with torch.serialization.safe_globals(allowed):
             state = torch.load(src, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as e:
         m = re.search(r"GLOBAL ([\w.]+)", str(e))

@@ -1,6 +1,6 @@
 """Training loop of the inverse-rendering CNN: deterministic, resumable, optionally distributed.
 
-Everything that decides a run is in :class:`TrainConfig` (YAML). The data order is a pure
+Everything that decides a run is in :class:`~relightnet.model.train_config.TrainConfig` (YAML). The data order is a pure
 function of (seed, step): epoch ``e`` shuffles the training items with a generator seeded
 by (seed, e) and each item's augmentation draws from a generator seeded by (seed, e, item).
 A checkpoint therefore only needs the model, optimiser, scheduler and step to continue
@@ -19,122 +19,25 @@ import logging
 import math
 import os
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import torch
 
 from ..checks import InputError
 from ..color import linear_to_srgb
-from ..io.documents import clip, short
 from ..threads import torch_threads
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
 from .network import NetConfig, RelightNet, normalize_input, shade_map
-from .photo_input import photo_input
-from .round_trip import NOVEL_LIGHTS, novel_lights, round_trip_loss
+from .round_trip import novel_lights, round_trip_loss
+from .train_config import TrainConfig, load_train_config
 from .train_log import check_ranks_in_sync, plot_losses
 
 logger = logging.getLogger(__name__)
 
+# TrainConfig and load_train_config live in .train_config; the training entry points take them from here too.
 __all__ = ["TrainConfig", "load_train_config", "train", "batch_to_input", "TrainData", "save_candidate",
            "CANDIDATE_BYTES"]
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """A training run. ``target`` selects the transport field: ``transport`` (occlusion-aware)
-    or ``transport_unoccluded`` (the ablation "occlusion ignored"); ``render_target`` is what the
-    rendering losses compare Â ⊙ (T̂·L̂) etc. with: ``image`` (the input photo, KE18) or ``model``
-    (A ⊙ (T·L) with the target transport, so that the rendering terms agree with the transport the
-    network learns — for ``transport_unoccluded`` the photo's occlusion shading would otherwise leak
-    into the albedo); ``init`` starts from the weights of a checkpoint (fine-tuning) instead of a
-    random initialisation; ``precision`` ``fp32`` or ``bf16`` (autocast of the network's
-    convolutions; losses and the light solve stay float32) and ``channels_last`` (NHWC
-    memory format) are speed settings (BENCHMARKS.md measures them); ``data_dtype`` ``float16``
-    halves the memory of the training split held in RAM (10,000 people at 128²: 5 GB instead of
-    10 GB; images and maps keep 11 bits of mantissa); ``train_items`` trains on the first N items of
-    the split only (a smaller run on the same dataset); ``novel_light`` draws the lights of the
-    ``relit_novel`` and ``round_trip`` loss terms (:func:`~relightnet.model.round_trip.novel_lights`)."""
-
-    steps: int = 1000
-    batch_size: int = 8
-    lr: float = 2e-3
-    weight_decay: float = 1e-4
-    warmup: int = 50
-    seed: int = 0
-    checkpoint_every: int = 100
-    log_every: int = 10
-    target: str = "transport"
-    render_target: str = "image"
-    net: dict = field(default_factory=dict)
-    loss: dict = field(default_factory=dict)
-    augment: dict = field(default_factory=lambda: {"flip": 0.5, "crop_scale": [0.875, 0.875],
-                                                   "intensity": [0.5, 2.0], "white_balance": 0.1})
-    threads: int = 0
-    init: str | None = None
-    precision: str = "fp32"
-    channels_last: bool = False
-    data_dtype: str = "float32"
-    train_items: int | None = None
-    photo: dict = field(default_factory=dict)
-    novel_light: str = "batch"
-
-    def __post_init__(self) -> None:
-        for name in ("steps", "batch_size", "checkpoint_every", "log_every"):
-            if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
-                raise InputError(f"train config {name}: expected an integer >= 1, got {short(getattr(self, name))}")
-        if not self.lr > 0:
-            raise InputError(f"train config lr: expected > 0, got {short(self.lr)}")
-        if self.target not in ("transport", "transport_unoccluded"):
-            raise InputError(
-                f"train config target: expected 'transport' or 'transport_unoccluded', got {short(self.target)}"
-            )
-        if self.precision not in ("fp32", "bf16"):
-            raise InputError(f"train config precision: expected 'fp32' or 'bf16', got {short(self.precision)}")
-        if self.train_items is not None and (not isinstance(self.train_items, int) or isinstance(self.train_items, bool)
-                                             or self.train_items < 1):
-            raise InputError(f"train config train_items: expected an integer >= 1, got {short(self.train_items)}")
-        if self.data_dtype not in ("float32", "float16"):
-            raise InputError(f"train config data_dtype: expected 'float32' or 'float16', got {short(self.data_dtype)}")
-        if self.novel_light not in NOVEL_LIGHTS:
-            raise InputError(f"train config novel_light: expected one of {', '.join(NOVEL_LIGHTS)}, "
-                             f"got {short(self.novel_light)}")
-        if self.render_target not in ("image", "model"):
-            raise InputError(
-                f"train config render_target: expected 'image' or 'model', got {short(self.render_target)}")
-        NetConfig(**self.net)
-        LossWeights(**self.loss)
-        photo_input(self.photo)
-        cs = self.augment.get("crop_scale") if self.augment else None
-        if cs is not None and cs[0] != cs[1] and self.augment.get("size") is None:
-            raise InputError(
-                f"train config augment.crop_scale: a range {list(cs)} gives items of different sizes; "
-                "use a fixed scale [s, s] or set augment.size so that batches stack"
-            )
-
-    def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
-
-
-def load_train_config(path) -> TrainConfig:
-    """Read a :class:`TrainConfig` from YAML/JSON; unknown keys are an error."""
-    from ..io.documents import read_document
-
-    path = Path(path)
-    d = read_document(path, "training config")
-    d = {} if d is None else d
-    if not isinstance(d, dict):
-        raise InputError(f"{path}: expected a mapping of training settings, got {type(d).__name__}")
-    unknown = set(d) - {f.name for f in dataclasses.fields(TrainConfig)}
-    if unknown:
-        raise InputError(f"{path}: unknown keys {short(sorted(map(str, unknown)))}")
-    try:
-        return TrainConfig(**d)
-    except InputError:
-        raise
-    except (TypeError, ValueError, OverflowError, AttributeError) as e:  # a value of the wrong type
-        raise InputError(f"{path}: a setting has the wrong type ({clip(str(e), 160)})") from None
 
 
 class TrainData:
@@ -221,9 +124,9 @@ def _dist_env() -> tuple[int, int]:
 
 def _new_model(cfg: TrainConfig, data: TrainData, device: str, resume: bool) -> tuple[RelightNet, NetConfig]:
     """The network to train (seeded), its working size ``photo.size`` or the data's; ``cfg.init``'s weights if new."""
-    photo = photo_input(cfg.photo)
+    photo = cfg.photo
     size = data.size if photo is None or photo.size is None else photo.size  # items framed down to it
-    net_cfg = NetConfig(**{**cfg.net, "lmax": int(round(math.sqrt(data.n_coeffs))) - 1, "input_size": size})
+    net_cfg = dataclasses.replace(cfg.net, lmax=int(round(math.sqrt(data.n_coeffs))) - 1, input_size=size)
     torch.manual_seed(cfg.seed)
     model = RelightNet(net_cfg).to(device)
     if cfg.channels_last:
@@ -246,7 +149,7 @@ def _resume(ckpt: Path, cfg: TrainConfig, model, opt, sched, device: str) -> int
     # Keys added to TrainConfig later take their defaults in older checkpoints.
     if not isinstance(state.get("train_config"), dict) or not isinstance(state.get("scheduler"), dict):
         raise InputError(f"{ckpt}: not a training checkpoint (no train_config or scheduler state)")
-    if {**TrainConfig().to_dict(), **state["train_config"]} != cfg.to_dict():
+    if TrainConfig.from_dict(state["train_config"], f"{ckpt}: its training config") != cfg:
         raise InputError(f"{ckpt}: the checkpoint was made with a different training config")
     model.load_state_dict(state["model"])
     if "optimizer" in state:
@@ -329,7 +232,7 @@ def train(cfg: TrainConfig, data_dir, out_dir, resume: bool = False, device: str
 def _train(cfg: TrainConfig, data_dir, out_dir, resume, device, stop_after, resume_from, candidate) -> dict:
     """:func:`train`'s run, on the thread count it set."""
     rank, world = _dist_env()
-    weights = LossWeights(**cfg.loss)
+    weights = cfg.loss
     if world > 1 and weights.round_trip:  # DDP marks a parameter ready once per backward
         raise InputError("train config loss.round_trip: a second pass per step is not supported under torchrun")
     if world > 1 and not torch.distributed.is_initialized():
@@ -385,8 +288,8 @@ def _data_and_augment(cfg: TrainConfig, data_dir):
     """The training split in memory and the per-item transform (augmentation, then the photo framing)."""
     from ..data.augment import Augment
 
-    photo = photo_input(cfg.photo)
+    photo = cfg.photo
     extra = ("image_composite",) if photo is not None and photo.composite > 0 else ()
     data = TrainData(data_dir, "train", cfg.target, getattr(torch, cfg.data_dtype), cfg.train_items, extra)
-    aug = Augment(**{**cfg.augment, "crop_scale": tuple(cfg.augment["crop_scale"])}) if cfg.augment else None
+    aug = Augment(**dataclasses.asdict(cfg.augment)) if cfg.augment else None
     return data, (photo.after(aug) if photo is not None else aug)

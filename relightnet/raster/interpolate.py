@@ -65,6 +65,21 @@ def interpolate(attr: torch.Tensor, frags: Fragments, faces: torch.Tensor, check
 
     Returns:
         (B, H, W, C) interpolated attributes, 0 on background; differentiable w.r.t. ``attr``.
+
+    Example:
+        A per-vertex attribute at every covered pixel, here each vertex's x in clip space:
+
+        >>> import torch
+        >>> from relightnet.raster import interpolate, rasterize
+        >>> verts = torch.tensor([[[-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 0.0, 1.0],
+        ...                        [1.0, 1.0, 0.0, 1.0], [-1.0, 1.0, 0.0, 1.0]]])
+        >>> faces = torch.tensor([[0, 1, 2], [0, 2, 3]])
+        >>> frags = rasterize(verts, faces, (2, 4))
+        >>> x = interpolate(verts[0, :, :1], frags, faces)
+        >>> x.shape
+        torch.Size([1, 2, 4, 1])
+        >>> [round(v, 2) for v in x[0, 0, :, 0].tolist()]  # pixel centres at x = -0.75, -0.25, 0.25, 0.75
+        [-0.75, -0.25, 0.25, 0.75]
     """
     vals = interpolate_pixels(attr, frags, faces, check=check)
     B, H, W = frags.shape
@@ -94,6 +109,12 @@ def to_channels_first(x: torch.Tensor) -> torch.Tensor:
     """Rasterizer layout → CNN layout: (B, H, W, C) → (B, C, H, W), or (H, W, C) → (C, H, W).
 
     Returns a view (no copy; the memory stays channels-last, which convolutions accept).
+
+    Example:
+        >>> import torch
+        >>> from relightnet.raster import to_channels_first
+        >>> to_channels_first(torch.zeros(2, 32, 24, 9)).shape
+        torch.Size([2, 9, 32, 24])
     """
     if x.dim() == 4:
         return x.permute(0, 3, 1, 2)
@@ -106,6 +127,12 @@ def to_channels_last(x: torch.Tensor) -> torch.Tensor:
     """CNN layout → rasterizer layout: (B, C, H, W) → (B, H, W, C), or (C, H, W) → (H, W, C).
 
     Returns a view (no copy).
+
+    Example:
+        >>> import torch
+        >>> from relightnet.raster import to_channels_last
+        >>> to_channels_last(torch.zeros(3, 32, 24)).shape
+        torch.Size([32, 24, 3])
     """
     if x.dim() == 4:
         return x.permute(0, 2, 3, 1)

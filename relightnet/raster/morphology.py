@@ -22,6 +22,16 @@ def erode(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
 
     Returns:
         (B, 1, H, W) eroded masks.
+
+    Example:
+        A 5 × 5 square loses its one-pixel rim:
+
+        >>> import torch
+        >>> from relightnet.raster import erode
+        >>> mask = torch.zeros(1, 1, 9, 9)
+        >>> mask[..., 2:7, 2:7] = 1
+        >>> int(erode(mask, radius=1).sum()), int(erode(mask, radius=0).sum())
+        (9, 25)
     """
     check_shape(mask, ("B", 1, "H", "W"), "mask")
     if radius < 0:
@@ -40,6 +50,14 @@ def dilate(mask: torch.Tensor, radius: int = 2) -> torch.Tensor:
 
     Returns:
         (B, 1, H, W) dilated masks.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.raster import dilate
+        >>> mask = torch.zeros(1, 1, 9, 9)
+        >>> mask[..., 4, 4] = 1
+        >>> int(dilate(mask, radius=1).sum())
+        9
     """
     check_shape(mask, ("B", 1, "H", "W"), "mask")
     if radius < 0:
@@ -60,6 +78,14 @@ def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
 
     Returns:
         (B, C, H, W).
+
+    Example:
+        >>> import torch
+        >>> from relightnet.raster import box_filter
+        >>> x = torch.zeros(1, 1, 3, 3)
+        >>> x[..., 1, 1] = 9.0
+        >>> box_filter(x, 1)[0, 0].tolist()  # corners average 4 pixels, edges 6, the centre 9
+        [[2.25, 1.5, 2.25], [1.5, 1.0, 1.5], [2.25, 1.5, 2.25]]
     """
     if radius == 0:
         return x

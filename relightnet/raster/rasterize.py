@@ -193,6 +193,20 @@ def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backface
         (−1 = background), perspective-correct ``bary`` (B, h, w, 3) and NDC ``depth``
         (B, h, w) (+inf = background), in ``verts_clip``'s dtype; (h, w) is the window's size
         ((H, W) without one) and ``Fragments.window`` the window.
+
+    Example:
+        Two triangles in clip space (w = 1) that cover the whole frame:
+
+        >>> import torch
+        >>> from relightnet.raster import rasterize
+        >>> verts = torch.tensor([[[-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 0.0, 1.0],
+        ...                        [1.0, 1.0, 0.0, 1.0], [-1.0, 1.0, 0.0, 1.0]]])
+        >>> faces = torch.tensor([[0, 1, 2], [0, 2, 3]])
+        >>> frags = rasterize(verts, faces, (4, 6))
+        >>> frags.face_id.shape, bool((frags.face_id >= 0).all())
+        (torch.Size([1, 4, 6]), True)
+        >>> torch.allclose(frags.bary.sum(-1), torch.ones(1, 4, 6))
+        True
     """
     H, W = int(size[0]), int(size[1])
     if check:

@@ -10,8 +10,8 @@ mask is held steady over time along the landmarks' motion (:mod:`.steady`).
 
 Example:
     >>> from relightnet.segment import segment_person  # doctest: +SKIP
-    >>> res = segment_person(image)  # image (3, H, W) sRGB in [0, 1]
-    >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)
+    >>> res = segment_person(image)  # image (3, H, W) sRGB in [0, 1]  # doctest: +SKIP
+    >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)  # doctest: +SKIP
 """
 
 from .jobs import MASK_VIDEO_SUFFIXES, save_landmarks, segment_files

@@ -33,21 +33,39 @@ __all__ = ["sh_count", "sh_index", "sh_degrees", "sh_basis", "SHBasis"]
 
 
 def sh_count(lmax: int) -> int:
-    """Number of coefficients K = (lmax+1)² up to order ``lmax``."""
+    """Number of coefficients K = (lmax+1)² up to order ``lmax``.
+
+    Example:
+        >>> from relightnet.sh import sh_count
+        >>> sh_count(2), sh_count(4)
+        (9, 25)
+    """
     if int(lmax) != lmax or lmax < 0:
         raise ValueError(f"lmax: expected a non-negative integer, got {lmax!r}")
     return (int(lmax) + 1) ** 2
 
 
 def sh_index(l: int, m: int) -> int:
-    """Flat index k = l(l+1)+m of the coefficient (l, m), |m| ≤ l."""
+    """Flat index k = l(l+1)+m of the coefficient (l, m), |m| ≤ l.
+
+    Example:
+        >>> from relightnet.sh import sh_index
+        >>> sh_index(0, 0), sh_index(1, -1), sh_index(2, 2)
+        (0, 1, 8)
+    """
     if l < 0 or abs(m) > l:
         raise ValueError(f"(l, m): expected l >= 0 and |m| <= l, got ({l}, {m})")
     return l * (l + 1) + m
 
 
 def sh_degrees(lmax: int, device=None) -> torch.Tensor:
-    """(K,) int64 tensor giving the band l of every flat index k."""
+    """(K,) int64 tensor giving the band l of every flat index k.
+
+    Example:
+        >>> from relightnet.sh import sh_degrees
+        >>> sh_degrees(2).tolist()
+        [0, 1, 1, 1, 2, 2, 2, 2, 2]
+    """
     return torch.tensor([l for l in range(lmax + 1) for _ in range(2 * l + 1)], device=device)
 
 
@@ -68,6 +86,18 @@ def sh_basis(dirs: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
 
     Returns:
         (..., K) basis values, same dtype and device as ``dirs``.
+
+    Example:
+        The basis straight up (z, the light frame's up) is Y_0 = 0.282095 and Y_2 = 0.488603
+        (docs/design.md, "Spherical harmonics"):
+
+        >>> import torch
+        >>> from relightnet.sh import sh_basis
+        >>> Y = sh_basis(torch.tensor([[0.0, 0.0, 1.0]]), lmax=2)
+        >>> Y.shape
+        torch.Size([1, 9])
+        >>> [round(v, 6) for v in Y[0, :3].tolist()]
+        [0.282095, 0.0, 0.488603]
     """
     sh_count(lmax)
     if check:
@@ -111,7 +141,14 @@ def sh_basis(dirs: torch.Tensor, lmax: int, check: bool = True) -> torch.Tensor:
 
 
 class SHBasis(nn.Module):
-    """Module form of :func:`sh_basis`: ``(..., 3) -> (..., K)``."""
+    """Module form of :func:`sh_basis`: ``(..., 3) -> (..., K)``.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.sh import SHBasis
+        >>> SHBasis(lmax=3)(torch.tensor([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])).shape
+        torch.Size([2, 16])
+    """
 
     def __init__(self, lmax: int = 2, check: bool = True) -> None:
         super().__init__()

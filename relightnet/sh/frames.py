@@ -32,13 +32,29 @@ def world_to_light(v: torch.Tensor) -> torch.Tensor:
 
     Returns:
         (..., 3) light-frame vectors ``(z_w, x_w, y_w)``.
+
+    Example:
+        World +z (toward the default camera) is the light frame's x; world +y (up) its z:
+
+        >>> import torch
+        >>> from relightnet.sh import world_to_light
+        >>> world_to_light(torch.tensor([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])).tolist()
+        [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     """
     check_shape(v, ["...", 3], name="v")
     return v[..., [2, 0, 1]]
 
 
 def light_to_world(v: torch.Tensor) -> torch.Tensor:
-    """Inverse of :func:`world_to_light`: (..., 3) light → (..., 3) world ``(y_l, z_l, x_l)``."""
+    """Inverse of :func:`world_to_light`: (..., 3) light → (..., 3) world ``(y_l, z_l, x_l)``.
+
+    Example:
+        >>> import torch
+        >>> from relightnet.sh import light_to_world, world_to_light
+        >>> v = torch.tensor([0.1, 0.2, 0.3])
+        >>> torch.equal(light_to_world(world_to_light(v)), v)
+        True
+    """
     check_shape(v, ["...", 3], name="v")
     return v[..., [1, 2, 0]]
 
@@ -73,6 +89,14 @@ def camera_normals_to_light(normals_world: torch.Tensor, cam_R: torch.Tensor) ->
 
     Returns:
         (..., 3) light-frame normals for SH lookup.
+
+    Example:
+        With the default camera (identity rotation) this is :func:`world_to_light`:
+
+        >>> import torch
+        >>> from relightnet.sh import camera_normals_to_light
+        >>> camera_normals_to_light(torch.tensor([[0.0, 0.0, 1.0]]), torch.eye(3)).tolist()
+        [[1.0, 0.0, 0.0]]
     """
     check_shape(normals_world, ["...", 3], name="normals_world")
     check_shape(cam_R, ["...", 3, 3], name="cam_R")

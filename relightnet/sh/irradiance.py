@@ -21,6 +21,11 @@ def cosine_lobe(l: int) -> float:
     Â_0 = π, Â_1 = 2π/3, odd l > 1 → 0, and for even l ≥ 2
     ``Â_l = 2π (−1)^{l/2−1} / ((l+2)(l−1)) · l! / (2^l ((l/2)!)²)``
     (Ramamoorthi & Hanrahan 2001, eq. 8). Â_2 = π/4.
+
+    Example:
+        >>> from relightnet.sh import cosine_lobe
+        >>> [round(cosine_lobe(l), 4) for l in range(4)]  # π, 2π/3, π/4, 0
+        [3.1416, 2.0944, 0.7854, 0.0]
     """
     if int(l) != l or l < 0:
         raise ValueError(f"l: expected a non-negative integer, got {l!r}")
@@ -95,6 +100,18 @@ def cone_transport(axis: torch.Tensor, cos_aperture: torch.Tensor, lmax: int, ch
 
     Returns:
         (..., K) transport, K = (lmax + 1)².
+
+    Example:
+        A full hemisphere (c = 0) is the unoccluded transport Â_l Y_k(n); a narrower cone lets less light in:
+
+        >>> import torch
+        >>> from relightnet.sh import cone_transport, cosine_lobe_per_coeff, sh_basis
+        >>> up = torch.tensor([[0.0, 0.0, 1.0]])
+        >>> T = cone_transport(up, torch.tensor([0.0]), lmax=2)
+        >>> T.shape, torch.allclose(T, cosine_lobe_per_coeff(2) * sh_basis(up, 2), atol=1e-6)
+        (torch.Size([1, 9]), True)
+        >>> bool(cone_transport(up, torch.tensor([0.5]), lmax=2)[0, 0] < T[0, 0])
+        True
     """
     check_shape(cos_aperture, list(axis.shape[:-1]), name="cos_aperture")
     Y = sh_basis(axis, lmax, check=check)
@@ -112,6 +129,17 @@ def irradiance(sh: torch.Tensor, normals: torch.Tensor, check: bool = True) -> t
 
     Returns:
         (..., 3) irradiance E(n) = Σ_k Â_l(k) L_k Y_k(n).
+
+    Example:
+        Radiance 1 from every direction gives the irradiance π at any normal:
+
+        >>> import math, torch
+        >>> from relightnet.sh import irradiance
+        >>> sh = torch.zeros(9, 3)
+        >>> sh[0] = math.sqrt(4 * math.pi)
+        >>> E = irradiance(sh, torch.tensor([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]]))
+        >>> E.shape, round(E[1, 0].item(), 4)
+        (torch.Size([2, 3]), 3.1416)
     """
     if check:
         check_shape(sh, ["...", "K", 3], name="sh")
@@ -131,7 +159,14 @@ def irradiance(sh: torch.Tensor, normals: torch.Tensor, check: bool = True) -> t
 
 
 class Irradiance(nn.Module):
-    """Module form of :func:`irradiance` holding a fixed light buffer (K, 3)."""
+    """Module form of :func:`irradiance` holding a fixed light buffer (K, 3).
+
+    Example:
+        >>> import torch
+        >>> from relightnet.sh import Irradiance
+        >>> Irradiance(torch.zeros(9, 3))(torch.tensor([[1.0, 0.0, 0.0]])).shape
+        torch.Size([1, 3])
+    """
 
     def __init__(self, sh: torch.Tensor) -> None:
         super().__init__()

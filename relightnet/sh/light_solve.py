@@ -144,6 +144,22 @@ def solve_light(evidence: Evidence, prior: torch.Tensor | None = None, reg: floa
 
     Returns:
         (B, K, 3) light, float32 (solved in float64: module docstring).
+
+    Example:
+        An image rendered as A ⊙ (T · L) gives its light back (a tiny λ: the solve is nearly exact):
+
+        >>> import torch
+        >>> from relightnet.sh import light_evidence, solve_light
+        >>> g = torch.Generator().manual_seed(0)
+        >>> T = torch.randn(1, 9, 8, 8, generator=g)
+        >>> A = torch.rand(1, 3, 8, 8, generator=g)
+        >>> L = torch.randn(1, 9, 3, generator=g)
+        >>> image = A * torch.einsum("bkhw,bkc->bchw", T, L)
+        >>> ev = light_evidence(image, A, T, torch.ones(1, 1, 8, 8))
+        >>> ev.M.shape, ev.r.shape
+        (torch.Size([1, 3, 9, 9]), torch.Size([1, 3, 9]))
+        >>> torch.allclose(solve_light(ev, reg=1e-8), L, atol=1e-4)
+        True
     """
     M, r = (x.double() for x in evidence)
     dims = check_shape(M, ["B", 3, "K", "K"], name="evidence M")

@@ -26,6 +26,17 @@ def project(values: torch.Tensor, basis: torch.Tensor, weights: torch.Tensor) ->
 
     Returns:
         (..., K, C) coefficients ``Σ_d w_d Y_k(d) f(d)``.
+
+    Example:
+        Projecting the constant 1 over a direction set recovers Y_0's coefficient √(4π) = 3.545:
+
+        >>> import torch
+        >>> from relightnet.sh import sh_basis, project
+        >>> from relightnet.sh.directions import fibonacci_sphere
+        >>> dirs, weights = fibonacci_sphere(4096)
+        >>> coeffs = project(torch.ones(4096, 1), sh_basis(dirs, 2), weights)
+        >>> coeffs.shape, round(coeffs[0, 0].item(), 3)
+        (torch.Size([9, 1]), 3.545)
     """
     check_shape(basis, ["D", "K"], name="basis")
     check_shape(weights, ["D"], name="weights", dims={"D": basis.shape[0]})
@@ -42,6 +53,17 @@ def project_envmap(env: torch.Tensor, lmax: int = 2) -> torch.Tensor:
 
     Returns:
         (K, 3) coefficients, dtype of ``env`` (float64 accumulation).
+
+    Example:
+        A uniform white sky has (up to the grid's quadrature) only the constant coefficient, √(4π) per channel:
+
+        >>> import torch
+        >>> from relightnet.sh import project_envmap
+        >>> sh = project_envmap(torch.ones(32, 64, 3), lmax=2)
+        >>> sh.shape
+        torch.Size([9, 3])
+        >>> round(sh[0, 0].item(), 3), bool(sh[1:].abs().max() < 0.01)
+        (3.545, True)
     """
     check_shape(env, ["H", "W", 3], name="env")
     if not env.is_floating_point():
@@ -91,6 +113,14 @@ def radiance(sh: torch.Tensor, dirs: torch.Tensor, check: bool = True) -> torch.
 
     Returns:
         (..., 3) ``Σ_k L_k Y_k(d)``.
+
+    Example:
+        >>> import math, torch
+        >>> from relightnet.sh import radiance
+        >>> sh = torch.zeros(9, 3)
+        >>> sh[0] = math.sqrt(4 * math.pi)  # radiance 1 from every direction
+        >>> radiance(sh, torch.tensor([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])).round(decimals=4).tolist()
+        [[1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
     """
     if check:
         check_shape(sh, ["K", 3], name="sh")
@@ -108,6 +138,12 @@ def sh_to_envmap(sh: torch.Tensor, h: int = 64, w: int | None = None) -> torch.T
 
     Returns:
         (H, W, 3) radiance (may be negative where the band limit rings).
+
+    Example:
+        >>> import torch
+        >>> from relightnet.sh import sh_to_envmap
+        >>> sh_to_envmap(torch.zeros(9, 3), h=16).shape
+        torch.Size([16, 32, 3])
     """
     w = 2 * h if w is None else w
     dirs, _ = latlong_directions(h, w, dtype=sh.dtype, device=sh.device)

@@ -29,6 +29,15 @@ def sh_rotation_matrix(R: torch.Tensor, lmax: int) -> torch.Tensor:
 
     Returns:
         (..., K, K) matrices M with ``rotated = M @ coeffs``, dtype of ``R``.
+
+    Example:
+        The matrix is block diagonal by band and orthogonal:
+
+        >>> import torch
+        >>> from relightnet.sh import rotation_about_up, sh_rotation_matrix
+        >>> M = sh_rotation_matrix(rotation_about_up(0.3), lmax=2)
+        >>> M.shape, torch.allclose(M @ M.T, torch.eye(9), atol=1e-5), M[0, 1:].abs().max().item() == 0
+        (torch.Size([9, 9]), True, True)
     """
     check_shape(R, ["...", 3, 3], name="R")
     check_finite(R, "R")
@@ -57,6 +66,17 @@ def rotate_sh(sh: torch.Tensor, R: torch.Tensor) -> torch.Tensor:
 
     Returns:
         (..., K, 3) coefficients of the light rotated by R.
+
+    Example:
+        A light along x (the camera) turned a quarter about the up axis lies along y (image right):
+
+        >>> import math, torch
+        >>> from relightnet.sh import rotate_sh, rotation_about_up
+        >>> sh = torch.zeros(9, 3)
+        >>> sh[3] = 1.0  # k = 3: Y ∝ x
+        >>> out = rotate_sh(sh, rotation_about_up(math.pi / 2))
+        >>> [round(v, 4) + 0.0 for v in out[:4, 0].tolist()]  # k = 1: Y ∝ y
+        [0.0, 1.0, 0.0, 0.0]
     """
     check_shape(sh, ["...", "K", 3], name="sh")
     lmax = check_sh_count(sh, "sh")
@@ -72,6 +92,14 @@ def rotation_about_up(angle: torch.Tensor | float, dtype=torch.float32, device=N
 
     Returns:
         (3, 3) or (N, 3, 3) rotation matrices in the light frame.
+
+    Example:
+        >>> import math, torch
+        >>> from relightnet.sh import rotation_about_up
+        >>> (rotation_about_up(math.pi / 2).round() + 0.0).tolist()
+        [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        >>> rotation_about_up(torch.zeros(4)).shape
+        torch.Size([4, 3, 3])
     """
     a = torch.as_tensor(angle, dtype=dtype, device=device)
     c, s = torch.cos(a), torch.sin(a)
@@ -80,7 +108,17 @@ def rotation_about_up(angle: torch.Tensor | float, dtype=torch.float32, device=N
 
 
 def rotate_sh_up(sh: torch.Tensor, angle: float) -> torch.Tensor:
-    """Rotate (..., K, 3) lights by ``angle`` radians about the up axis."""
+    """Rotate (..., K, 3) lights by ``angle`` radians about the up axis.
+
+    Example:
+        The DC term (the light's mean) does not change under rotation:
+
+        >>> import torch
+        >>> from relightnet.sh import rotate_sh_up
+        >>> sh = torch.randn(9, 3, generator=torch.Generator().manual_seed(0))
+        >>> torch.allclose(rotate_sh_up(sh, 1.0)[0], sh[0], atol=1e-6)
+        True
+    """
     return rotate_sh(sh, rotation_about_up(angle, dtype=sh.dtype, device=sh.device))
 
 

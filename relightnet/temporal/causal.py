@@ -197,6 +197,11 @@ def ema_matrix(n: int, alpha: float, dtype=torch.float32, device=None) -> torch.
     """(T, T) lower-triangular matrix M with ``ema_sequence(x) = M @ x``.
 
     ``M[t, j] = α (1−α)^{t−j}`` for 1 ≤ j ≤ t and ``M[t, 0] = (1−α)^t`` (y_0 = x_0).
+
+    Example:
+        >>> from relightnet.temporal.causal import ema_matrix
+        >>> ema_matrix(3, 0.5).tolist()
+        [[1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.25, 0.25, 0.5]]
     """
     alpha = check_alpha(alpha)
     t = torch.arange(n, dtype=torch.float64, device=device)
@@ -207,7 +212,18 @@ def ema_matrix(n: int, alpha: float, dtype=torch.float32, device=None) -> torch.
 
 
 def ema_sequence(lights: torch.Tensor, alpha: float) -> torch.Tensor:
-    """EMA of whole sequences in one matmul: (T, K, 3) or (B, T, K, 3) → same shape."""
+    """EMA of whole sequences in one matmul: (T, K, 3) or (B, T, K, 3) → same shape.
+
+    Example:
+        A step from light 0 to light 1 is followed at the rate α:
+
+        >>> import torch
+        >>> from relightnet.temporal import ema_sequence
+        >>> lights = torch.zeros(4, 9, 3)
+        >>> lights[1:] = 1.0
+        >>> ema_sequence(lights, alpha=0.5)[:, 0, 0].tolist()
+        [0.0, 0.5, 0.75, 0.875]
+    """
     x, batched = _seq(lights)
     b, n, k, _ = x.shape
     y = (ema_matrix(n, alpha, x.dtype, x.device) @ x.reshape(b, n, k * 3)).reshape(x.shape)

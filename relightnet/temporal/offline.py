@@ -20,6 +20,21 @@ Switches (``switches="auto"``, :func:`detect_switches`): a jump that persists â€
 light changes and stays changed â€” is a switch, not an outlier. The sequence is
 split there and each segment is smoothed on its own, so the output follows the
 step at once instead of blurring it over a knot interval.
+
+Example:
+    Noisy frames of one steady light come out near it; one wild frame is flagged and replaced:
+
+    >>> import torch
+    >>> from relightnet.temporal import smooth_lights
+    >>> g = torch.Generator().manual_seed(0)
+    >>> light = torch.randn(9, 3, generator=g)
+    >>> raw = light + 0.01 * torch.randn(60, 9, 3, generator=g)
+    >>> raw[30] += 5.0
+    >>> res = smooth_lights(raw, "hermite", outlier_eps="8mad")
+    >>> res.smoothed.shape, res.outliers.nonzero().flatten().tolist()
+    (torch.Size([60, 9, 3]), [30])
+    >>> bool((res.smoothed - light).abs().max() < 0.05)
+    True
 """
 
 from __future__ import annotations

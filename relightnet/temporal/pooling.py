@@ -60,7 +60,13 @@ SWITCH_NOISE = 8.0
 
 
 def pool_window(fps: float, seconds: float = POOL_SECONDS) -> int:
-    """Triangular pooling half-width in frames for a video at ``fps`` (at least 1)."""
+    """Triangular pooling half-width in frames for a video at ``fps`` (at least 1).
+
+    Example:
+        >>> from relightnet.temporal.pooling import pool_window
+        >>> pool_window(30.0, seconds=0.5), pool_window(1.0, seconds=0.1)
+        (15, 1)
+    """
     if not (fps > 0 and seconds > 0):
         raise InputError(f"pooling window: expected positive fps and seconds, got {fps!r}, {seconds!r}")
     return max(1, round(fps * seconds))
@@ -153,6 +159,24 @@ def pool_shot_lights(evidence: Evidence, prior: torch.Tensor | None = None, reg:
 
     Returns:
         ``(pooled (T, K, 3), per_frame (T, K, 3), switches (T,) bool)``.
+
+    Example:
+        Four frames of one shot, each seeing half of the person, share the light of all their pixels:
+
+        >>> import torch
+        >>> from relightnet.sh import light_evidence
+        >>> from relightnet.temporal import pool_shot_lights
+        >>> g = torch.Generator().manual_seed(0)
+        >>> T = torch.randn(4, 9, 8, 8, generator=g)
+        >>> A = torch.rand(4, 3, 8, 8, generator=g)
+        >>> L = torch.randn(9, 3, generator=g)
+        >>> image = A * torch.einsum("tkhw,kc->tchw", T, L)
+        >>> ev = light_evidence(image, A, T, torch.ones(4, 1, 8, 8))
+        >>> pooled, per_frame, switches = pool_shot_lights(ev, reg=1e-8, switches=None)
+        >>> pooled.shape, switches.tolist()
+        (torch.Size([4, 9, 3]), [False, False, False, False])
+        >>> torch.allclose(pooled, L.expand(4, 9, 3), atol=1e-4)
+        True
     """
     dims = check_shape(evidence.M, ["T", 3, "K", "K"], name="evidence M")
     per_frame = solve_light(evidence, prior, reg)

@@ -62,7 +62,7 @@ def readers(tmp: Path) -> dict:
     from relightnet.data.shards import read_shard
     from relightnet.io import read_envmap, read_image_alpha, read_mask
     from relightnet.model import load_model
-    from relightnet.model.training import load_train_config
+    from relightnet.model.train_config import load_train_config
     from relightnet.sh import load_light
 
     light = cd.light_seeds()

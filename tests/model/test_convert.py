@@ -36,6 +36,25 @@ def test_older_checkpoint_with_numpy_and_config_objects_converts(tmp_path, capsy
                                                                          net.state_dict().values(), strict=True))
 
 
+def test_a_train_config_object_pickled_by_an_older_version_converts(tmp_path, monkeypatch):
+    from relightnet.model.train_config import TrainConfig
+
+    torch.manual_seed(0)
+    net = RelightNet(CFG)
+    old_cfg = TrainConfig(steps=3)
+    for key, value in {"net": {"width": 4}, "loss": {}, "photo": {},  # sections were plain dicts then
+                       "augment": {"flip": 0.5, "crop_scale": [0.875, 0.875]}}.items():
+        object.__setattr__(old_cfg, key, value)
+    with monkeypatch.context() as m:  # the class's module then: relightnet.model.training
+        m.setattr(TrainConfig, "__module__", "relightnet.model.training")
+        torch.save(_old(net, train_config=old_cfg), tmp_path / "old.pt")
+    assert b"relightnet.model.training" in (tmp_path / "old.pt").read_bytes()
+    convert_checkpoint(tmp_path / "old.pt", tmp_path / "new.pt")
+    stored = load_checkpoint(tmp_path / "new.pt")["train_config"]
+    assert stored["steps"] == 3 and stored["net"] == {"width": 4}
+    assert TrainConfig.from_dict(stored) == TrainConfig(steps=3, net={"width": 4}, augment=stored["augment"])
+
+
 def test_convert_in_place_with_nested_values(tmp_path):
     torch.manual_seed(0)
     net = RelightNet(CFG)

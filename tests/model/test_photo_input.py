@@ -8,7 +8,8 @@ from relightnet.color import linear_to_srgb
 from relightnet.model.inference import frame_person
 from relightnet.model.network import normalize_input
 from relightnet.model.photo_input import FLAW_RADIUS, PhotoInput, as_photo, mask_flaws, morph_mask
-from relightnet.model.training import TrainConfig, TrainData, batch_to_input, train
+from relightnet.model.train_config import TrainConfig
+from relightnet.model.training import TrainData, batch_to_input, train
 
 pytestmark = pytest.mark.slow  # a generated dataset
 

