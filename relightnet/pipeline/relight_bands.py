@@ -31,7 +31,7 @@ from ..checks import InputError, check_finite, check_shape
 from ..color import linear_to_srgb, luminance, srgb_to_linear
 from ..model.exposure import exposure_scale, transport_level
 from ..model.inference import CropMaps
-from ..model.network import shading_map
+from ..model.maps import shading_map
 from ..model.network import Prediction
 from ..model.photo_albedo import ROW_BAND, photo_albedo_rows
 from ..raster.interpolate import to_channels_last
