@@ -137,3 +137,15 @@ def test_only_the_persons_span_is_computed_and_the_photo_is_left_alone(predict, 
     far = outside & ~border_band(mask, band_radius(600, 70))  # the soft matte may reach into its band only
     assert torch.equal(res.image[far], before.permute(1, 2, 0)[far])
     assert not torch.equal(res.image[~outside], before.permute(1, 2, 0)[~outside])
+
+
+def test_the_person_alone_is_linear_float_without_a_soft_edge(predict, photo):
+    """composite=False (compare's 2D path) refuses what only a composite has: uint8 levels, the soft matte."""
+    from relightnet.checks import InputError
+
+    img, mask = photo
+    crop = predict.crop(img, mask)
+    light = torch.tensor([[1.0, 0.9, 0.8]] + [[0.0] * 3] * 8)
+    for kw in ({"dtype": torch.uint8}, {"soft_edges": True}):
+        with pytest.raises(InputError, match="composite=False"):
+            relight_over_photo(crop, img, light, composite=False, **kw)
