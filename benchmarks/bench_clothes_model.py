@@ -27,7 +27,7 @@ from common import table  # noqa: E402
 from relightnet.data import GARMENT_TYPES, GENERATOR_VERSION, SynthConfig, generate_samples  # noqa: E402
 from relightnet.data.generate import prepare_assets  # noqa: E402
 from relightnet.model.checkpoint import load_model  # noqa: E402
-from relightnet.model.network import shading_map  # noqa: E402
+from relightnet.model.maps import shading_map  # noqa: E402
 from relightnet.model.training import batch_to_input  # noqa: E402
 
 _PAINTED = {"upper": {"none": 1}, "lower": {"none": 1}, "head": {"none": 1}, "hair": {"painted": 1}}

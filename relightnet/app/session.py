@@ -1,7 +1,7 @@
 """One photo in the app: the CNN runs once, every change of light only re-shades.
 
-:class:`RelightSession` holds what :func:`relightnet.pipeline.relight_prediction` needs that does
-not depend on the new light — the prediction (transport T), the photo's albedo (photo / T·L̂)
+:class:`RelightSession` holds what the photo relight (:func:`relightnet.pipeline.relight_over_photo`)
+needs that does not depend on the new light — the prediction (transport T), the photo's albedo (photo / T·L̂)
 and the person's mean shading luminance under the photo's own light (the exposure reference) —
 so :meth:`RelightSession.relight` is one T·L′ product, one scale, one multiply and the
 sRGB composite over the photo, inside the person's bounding box only: the same result as

@@ -1,4 +1,5 @@
-"""The 2D path's CNN: network, losses, checkpoints, training loop, inference on real images.
+"""The 2D path's CNN: network, its maps in the CNN layout, the photo albedo, losses, checkpoints, training
+loop, inference on real images.
 
 Example:
     A small network (the shipped one is :func:`load_model`) on one normalised 32 × 32 input:
@@ -31,6 +32,7 @@ from .inference import (
     predict_image,
 )
 from .losses import LossWeights, masked_l1, relight_losses, total_variation
+from .maps import pad_to_multiple, relight, shade_map, shading_map
 from .network import (
     DEFAULT_INPUT_SIZE,
     LIGHT_MODES,
@@ -40,10 +42,6 @@ from .network import (
     RelightNet,
     cone_maps,
     normalize_input,
-    pad_to_multiple,
-    relight,
-    shade_map,
-    shading_map,
 )
 from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx, pose_encoder
 from .photo_albedo import photo_albedo, photo_albedo_rows

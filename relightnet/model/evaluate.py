@@ -18,7 +18,8 @@ import torch
 from ..checks import InputError
 from ..color import linear_to_srgb
 from ..io import atomic_write, write_image
-from .network import Prediction, RelightNet, shade_map, shading_map
+from .maps import shade_map, shading_map
+from .network import Prediction, RelightNet
 from .photo_albedo import photo_albedo
 from .training import batch_to_input
 

@@ -21,7 +21,8 @@ import torch
 from ..checks import check_shape
 from ..color import LUMA, luminance
 from ..raster.interpolate import to_channels_last
-from .network import Prediction, shading_map
+from .maps import shading_map
+from .network import Prediction
 
 __all__ = ["exposure_level", "transport_level", "exposure_scale", "match_exposure"]
 

@@ -28,7 +28,8 @@ from torch.nn import functional as F
 
 from ..raster.morphology import erode
 from ..sh.metrics import scale_invariant_light_error
-from .network import Prediction, shading_map
+from .maps import shading_map
+from .network import Prediction
 
 __all__ = ["LossWeights", "masked_l1", "total_variation", "relight_losses"]
 

@@ -39,14 +39,13 @@ from torch.nn import functional as F
 from ..checks import InputError, ShapeError, check_shape
 from ..color import srgb_to_linear
 from ..raster.interpolate import to_channels_first, to_channels_last
-from ..render.shading import shade, shading
 from ..sh.irradiance import cone_transport
 from ..sh.light_solve import Evidence, light_evidence, solve_light
 from .guided import FastGuidedUpsample, double_to, pool_input
+from .maps import shading_map
 
 __all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
-           "RelightNet", "normalize_input", "relight",
-           "pad_to_multiple", "shade_map", "shading_map"]
+           "RelightNet", "normalize_input"]
 
 
 #: How the network gets its light (see the module docstring).
@@ -144,50 +143,6 @@ class Prediction:
         return shading_map(self.transport, self.light if light is None else light)
 
 
-def shading_map(transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
-    """S = Σ_k T_k L_k in the CNN layout (:func:`relightnet.render.shading` on channels-last views).
-
-    Args:
-        transport: (B, K, H, W).
-        light: (K, 3) or (B, K, 3).
-
-    Returns:
-        (B, 3, H, W).
-    """
-    dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
-    check_shape(light, [dims["K"], 3] if light.dim() == 2 else [dims["B"], dims["K"], 3], name="light")
-    return to_channels_first(shading(to_channels_last(transport), light))
-
-
-def shade_map(albedo: torch.Tensor, transport: torch.Tensor, light: torch.Tensor) -> torch.Tensor:
-    """A ⊙ (T · L) in the CNN layout (:func:`relightnet.render.shade` on channels-last views).
-
-    Args:
-        albedo: (B, 3, H, W) linear.
-        transport: (B, K, H, W).
-        light: (K, 3) or (B, K, 3).
-
-    Returns:
-        (B, 3, H, W) linear RGB.
-    """
-    dims = check_shape(transport, ["B", "K", "H", "W"], name="transport")
-    check_shape(albedo, [dims["B"], 3, dims["H"], dims["W"]], name="albedo")
-    return to_channels_first(shade(to_channels_last(albedo), to_channels_last(transport), light, check=False))
-
-
-def relight(pred: Prediction, new_light: torch.Tensor) -> torch.Tensor:
-    """Relit image A ⊙ (T · L′) (linear RGB, :func:`shade_map`).
-
-    Args:
-        pred: a :class:`Prediction`.
-        new_light: (K, 3) or (B, K, 3) light in the camera-relative light frame.
-
-    Returns:
-        (B, 3, H, W).
-    """
-    return shade_map(pred.albedo, pred.transport, new_light)
-
-
 def cone_maps(raw: torch.Tensor, lmax: int) -> torch.Tensor:
     """Transport maps from a cone head's raw output (:func:`relightnet.sh.cone_transport`).
 
@@ -223,13 +178,6 @@ def normalize_input(image: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         image = image.float() / 255
     mask = mask.to(image.dtype)
     return torch.cat([(image * 2 - 1) * mask, mask], 1)
-
-
-def pad_to_multiple(x: torch.Tensor, multiple: int = 16) -> tuple[torch.Tensor, tuple[int, int]]:
-    """Zero-pad (B, C, H, W) at the bottom/right to multiples of ``multiple``; returns the original (H, W)."""
-    h, w = x.shape[-2:]
-    ph, pw = (-h) % multiple, (-w) % multiple
-    return (F.pad(x, (0, pw, 0, ph)) if ph or pw else x), (h, w)
 
 
 def _norm(c: int) -> nn.GroupNorm:

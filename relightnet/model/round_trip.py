@@ -25,7 +25,8 @@ from ..checks import InputError, check_shape
 from ..color import linear_to_srgb, srgb_to_linear
 from ..sh import scale_invariant_light_error, side_light
 from .exposure import match_exposure
-from .network import Prediction, normalize_input, relight
+from .maps import relight
+from .network import Prediction, normalize_input
 from .photo_albedo import photo_albedo
 
 __all__ = ["NOVEL_LIGHTS", "novel_lights", "relit_input", "round_trip_loss"]

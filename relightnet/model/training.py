@@ -28,7 +28,8 @@ from ..color import linear_to_srgb
 from ..threads import torch_threads
 from .checkpoint import load_checkpoint, save_checkpoint
 from .losses import LossWeights, relight_losses
-from .network import NetConfig, RelightNet, normalize_input, shade_map
+from .maps import shade_map
+from .network import NetConfig, RelightNet, normalize_input
 from .round_trip import novel_lights, round_trip_loss
 from .train_config import TrainConfig, load_train_config
 from .train_log import check_ranks_in_sync, plot_losses

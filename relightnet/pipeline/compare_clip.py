@@ -3,13 +3,15 @@ lights, and the clip's numbers.
 
 :func:`compare_clip` runs the stages of one clip — *estimate* (the CNN's light per target frame),
 *smooth* (over the clip, :func:`~relightnet.temporal.smooth_video_lights`), and the two
-paths: the 2D path's predictions relit by :func:`~relightnet.pipeline.relight_image.relight_prediction`
-(as ``relight-video`` relights), the 3D path's PRT render shaded by :func:`relightnet.render.shade`;
+paths: the 2D path's predictions relit by :func:`~relightnet.pipeline.relight_bands.relight_over_photo`
+(as ``relight-video`` relights; the relit person alone, in linear RGB), the 3D path's PRT render
+shaded by :func:`relightnet.render.shade`;
 :func:`clip_metrics` compares the six outputs with the ground truth.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -20,8 +22,6 @@ import torch
 from ..checks import InputError, sh_order_from_count
 from ..color import linear_to_srgb
 from ..io.image import to_uint8
-from ..model.network import Prediction
-from ..raster.interpolate import to_channels_last
 from ..render.shading import composite, shade
 from ..sh.io import resize_sh
 from ..sh.light_solve import stack_evidence
@@ -30,7 +30,7 @@ from ..temporal.registry import smooth_video_lights
 from ..temporal.switches import frame_colour
 from . import metrics as M
 from .backends import as_predictor
-from .relight_image import relight_prediction
+from .relight_bands import relight_over_photo
 
 __all__ = ["PATHS", "LIGHTS", "CLIP_FPS", "CLIP_FIELDS", "ClipOutputs", "source_light", "compare_clip",
            "clip_metrics"]
@@ -94,18 +94,20 @@ def _clip_inputs(clip: dict, source: str, lmax: int):
     return mask, comp, src
 
 
-def _stack_predictions(preds: list) -> Prediction:
-    """Per-frame 2D predictions (batch 1 each) → one (T, ...) prediction, float32 on the CPU."""
-    def cat(name):
-        return torch.cat([getattr(p, name).float().cpu() for p in preds])
+def _relight_2d(crops: list, photos: torch.Tensor, light: torch.Tensor, cnn_albedo: bool) -> torch.Tensor:
+    """The 2D path under (T, K, 3) lights, each frame's prediction (:class:`~relightnet.model.CropMaps`)
+    relit with its light: (T, H, W, 3) linear, 0 off the person."""
+    return torch.stack([relight_over_photo(c, p, L, detail=not cnn_albedo, keep_exposure=False, composite=False).image
+                        for c, p, L in zip(crops, photos, light, strict=True)])
 
-    return Prediction(albedo=cat("albedo"), transport=cat("transport"), light=cat("light"), mask=cat("mask"))
 
+def _cpu_float(crop):
+    """A frame's :class:`~relightnet.model.CropMaps` in float32 on the CPU (where the clip's arrays are)."""
+    def cpu(x):
+        return None if x is None else x.float().cpu()
 
-def _relight_2d(preds: Prediction, photos: torch.Tensor, light: torch.Tensor, cnn_albedo: bool) -> torch.Tensor:
-    """The 2D path under (T, K, 3) lights: (T, H, W, 3) linear, 0 off the person."""
-    relit = relight_prediction(preds, photos, light, detail=not cnn_albedo, keep_exposure=False)
-    return to_channels_last(relit.linear).contiguous()
+    return dataclasses.replace(crop, albedo=cpu(crop.albedo), transport=cpu(crop.transport), light=cpu(crop.light),
+                               mask=cpu(crop.mask))
 
 
 def _render_3d(maps: dict, light: torch.Tensor) -> torch.Tensor:
@@ -168,7 +170,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         evs.append(ev)
         priors.append(prior)
         photos.append(to_uint8(src[t]).permute(2, 0, 1))  # the 2D path's input photo
-        preds.append(predict(photos[-1], mask[t]))
+        preds.append(_cpu_float(predict.crop(photos[-1], mask[t])))
         c1 = time.perf_counter()
         Tv = _clip_transport(geometry, t, lmax, n_dirs, bounces, prt_seed)
         c2 = time.perf_counter()
@@ -187,7 +189,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
     smoothed, outliers, switches, _ = smooth_video_lights(raw, smoothing, *stack_evidence(evs, priors),
                                                        predict.solve_reg, CLIP_FPS, colour=colour)
     lights = {"true": true, "raw": raw, "smoothed": resize_sh(smoothed, lmax)}
-    preds, photos = _stack_predictions(preds), torch.stack(photos)
+    photos = torch.stack(photos)
     maps = {k: torch.stack(v) for k, v in maps.items()}
     renders = {}
     for name, L in lights.items():

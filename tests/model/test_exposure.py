@@ -3,8 +3,8 @@ import torch
 
 from relightnet.checks import ShapeError
 from relightnet.color import luminance
+from relightnet.model import Prediction, shading_map
 from relightnet.model.exposure import exposure_level, exposure_scale, match_exposure, transport_level
-from relightnet.model.network import Prediction, shading_map
 from relightnet.pipeline import match_exposure as pipeline_match_exposure
 
 

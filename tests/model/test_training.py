@@ -8,9 +8,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.model import load_checkpoint, load_model
+from relightnet.model import Prediction, load_checkpoint, load_model, shading_map
 from relightnet.model.losses import relight_losses
-from relightnet.model.network import Prediction, shading_map
 from relightnet.model.train_config import TrainConfig, load_train_config
 from relightnet.model.training import train
 

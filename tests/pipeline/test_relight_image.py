@@ -154,28 +154,27 @@ def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys
     assert "order 3 truncated to the model's order 2" in capsys.readouterr().err
 
 
-def test_relight_prediction_is_the_shading_kernel_and_backends_agree(photo):
-    """relight_prediction = A ⊙ (T · L) (render.shade); relight-image runs on either backend."""
+def test_relight_is_the_shading_kernel_and_backends_agree(photo):
+    """The photo relight = A ⊙ (T · L) (render.shade) over the photo; relight-image runs on either backend."""
+    from relightnet.color import srgb_to_linear
     from relightnet.model import photo_albedo, shading_map
-    from relightnet.pipeline import make_predictor
-    from relightnet.pipeline.relight_image import over_photo, relight_prediction
+    from relightnet.pipeline import make_predictor, relight_over_photo
 
     img, mask = photo
     predict = make_predictor("torch")
-    pred = predict(img, mask)
+    crop = predict.crop(img, mask)
+    pred = crop.pasted()
     light = preset_light("sunset")
     image = img.float()[None] / 255
-    r = relight_prediction(pred, image, light, keep_exposure=False)
-    from relightnet.color import srgb_to_linear
-
+    r = relight_over_photo(crop, img, light, keep_exposure=False, keep_albedo=True, composite=False)
     albedo = photo_albedo(srgb_to_linear(image), pred)
-    torch.testing.assert_close(r.albedo, albedo)
-    torch.testing.assert_close(r.shading, shading_map(pred.transport, light))
-    torch.testing.assert_close(r.linear, albedo * shading_map(pred.transport, light))
-    out = over_photo(r.linear, pred.mask, image)
-    assert out.shape == (1, 120, 150, 3)
-    outside = (mask < 0.5)[None]
-    torch.testing.assert_close(out[outside], image.permute(0, 2, 3, 1)[outside])
+    torch.testing.assert_close(r.albedo, albedo[0], rtol=1e-4, atol=1e-5)
+    torch.testing.assert_close(r.image, (albedo * shading_map(pred.transport, light))[0].permute(1, 2, 0),
+                               rtol=1e-4, atol=1e-5)
+    out = relight_over_photo(crop, img, light, keep_exposure=False).image
+    assert out.shape == (120, 150, 3)
+    outside = mask < 0.5
+    torch.testing.assert_close(out[outside], image[0].permute(1, 2, 0)[outside])
     # The predictor's working size is the checkpoint's (the shipped model was trained on 128² crops).
     assert predict.size == predict.model.config.input_size == 128
     res = relight_image(predict, img, light, mask)
