@@ -7,7 +7,7 @@ import logging
 from pathlib import Path
 
 from .argtypes import exposure_arg, image_size, nonneg_int
-from .options import LIGHT_HELP, add_command
+from .options import LIGHT_HELP, add_command, no_subcommand
 from .paths import out_file
 
 logger = logging.getLogger("relightnet.light")
@@ -53,14 +53,6 @@ def run_convert(args: argparse.Namespace) -> int:
     return 0
 
 
-def _no_subcommand(parser: argparse.ArgumentParser):
-    def run(args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    return run
-
-
 def register(sub) -> None:
     light = add_command(
         sub,
@@ -72,7 +64,7 @@ def register(sub) -> None:
         "  relightnet light convert relightnet/data/envmaps/sunset.exr sunset.npz --lmax 3\n"
         "  relightnet light convert kanamori_light.npy light.json\n",
     )
-    light.set_defaults(func=_no_subcommand(light))
+    light.set_defaults(func=no_subcommand(light))
     lsub = light.add_subparsers(dest="light_command", metavar="{show,convert}")
 
     show = add_command(
