@@ -79,16 +79,16 @@ def register(sub) -> None:
         "  relightnet light show lights_over_time.npz --out seq.png   # up to 8 frames as spheres\n",
     )
     show.add_argument("light", help=LIGHT_HELP)
-    show.add_argument("--out", default="light.png", help="output .png (default: light.png)")
+    show.add_argument("--out", default="light.png", help="output .png (default: %(default)s)")
     show.add_argument(
         "--lmax", type=nonneg_int, default=None,
         help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
     )
     show.add_argument(
         "--exposure", type=exposure_arg, default="auto",
-        help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: auto)",
+        help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: %(default)s)",
     )
-    show.add_argument("--size", type=image_size, default=256, help="sphere size in pixels (default: 256)")
+    show.add_argument("--size", type=image_size, default=256, help="sphere size in pixels (default: %(default)s)")
     show.set_defaults(func=run_show)
 
     conv = add_command(

@@ -16,6 +16,9 @@ from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.model")
 
+#: The plate's horizontal field of view in degrees when --fov is not given.
+PLATE_FOV = 60.0
+
 
 def run_train(args: argparse.Namespace) -> int:
     from ..model.training import load_train_config, train
@@ -44,7 +47,7 @@ def run_estimate_light(args: argparse.Namespace) -> int:
     out = out_file(args.out, suffixes=LIGHT_SUFFIXES)
     plate = None
     if args.plate is not None:
-        plate = load_plate(args.plate, hfov_deg=args.fov or 60.0)
+        plate = load_plate(args.plate, hfov_deg=args.fov or PLATE_FOV)
     light = None
     if args.image is not None:
         image, mask, _ = read_photo(args.image, args.mask, args.mask_source)
@@ -74,7 +77,7 @@ def register(sub) -> None:
     p.add_argument("--candidate", metavar="PATH", default=None,
                    help="also write the run's carry-over checkpoint here at every checkpoint (weights, step, "
                         "schedule, config and data recipe; no optimiser state; at most 15 MB)")
-    p.add_argument("--device", default="cpu", help="cpu or cuda (default: cpu)")
+    p.add_argument("--device", default="cpu", help="cpu or cuda (default: %(default)s)")
     p.set_defaults(func=run_train, interrupt_hint=lambda a: f"run the same command with --resume to continue "
                    f"from {a.out}/last.pt")
 
@@ -92,7 +95,7 @@ def register(sub) -> None:
                    "picture itself (with IMAGE: the plate where its frame shows the light, the person's estimate "
                    "elsewhere)")
     p.add_argument("--fov", type=float, default=None, help="the plate's horizontal field of view in degrees "
-                   "(default: 60)")
+                   f"(default: {PLATE_FOV:g})")
     p.add_argument("--mask", help="mask of the person (white = person, or its alpha); default: the photo's alpha "
                    "if it has one, else the person segmentation (--mask-source)")
     add_mask_source_arg(p)

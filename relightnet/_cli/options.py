@@ -84,10 +84,10 @@ def add_body_args(p: argparse.ArgumentParser, fps_help: str = "video frame rate 
     """--body, --pose, --motion, --frames, --fps, --phenotype: the posed body of render-body and blender-export."""
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--pose", default="arms_down", choices=POSE_PRESETS, metavar="POSE",
-                   help=f"pose preset of a still Anny body: {', '.join(POSE_PRESETS)} (default: arms_down)")
+                   help=f"pose preset of a still Anny body: {', '.join(POSE_PRESETS)} (default: %(default)s)")
     p.add_argument("--motion", help=f"procedural motion for Anny ({', '.join(MOTION_KINDS)}) or an SMPL-style "
                    "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
-    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
+    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: %(default)s)")
     p.add_argument("--fps", type=float, default=30.0, help=fps_help)
     p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
                    help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")
