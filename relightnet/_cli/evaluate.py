@@ -150,8 +150,8 @@ def _register_data(esub) -> None:
                     "  relightnet evaluate data --checkpoint runs/small/last.pt --data data/synth --split val "
                     "--out r/\n"
                     "  relightnet evaluate data --as-photo --no-baseline --data data/clothed --out reports/photo\n"
-                    "  relightnet evaluate data --checkpoint runs/medium/last.pt --ablation "
-                    "runs/medium_unoccluded/last.pt --data data/medium --out reports/ablation\n")
+                    "  relightnet evaluate data --checkpoint runs/small/last.pt --ablation "
+                    "runs/small_unoccluded/last.pt --data data/small --out reports/ablation\n")
     add_model_args(p, backend=False)
     _data_args(p)
     _out_arg(p, "report.md, metrics.json, contact_sheet.png")
@@ -168,7 +168,7 @@ def _register_light(esub) -> None:
     p = add_command(esub, "light", "The light report: irradiance error by light family, direction and colour "
                     "errors, of the stills as rendered and as photos (each composite framed around its mask, as "
                     "relight-image frames a photo); with --clips, drift and lag over time.",
-                    "  relightnet evaluate light --data data/large --clips data/seq_constant data/seq_switch "
+                    "  relightnet evaluate light --data data/clothed --clips data/seq_constant data/seq_switch "
                     "--out reports/light\n"
                     "  relightnet evaluate light --checkpoint runs/small/last.pt --data data/synth --out r/\n")
     add_model_args(p, backend=False)
@@ -184,7 +184,7 @@ def _register_photos(esub) -> None:
                     "segmentation finds them): side contrast under a light from the left and from the right, and "
                     "the light's round trip through relighting and estimation.",
                     "  relightnet evaluate photos photos/ --out reports/photos_shipped\n"
-                    "  relightnet evaluate photos photos/ --checkpoint runs/large/last.pt --out reports/photos\n")
+                    "  relightnet evaluate photos photos/ --checkpoint runs/small/last.pt --out reports/photos\n")
     p.add_argument("photos", metavar="DIR", help="folder of photos of people")
     add_model_args(p, backend=False)
     _out_arg(p, "photo_checks.md, photo_checks.json")
@@ -240,7 +240,7 @@ def register(sub) -> None:
                     "real photos (photos), the motion-capture fit (fit) or the avatar capture (capture) on generated "
                     "clips, or the ship rule between two models (ship).",
                     "  relightnet evaluate data --data data/synth --out reports/shipped\n"
-                    "  relightnet evaluate light --data data/large --clips data/seq_constant data/seq_switch "
+                    "  relightnet evaluate light --data data/clothed --clips data/seq_constant data/seq_switch "
                     "--out reports/light\n"
                     "  relightnet evaluate photos photos/ --out reports/photos_shipped\n"
                     "  relightnet evaluate fit --clips 3 --frames 12 --out reports/fit\n"
