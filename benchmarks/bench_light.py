@@ -1,9 +1,9 @@
 """Light estimation quality of several models side by side, in one run.
 
-Run: ``.venv/bin/python benchmarks/bench_light.py --data data/large --clips data/seq_constant data/seq_switch
---checkpoints shipped runs/large_hybrid/last.pt [--out reports/light_bench.md]``
+Run: ``.venv/bin/python benchmarks/bench_light.py --data data/clothed --clips data/seq_constant data/seq_switch
+--checkpoints shipped train/checkpoints/clothed_photo_side_masks.pt [--out reports/light_bench.md]``
 
-For every model: the still metrics of ``relightnet evaluate --light`` per light family, of the test items as
+For every model: the still metrics of ``relightnet evaluate light`` per light family, of the test items as
 rendered and as photos (their composites framed around their masks by the package's own path): median and p90 of the
 scale-invariant irradiance error over the sphere and the camera hemisphere, dominant-direction angle,
 chromaticity error) and, with ``--clips``, drift p50/p90 of constant lights and the lag after a switch, per

@@ -6,7 +6,7 @@ Run: ``.venv/bin/python benchmarks/bench_plate_light.py --data data/plate_bench 
 128², env-map lights only; the generator renders 60% of their backgrounds from the light's own
 env map, rotated and scaled like the light — those are the plates whose true light is known).
 For every such still, four estimates of the light are compared with the truth with the metric
-of ``relightnet evaluate --light`` (the scale-invariant irradiance error over the sphere and over
+of ``relightnet evaluate light`` (the scale-invariant irradiance error over the sphere and over
 the camera-facing hemisphere, :func:`relightnet.sh.scale_invariant_light_error`):
 
 - ``constant``: the truth's own l = 0 band (a direction-less light of the true colour);

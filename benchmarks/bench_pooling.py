@@ -7,7 +7,7 @@ Run: ``.venv/bin/python benchmarks/bench_pooling.py --constant data/seq_constant
 Each clip's per-frame evidence is computed once (the CNN), then pooled with every window
 (:func:`relightnet.temporal.pool_shot_lights`, switches detected as the jobs do). Columns:
 
-- drift p50/p90 of the constant clips (``evaluate --light``'s definition), lag median/max of the switch clips;
+- drift p50/p90 of the constant clips (``evaluate light``'s definition), lag median/max of the switch clips;
 - the turning clips' scale-invariant light error (median, p90) of the pooled estimate, as the jobs get it;
 - "window cost": the same window applied to the clips' *true* per-frame lights (true switches), against the
   truth: what the window alone costs a light that turns (up to 60°/s), i.e. the error a perfect per-frame

@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python benchmarks/bench_round_trip_mask.py --photos DIR --checkpoints shipped
 train/checkpoints/X.pt [--erode -2 0 2 4]``
 
-The round trip of ``relightnet evaluate --photos`` (:func:`relightnet.pipeline.photo_checks.check_photo`):
+The round trip of ``relightnet evaluate photos`` (:func:`relightnet.pipeline.photo_checks.check_photo`):
 each photo relit to six lights, the light estimated back from each relit photo. Here the estimate
 is given the photo's person mask shrunk by k pixels (at the photo's resolution, ~1,024 px high;
 k = 0 is the check itself, k < 0 grows it by -k), while the relighting keeps the mask as it is. A network that reads the

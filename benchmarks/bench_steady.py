@@ -10,7 +10,7 @@ the switches found in the lights (what the video jobs did before); **shot** — 
 also found in the frames' colour). Rows:
 
 - the real clip with its hand-made masks and with the package's own segmentation: drift of the smoothed
-  light (``evaluate --light``'s definition: distance from the clip's mean over its level, p50/p90/max);
+  light (``evaluate light``'s definition: distance from the clip's mean over its level, p50/p90/max);
 - the same clip with a light switch put in at frame ``--switch`` (every frame after it dimmed and warmed,
   in linear RGB, by ``--gain``): the switch frames found and the lag (frames until the estimate covers 90%
   of its own step);

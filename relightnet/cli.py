@@ -56,9 +56,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     for command in _leaf_parsers(sub):  # every command reads files: one limit for all
         command.add_argument("--max-pixels", type=_max_pixels, metavar="N",
-                             help="largest image or video frame decoded, width x height (default: "
-                                  f"{DEFAULT_MAX_PIXELS:,}, or $RELIGHTNET_MAX_PIXELS); larger files are refused "
-                                  "before decoding")
+                             help="largest image or video frame, width x height: a file whose header gives more "
+                                  "is refused before a pixel is decoded, and the decoder refuses a frame whose "
+                                  "size only it knows at 1/16 more (it counts the sides padded for alignment) "
+                                  f"(default: {DEFAULT_MAX_PIXELS:,}, or $RELIGHTNET_MAX_PIXELS when set)")
     return parser
 
 

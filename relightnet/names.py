@@ -75,7 +75,7 @@ def smoothing_names(causal: bool | None = None, evidence: bool | None = None) ->
 
 #: Offline-only regressions of a whole light sequence (:func:`relightnet.temporal.smoothing_matrix`).
 OFFLINE_METHODS = smoothing_names(causal=False)
-#: Light smoothing of the offline video jobs (avatar, compare, evaluate --light): ``auto`` or any method.
+#: Light smoothing of the offline video jobs (avatar, compare, evaluate light): ``auto`` or any method.
 VIDEO_SMOOTHING = ("auto", *SMOOTHING_METHODS)
 #: Light smoothing of the streaming jobs (relight-video, export, onnx-run): ``auto`` (``pooled`` with
 #: the light solve's evidence, else ``ema``) or a causal method (each can live inside an ONNX graph).

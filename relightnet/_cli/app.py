@@ -42,5 +42,5 @@ def register(sub) -> None:
         "  relightnet app                 # http://127.0.0.1:7860\n"
         "  relightnet app --port 8080\n",
     )
-    p.add_argument("--port", type=_port, default=7860, help="TCP port on 127.0.0.1 (default: 7860)")
+    p.add_argument("--port", type=_port, default=7860, help="TCP port on 127.0.0.1 (default: %(default)s)")
     p.set_defaults(func=run)

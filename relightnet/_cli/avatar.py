@@ -13,6 +13,9 @@ from .paths import in_path, out_file
 
 logger = logging.getLogger("relightnet.avatar")
 
+#: The motion of Anny when neither --motion nor --motion-from is given.
+DEFAULT_MOTION = "walk"
+
 
 def run(args: argparse.Namespace) -> int:
     from ..io import video_info
@@ -30,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
         if value:
             in_path(value, option)
     info = video_info(args.target)  # fail early, before loading the model
-    motion = args.motion or "walk"
+    motion = args.motion or DEFAULT_MOTION
     if args.motion_from:
         if args.motion or args.body != "anny":
             raise InputError("--motion-from: the motion comes from the source video; it drives Anny "
@@ -92,7 +95,8 @@ def register(sub) -> None:
                    "moving one is refused)")
     p.add_argument("--motion", default=None,
                    help=f"Anny preset ({', '.join(MOTION_KINDS)}; as long as the video), an Anny motion file from "
-                   "`relightnet fit`, or an SMPL-style motion file (.npz/.pkl) for --body smpl:PATH (default: walk)")
+                   "`relightnet fit`, or an SMPL-style motion file (.npz/.pkl) for --body smpl:PATH "
+                   f"(default: {DEFAULT_MOTION})")
     p.add_argument("--motion-from", metavar="SOURCE",
                    help="motion transfer: fit the person in this video (or photo) and let the avatar perform "
                    "the motion (retargeted to its body, feet held on the ground)")
@@ -111,13 +115,14 @@ def register(sub) -> None:
                         "(an environment map made from the background: --plate, else the target's first frame), or "
                         "both (the person's light on the camera side, the plate's on the far side)")
     p.add_argument("--fov", type=float, default=60.0,
-                   help="with --light-from plate/both: the plate camera's horizontal field of view (default: 60)")
+                   help="with --light-from plate/both: the plate camera's horizontal field of view "
+                        "(default: %(default)g)")
     p.add_argument("--camera", help='camera JSON {"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35} '
                    "(default: full body at the origin)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
                    help=smoothing_help(VIDEO_SMOOTHING, "auto"))
-    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: 64)")
-    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
+    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT ray directions per vertex (default: %(default)s)")
+    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: %(default)s)")
     p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")
     p.add_argument("--antialias", action=argparse.BooleanOptionalAction, default=True,
                    help="smooth the avatar's silhouette against the background (default: on; ~24 ms per 512² frame)")

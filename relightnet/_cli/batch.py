@@ -64,7 +64,7 @@ def register(sub) -> None:
                    help="one Ray task per job: on the running cluster (RAY_ADDRESS or 'ray start' here), else a "
                    "new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")
     p.add_argument("--max-retries", type=nonneg_int, default=1,
-                   help="times a crashed job is run again; bad input is not retried (default: 1)")
+                   help="times a crashed job is run again; bad input is not retried (default: %(default)s)")
     # sub.choices: the command table (filled as the commands register), which the jobs are checked against
     p.set_defaults(func=run, commands=sub.choices,
                    interrupt_hint=lambda a: f"run the same command again to resume {a.jobs}")

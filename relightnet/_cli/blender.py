@@ -108,7 +108,7 @@ def register(sub) -> None:
                    "to the world")
     p.add_argument("--band-limit", action="store_true",
                    help="light an environment-map light by its order-LMAX SH reconstruction (what PRT sees)")
-    p.add_argument("--lmax", type=nonneg_int, default=2, help="SH order for --band-limit (default: 2)")
+    p.add_argument("--lmax", type=nonneg_int, default=2, help="SH order for --band-limit (default: %(default)s)")
     p.add_argument("--negative", default="clamp", choices=("clamp", "lift"),
                    help="negative radiance of an SH world: clamp to 0 (default) or lift by a constant")
     p.add_argument("--world-res", type=pos_int, default=128,
@@ -116,10 +116,10 @@ def register(sub) -> None:
     p.add_argument("--camera", default="default",
                    help="'default' (full body, 35° fov), 'fit' (framing the motion from 20° above) or a camera JSON "
                    '{"eye": [x,y,z], "target": [x,y,z], "fov_deg": 35}')
-    p.add_argument("--res", type=pos_int, default=512, help="square image size in pixels (default: 512)")
-    p.add_argument("--spp", type=pos_int, default=64, help="Cycles samples stored in the file (default: 64)")
+    p.add_argument("--res", type=pos_int, default=512, help="square image size in pixels (default: %(default)s)")
+    p.add_argument("--spp", type=pos_int, default=64, help="Cycles samples stored in the file (default: %(default)s)")
     p.add_argument("--bounces", type=nonneg_int, default=4, help="Cycles diffuse bounces stored in the file "
-                   "(default: 4)")
+                   "(default: %(default)s)")
     p.add_argument("--out", required=True, help="output .blend file (written atomically)")
     p.set_defaults(func=run_export)
 

@@ -73,13 +73,14 @@ def register(sub) -> None:
                    "poses and light over its frames (.mp4/.mkv; .png for a photo); logs the PSNR inside the person")
     p.add_argument("--mask-out", metavar="VIDEO", help="the captured mesh's silhouette in the source camera (a mask "
                    "video .mkv/.mp4; .png for a photo)")
-    p.add_argument("--texture-size", type=pos_int, default=1024, help="texture side in texels (default: 1024)")
+    p.add_argument("--texture-size", type=pos_int, default=1024, help="texture side in texels (default: %(default)s)")
     p.add_argument("--no-offsets", action="store_true", help="keep the bare fitted body (no geometry beyond it)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
                    help=smoothing_help(VIDEO_SMOOTHING, "auto"))
     p.add_argument("--fov", type=pos_float, default=60.0,
                    help="field of view (degrees) across the longer side when the source has no EXIF focal length "
-                   "(default: 60); the captured height follows it (a narrower lens read as 60° makes a taller person)")
+                   "(default: %(default)g); the captured height follows it (a narrower lens read as 60° makes a taller "
+                   "person)")
     p.add_argument("--threads", type=pos_int, default=None, help="torch and ONNX Runtime threads (default: all)")
     add_model_args(p)
     p.set_defaults(func=run)

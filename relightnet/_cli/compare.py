@@ -44,16 +44,18 @@ def register(sub) -> None:
                    help="a dataset of clips made by 'relightnet synth --sequence T' (or sequence_frames > 0)")
     p.add_argument("--out", required=True, metavar="REPORT_DIR",
                    help="report folder (made if needed; nothing is written there unless the run succeeds)")
-    p.add_argument("--split", default="test", choices=("train", "val", "test"), help="split to use (default: test)")
+    p.add_argument("--split", default="test", choices=("train", "val", "test"),
+                   help="split to use (default: %(default)s)")
     p.add_argument("--clips", type=pos_int, metavar="N", help="only the first N clips (default: all)")
-    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT directions of the 3D path (default: 64)")
+    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT directions of the 3D path (default: %(default)s)")
     p.add_argument("--prt-seed", type=nonneg_int, default=0,
-                   help="rotation seed of the 3D path's PRT directions (default: 0)")
-    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces of the 3D path (default: 0)")
+                   help="rotation seed of the 3D path's PRT directions (default: %(default)s)")
+    p.add_argument("--bounces", type=nonneg_int, default=0,
+                   help="interreflection bounces of the 3D path (default: %(default)s)")
     p.add_argument("--smoothing", default="auto", choices=VIDEO_SMOOTHING,
                    help=smoothing_help(VIDEO_SMOOTHING, "auto"))
     p.add_argument("--source-light", default="studio", metavar="PRESET",
-                   help="preset light of the 2D path's input image of the subject (default: studio)")
+                   help="preset light of the 2D path's input image of the subject (default: %(default)s)")
     p.add_argument("--size", type=work_size, help="CNN working size, a multiple of 16 (default: its training size)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="the 2D path relights the CNN's albedo (default: the photo divided by the predicted "

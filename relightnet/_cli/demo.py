@@ -46,11 +46,13 @@ def register(sub) -> None:
         "paths against ground truth on generated sequences.",
         "  relightnet demo\n  relightnet demo --out /tmp/demo --size 128 --frames 12 --compare-clips 1\n",
     )
-    p.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
-    p.add_argument("--size", type=pos_int, default=256, help="target clip size, a multiple of 16 (default: 256)")
-    p.add_argument("--frames", type=pos_int, default=48, help="frames of the target clip (default: 48)")
-    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT directions (default: 64)")
-    p.add_argument("--compare-clips", type=pos_int, default=2, help="generated sequences compared (default: 2)")
-    p.add_argument("--compare-size", type=pos_int, default=128, help="their size (default: 128)")
-    p.add_argument("--compare-frames", type=pos_int, default=24, help="their length (default: 24)")
+    p.add_argument("--out", default="out/demo", help="output folder (default: %(default)s)")
+    p.add_argument("--size", type=pos_int, default=256,
+                   help="target clip size, a multiple of 16 (default: %(default)s)")
+    p.add_argument("--frames", type=pos_int, default=48, help="frames of the target clip (default: %(default)s)")
+    p.add_argument("--n-dirs", type=pos_int, default=64, help="PRT directions (default: %(default)s)")
+    p.add_argument("--compare-clips", type=pos_int, default=2,
+                   help="generated sequences compared (default: %(default)s)")
+    p.add_argument("--compare-size", type=pos_int, default=128, help="their size (default: %(default)s)")
+    p.add_argument("--compare-frames", type=pos_int, default=24, help="their length (default: %(default)s)")
     p.set_defaults(func=run)

@@ -76,15 +76,16 @@ def register(sub) -> None:
                    ".mp4/.mkv for a video)")
     p.add_argument("--mask-out", metavar="FILE", help="the fitted body's silhouette in the input's camera (.png for "
                    "a photo, a mask video .mkv/.mp4 for a video)")
-    p.add_argument("--iters", type=pos_int, default=120, help="optimiser steps of the first window (default: 120)")
+    p.add_argument("--iters", type=pos_int, default=120,
+                   help="optimiser steps of the first window (default: %(default)s)")
     p.add_argument("--warm-iters", type=pos_int, default=50,
-                   help="optimiser steps of each later window, warm-started (default: 50)")
-    p.add_argument("--window", type=pos_int, default=8, help="frames fitted together (default: 8)")
+                   help="optimiser steps of each later window, warm-started (default: %(default)s)")
+    p.add_argument("--window", type=pos_int, default=8, help="frames fitted together (default: %(default)s)")
     p.add_argument("--smooth", type=float, default=1.5,
                    help="video: Gaussian sigma in frames of the final smoothing pass (0: none; default: 1.5)")
     p.add_argument("--fov", type=pos_float, default=60.0,
                    help="field of view (degrees) across the longer side when the input has no EXIF focal length "
-                   "(default: 60)")
+                   "(default: %(default)g)")
     p.add_argument("--no-shape", action="store_true", help="keep the default body shape (fit the pose only)")
     p.add_argument("--threads", type=pos_int, default=None, help="torch and ONNX Runtime threads (default: all)")
     p.set_defaults(func=run)

@@ -7,7 +7,7 @@ import logging
 from pathlib import Path
 
 from .argtypes import exposure_arg, image_size, nonneg_int
-from .options import LIGHT_HELP, add_command
+from .options import LIGHT_HELP, add_command, no_subcommand
 from .paths import out_file
 
 logger = logging.getLogger("relightnet.light")
@@ -53,14 +53,6 @@ def run_convert(args: argparse.Namespace) -> int:
     return 0
 
 
-def _no_subcommand(parser: argparse.ArgumentParser):
-    def run(args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    return run
-
-
 def register(sub) -> None:
     light = add_command(
         sub,
@@ -72,7 +64,7 @@ def register(sub) -> None:
         "  relightnet light convert relightnet/data/envmaps/sunset.exr sunset.npz --lmax 3\n"
         "  relightnet light convert kanamori_light.npy light.json\n",
     )
-    light.set_defaults(func=_no_subcommand(light))
+    light.set_defaults(func=no_subcommand(light))
     lsub = light.add_subparsers(dest="light_command", metavar="{show,convert}")
 
     show = add_command(
@@ -87,16 +79,16 @@ def register(sub) -> None:
         "  relightnet light show lights_over_time.npz --out seq.png   # up to 8 frames as spheres\n",
     )
     show.add_argument("light", help=LIGHT_HELP)
-    show.add_argument("--out", default="light.png", help="output .png (default: light.png)")
+    show.add_argument("--out", default="light.png", help="output .png (default: %(default)s)")
     show.add_argument(
         "--lmax", type=nonneg_int, default=None,
         help="SH order: projection order for env maps/presets (default 2); truncates/pads stored lights",
     )
     show.add_argument(
         "--exposure", type=exposure_arg, default="auto",
-        help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: auto)",
+        help="'auto' (sphere 99th percentile at 0.9) or a linear multiplier (default: %(default)s)",
     )
-    show.add_argument("--size", type=image_size, default=256, help="sphere size in pixels (default: 256)")
+    show.add_argument("--size", type=image_size, default=256, help="sphere size in pixels (default: %(default)s)")
     show.set_defaults(func=run_show)
 
     conv = add_command(

@@ -60,7 +60,7 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output .onnx (weights inside)")
     p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
                    help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; inside the graph")
-    p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
+    p.add_argument("--alpha", type=float, default=0.3, help="ema: weight of the newest frame (default: %(default)g)")
     method_options(p, {"alpha": ("ema",)})
     p.add_argument("--int8", action="store_true", help="also write OUT_int8.onnx")
     p.add_argument("--int8-mode", choices=("static", "dynamic"), default="static",

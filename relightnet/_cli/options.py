@@ -12,7 +12,7 @@ from ..errors import InputError
 from ..names import MASK_SOURCES, MOTION_KINDS, POSE_PRESETS, light_presets
 from .argtypes import phenotype_arg, pos_int
 
-__all__ = ["add_command", "LIGHT_HELP", "method_options", "check_method_options", "MASK_SOURCE_HELP",
+__all__ = ["add_command", "no_subcommand", "LIGHT_HELP", "method_options", "check_method_options", "MASK_SOURCE_HELP",
            "add_mask_source_arg", "add_model_args", "add_body_args"]
 
 
@@ -25,6 +25,16 @@ def add_command(sub, name: str, help: str, examples: str) -> argparse.ArgumentPa
         epilog="examples:\n" + examples,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+
+
+def no_subcommand(parser: argparse.ArgumentParser):
+    """The ``func`` of a command given without its subcommand: print the command's help, exit status 2."""
+
+    def run(args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 2
+
+    return run
 
 
 LIGHT_HELP = (
@@ -63,20 +73,21 @@ def add_model_args(p: argparse.ArgumentParser, backend: bool = True, device: boo
                    "model)" if backend else "model checkpoint (default: the shipped model)")
     if backend:
         p.add_argument("--backend", default="torch", choices=("torch", "onnx"),
-                       help="run the CNN in PyTorch or in ONNX Runtime (exported once and cached; default: torch)")
+                       help="run the CNN in PyTorch or in ONNX Runtime (exported once and cached; "
+                            "default: %(default)s)")
     if device:
-        p.add_argument("--device", default="cpu", help="cpu or cuda" + (" (torch backend" if backend else " (")
-                       + "; default: cpu)")
+        p.add_argument("--device", default="cpu", help="cpu or cuda (" + ("torch backend; " if backend else "")
+                       + "default: %(default)s)")
 
 
 def add_body_args(p: argparse.ArgumentParser, fps_help: str = "video frame rate (default: 30)") -> None:
     """--body, --pose, --motion, --frames, --fps, --phenotype: the posed body of render-body and blender-export."""
     p.add_argument("--body", default="anny", help="'anny' (default) or 'smpl:PATH' to a user-supplied SMPL file")
     p.add_argument("--pose", default="arms_down", choices=POSE_PRESETS, metavar="POSE",
-                   help=f"pose preset of a still Anny body: {', '.join(POSE_PRESETS)} (default: arms_down)")
+                   help=f"pose preset of a still Anny body: {', '.join(POSE_PRESETS)} (default: %(default)s)")
     p.add_argument("--motion", help=f"procedural motion for Anny ({', '.join(MOTION_KINDS)}) or an SMPL-style "
                    "motion file (.npz/.pkl with poses (T,72), betas (10,), trans (T,3)) for --body smpl:PATH")
-    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: 60)")
+    p.add_argument("--frames", type=pos_int, default=60, help="frames of a procedural motion (default: %(default)s)")
     p.add_argument("--fps", type=float, default=30.0, help=fps_help)
     p.add_argument("--phenotype", type=phenotype_arg, action="append", metavar="NAME=VALUE",
                    help="Anny phenotype value (gender, age, muscle, weight, height, proportions); repeatable")

@@ -109,7 +109,7 @@ def register(sub) -> None:
     add_mask_source_arg(p)
     p.add_argument("--light", required=True, help=LIGHT_HELP)
     p.add_argument("--out", required=True, help="relit image: .png (lossless), .jpg/.jpeg or .webp (--quality)")
-    p.add_argument("--quality", type=quality, default=92, help="JPEG/WebP quality, 1 to 100 (default: 92)")
+    p.add_argument("--quality", type=quality, default=92, help="JPEG/WebP quality, 1 to 100 (default: %(default)s)")
     p.add_argument("--save-maps", metavar="DIR", help="also write albedo, shading, mask, transport, lights")
     p.add_argument("--absolute", action="store_true",
                    help="use the light at its own scale (default: keep the photo's exposure)")
@@ -134,7 +134,8 @@ def register(sub) -> None:
     p.add_argument("--turntable", type=float, default=0.0, help="turn the light about the up axis, degrees/second")
     p.add_argument("--smoothing", choices=STREAMING_SMOOTHING, default="auto",
                    help=smoothing_help(STREAMING_SMOOTHING, "auto") + "; of the source-light estimate")
-    p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the newest frame (default: 0.3)")
+    p.add_argument("--alpha", type=pos_float, default=0.3,
+                   help="ema: weight of the newest frame (default: %(default)g)")
     p.add_argument("--cnn-albedo", action="store_true",
                    help="relight the CNN's albedo instead of each frame divided by the predicted shading")
     p.add_argument("--hard-edges", action="store_true", help=_HARD_EDGES)

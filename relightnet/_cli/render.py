@@ -167,11 +167,11 @@ def run_render_body(args: argparse.Namespace) -> int:
 
 def _prt_options(p: argparse.ArgumentParser, n_dirs: int) -> None:
     p.add_argument("--light", required=True, help=LIGHT_HELP)
-    p.add_argument("--lmax", type=nonneg_int, default=2, help="SH order of the light (default: 2)")
-    p.add_argument("--res", type=pos_int, default=512, help="square image size in pixels (default: 512)")
+    p.add_argument("--lmax", type=nonneg_int, default=2, help="SH order of the light (default: %(default)s)")
+    p.add_argument("--res", type=pos_int, default=512, help="square image size in pixels (default: %(default)s)")
     p.add_argument("--occlusion", action=argparse.BooleanOptionalAction, default=True,
                    help="ray-cast visibility in the transport (default: on)")
-    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: 0)")
+    p.add_argument("--bounces", type=nonneg_int, default=0, help="interreflection bounces (default: %(default)s)")
     p.add_argument("--n-dirs", type=pos_int, default=n_dirs, help=f"PRT directions (default: {n_dirs})")
     p.add_argument("--exposure", type=exposure_arg, default="auto",
                    help="'auto' (99th percentile of the body at 0.9) or a linear multiplier")

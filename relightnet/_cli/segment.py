@@ -58,5 +58,6 @@ def register(sub) -> None:
     p.add_argument("--soft", action="store_true",
                    help="photos: write the soft matte (the segmentation's probability refined on the photo in a "
                    "narrow band around the outline; 8-bit gray PNG) instead of the binary mask")
-    p.add_argument("--threads", type=nonneg_int, default=0, help="ONNX Runtime threads (default: 0, all cores)")
+    p.add_argument("--threads", type=nonneg_int, default=0,
+                   help="ONNX Runtime threads (default: %(default)s, all cores)")
     p.set_defaults(func=run)

@@ -113,9 +113,9 @@ def register(sub) -> None:
                    "switches) or .json (sh only)")
     p.add_argument("--smoothing", default="hermite", choices=SEQUENCE_SMOOTHING,
                    help=smoothing_help(SEQUENCE_SMOOTHING, "hermite"))
-    p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: 8)")
+    p.add_argument("--knots", type=pos_float, default=8.0, help="hermite: frames between knots (default: %(default)g)")
     p.add_argument("--tangents", choices=("catmull-rom", "free"), default="catmull-rom",
-                   help="hermite: knot tangents from finite differences or fitted (default: catmull-rom)")
+                   help="hermite: knot tangents from finite differences or fitted (default: %(default)s)")
     p.add_argument("--degree", type=int, default=None,
                    help="poly/savgol: polynomial degree (default 2); fir: 0 = moving average, 1 = linear")
     p.add_argument("--window", type=nonneg_int, default=None,
@@ -123,17 +123,19 @@ def register(sub) -> None:
                         "(default 9); fir: taps (default 5)")
     p.add_argument("--outlier-eps", default="3mad",
                    help="outlier threshold: '<c>mad' (c robust deviations above the median distance), an "
-                        "absolute light distance, or 'none' (default: 3mad); causal: '<c>mad' = c times the "
+                        "absolute light distance, or 'none' (default: %(default)s); causal: '<c>mad' = c times the "
                         "running innovation scale")
     p.add_argument("--switches", choices=("auto", "none"), default="auto",
-                   help="offline: split the sequence at persistent jumps (default: auto)")
-    p.add_argument("--iterations", type=pos_int, default=3, help="offline outlier passes (default: 3)")
-    p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the new frame (default: 0.3)")
-    p.add_argument("--min-cutoff", type=pos_float, default=0.5, help="one-euro: cutoff at rest, Hz (default: 0.5)")
-    p.add_argument("--beta", type=float, default=1.0, help="one-euro: cutoff gain per unit speed (default: 1)")
-    p.add_argument("--rate", type=pos_float, default=30.0, help="one-euro: frames per second (default: 30)")
+                   help="offline: split the sequence at persistent jumps (default: %(default)s)")
+    p.add_argument("--iterations", type=pos_int, default=3, help="offline outlier passes (default: %(default)s)")
+    p.add_argument("--alpha", type=pos_float, default=0.3, help="ema: weight of the new frame (default: %(default)g)")
+    p.add_argument("--min-cutoff", type=pos_float, default=0.5,
+                   help="one-euro: cutoff at rest, Hz (default: %(default)g)")
+    p.add_argument("--beta", type=float, default=1.0,
+                   help="one-euro: cutoff gain per unit speed (default: %(default)g)")
+    p.add_argument("--rate", type=pos_float, default=30.0, help="one-euro: frames per second (default: %(default)g)")
     p.add_argument("--persist", type=pos_int, default=2,
-                   help="causal: frames a jump must last to count as a switch (default: 2)")
+                   help="causal: frames a jump must last to count as a switch (default: %(default)s)")
     p.add_argument("--truth", default=None, help="true light sequence, for the error and the plot")
     p.add_argument("--plot", default=None, help="write a .png of raw/smoothed/true coefficients over time")
     offline, causal = OFFLINE_METHODS, tuple(n for n in smoothing_names(causal=True) if n in SEQUENCE_SMOOTHING)

@@ -13,6 +13,9 @@ from .paths import out_dir, out_file
 
 logger = logging.getLogger("relightnet.synth")
 
+#: --ray: CPUs reserved per shard task; --preview: rows of the sheet (when not given).
+CPUS_PER_TASK, PREVIEW_ROWS = 1.0, 8
+
 _DESCRIPTION = """\
 Make a synthetic training set of people (Anny bodies, clothes, env-map and procedural lights)
 with ground truth albedo, SH transport and light, as shards + manifest.json in --out.
@@ -105,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
         from ..data.preview import preview
 
         out = out_file(args.out, suffixes=(".png",)) if args.out else None
-        path = preview(args.preview, out, n=8 if args.n is None else args.n, split=args.split)
+        path = preview(args.preview, out, n=PREVIEW_ROWS if args.n is None else args.n, split=args.split)
         logger.info("wrote %s", path)
         return 0
     if not args.out:
@@ -124,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         from ..distributed import RayOptions
 
         ray = RayOptions(address=args.ray or None,
-                         cpus_per_task=1.0 if args.cpus_per_task is None else args.cpus_per_task)
+                         cpus_per_task=CPUS_PER_TASK if args.cpus_per_task is None else args.cpus_per_task)
     splits = None if not args.splits else [s.strip() for s in args.splits.split(",") if s.strip()]
     m = run_synth(out, cfg, workers=workers, splits=splits, progress=not args.quiet,
                   compression=args.compression, ray=ray, max_retries=args.max_retries)
@@ -170,12 +173,13 @@ def register(sub) -> None:
                    help="run one Ray task per shard: on the running cluster (RAY_ADDRESS or 'ray start' here), "
                    "else a new local instance; ADDRESS: HOST:PORT of a head node, or 'local' (needs relightnet[ray])")
     p.add_argument("--cpus-per-task", type=pos_float, default=None,
-                   help="--ray: CPUs reserved per shard task (default: 1)")
+                   help=f"--ray: CPUs reserved per shard task (default: {CPUS_PER_TASK:g})")
     p.add_argument("--max-retries", type=nonneg_int, default=2,
                    help="times a shard that raised or whose worker process (or Ray node) died is tried again "
-                   "(default: 2)")
+                   "(default: %(default)s)")
     p.add_argument("--compression", choices=("deflate", "store"), default="deflate",
-                   help="shard compression (default: deflate)")
-    p.add_argument("--n", type=int, default=None, help="--preview: samples (rows) in the sheet (default: 8)")
+                   help="shard compression (default: %(default)s)")
+    p.add_argument("--n", type=int, default=None,
+                   help=f"--preview: samples (rows) in the sheet (default: {PREVIEW_ROWS})")
     p.add_argument("--split", help="--preview: split to show (default: the first with shards)")
     p.set_defaults(func=run, interrupt_hint=lambda a: f"run the same command again to resume {a.out}")

@@ -1,6 +1,6 @@
 """How well ``relightnet capture`` makes an avatar, on generated people whose truth is known.
 
-``relightnet evaluate --capture`` and ``benchmarks/bench_capture.py`` both run :func:`evaluate_capture`.
+``relightnet evaluate capture`` and ``benchmarks/bench_capture.py`` both run :func:`evaluate_capture`.
 Each clip is an unseen generated person (:func:`relightnet.capture.truth.turning_person`, seeds of
 their own) turning one full circle; it is filmed twice, under the two lights of
 :func:`~relightnet.capture.truth.light_pair`, and each film goes through :func:`capture_file`
@@ -59,7 +59,7 @@ BASE_SEED = 7301
 NEW_ANGLES = (0.25 * math.pi, 0.75 * math.pi, 1.25 * math.pi, 1.75 * math.pi)
 NEW_LIGHT = "sunset"
 #: The truth clips' field of view (:func:`relightnet.raster.default_camera`'s, degrees): the fit is told it, as
-#: ``evaluate --fit`` gives the fit the clip's true camera (a video has no EXIF focal length, and the fit's
+#: ``evaluate fit`` gives the fit the clip's true camera (a video has no EXIF focal length, and the fit's
 #: default of 60° would film a taller person nearer).
 TRUTH_FOV_DEG = 35.0
 

@@ -1,6 +1,6 @@
 """How well :mod:`relightnet.fit` recovers a body, on generated clips whose true body is known.
 
-``relightnet evaluate --fit`` and ``benchmarks/bench_fit.py`` both run :func:`evaluate_fit_clip`:
+``relightnet evaluate fit`` and ``benchmarks/bench_fit.py`` both run :func:`evaluate_fit_clip`:
 the data generator's test clip (unseen body, motion, camera and light) goes through the shipped
 segmentation (landmarks and masks) and the fit (warm-started windows, then the smoothing pass),
 and the fit is compared with the generator's own body:

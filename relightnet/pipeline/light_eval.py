@@ -1,6 +1,6 @@
 """How good the estimated light is: per photo (by light family) and per shot (drift, lag).
 
-``relightnet evaluate --light`` runs :func:`evaluate_light`:
+``relightnet evaluate light`` runs :func:`evaluate_light`:
 
 - **stills** — every item of a split (the test split: unseen bodies, the held-out env maps
   rotated and new procedural lights), seen two ways: as rendered (the person alone at the
@@ -195,7 +195,7 @@ def evaluate_light(model, data_dir=None, clips=(), split: str = "test", smoothin
         every = [c for d in clips for c in clip_lights(model, d, split, smoothing)]
         result["clips"] = clip_metrics(every)
     if not result:
-        raise InputError("evaluate --light: give a dataset of stills (--data) or of clips (--clips)")
+        raise InputError("evaluate light: give a dataset of stills (--data) or of clips (--clips)")
     return result
 
 

@@ -1,4 +1,4 @@
-"""Two checks of the 2D path on real photos of people, with no ground truth (``relightnet evaluate --photos``).
+"""Two checks of the 2D path on real photos of people, with no ground truth (``relightnet evaluate photos``).
 
 A folder of photos is all they need: each photo's person is found by the package's own person
 segmentation (:func:`relightnet.segment.segment_person`, the full-resolution mask > 0.5), and a
@@ -28,7 +28,7 @@ shipped presets) and the light is estimated back from the relit photo (sRGB floa
 quantised to 8 bits) with the estimator ``relightnet estimate-light`` uses
 (:meth:`~relightnet.pipeline.backends.Predictor.light`) and the photo's own mask (the person
 has not moved); the estimate is scored against the light with the scale-invariant irradiance
-error of ``evaluate --light`` (:func:`relightnet.sh.scale_invariant_light_error`, whole sphere;
+error of ``evaluate light`` (:func:`relightnet.sh.scale_invariant_light_error`, whole sphere;
 0 is perfect, 1 no better than a zero light). The "changes nothing" baseline scores the light
 estimated from the original photo against each light. Medians are over photos × lights.
 

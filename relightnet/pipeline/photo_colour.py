@@ -1,4 +1,4 @@
-"""Does relighting invent colour? Two figures of a photo relit under white side lights (``evaluate --photos``).
+"""Does relighting invent colour? Two figures of a photo relit under white side lights (``evaluate photos``).
 
 A white light changes the person's shading, not their colour: the relit person's chromaticity
 should differ from the photo's by the photo light's own tint only (a few hundredths). Where the

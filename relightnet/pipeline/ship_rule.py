@@ -1,4 +1,4 @@
-"""Which of two models ships: floors plus one score (``relightnet evaluate --ship INCUMBENT CANDIDATE``).
+"""Which of two models ships: floors plus one score (``relightnet evaluate ship INCUMBENT CANDIDATE``).
 
 A candidate replaces the shipped model when it keeps every floor and improves the score:
 
@@ -6,12 +6,12 @@ A candidate replaces the shipped model when it keeps every floor and improves th
   package's own masks) at least :data:`SIDE_CONTRAST_FLOOR`; and no generated-data metric of
   :data:`FLOOR_METRICS` more than :data:`WORSE_BY` (5%) worse than the incumbent's. Those are the
   test split's maps and relit images *as photos*: each composite framed around its mask as
-  ``relight-image`` frames a photo (``evaluate --as-photo``), the only framing a user's input has.
+  ``relight-image`` frames a photo (``evaluate data --as-photo``), the only framing a user's input has.
   The same metrics on the renders at their training framing are reported beside them
   (:data:`INFO_METRICS`) but do not block;
 - **score**: the mean over :data:`SCORE_METRICS` of the candidate's light error divided by the
   incumbent's (so each error counts by its relative change): the test split's stills as photos
-  (median scale-invariant irradiance error, ``evaluate --light``), ``relightnet compare`` on clips
+  (median scale-invariant irradiance error, ``evaluate light``), ``relightnet compare`` on clips
   (mean relative error of the per-frame estimate) and the real-photo round trip through the user's
   path (median over photos × lights). Below 1 is better.
 

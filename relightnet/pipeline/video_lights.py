@@ -3,7 +3,7 @@
 :func:`estimate_video_evidence` runs the CNN on every frame (streaming) and keeps what a video
 needs (the per-frame lights, and for a network that solves its light the solve's evidence and
 priors); :func:`relightnet.temporal.smooth_video_lights` smooths them. ``avatar``, ``compare``
-and ``evaluate --light`` use both.
+and ``evaluate light`` use both.
 
 The estimates of ``avatar`` are kept in its side file ``OUT.lights.npz``
 (:func:`write_video_lights`) with a fingerprint of the inputs (:func:`lights_fingerprint`): when

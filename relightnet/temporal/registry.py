@@ -4,7 +4,7 @@ The methods — names, whether they are causal or need the light solve's evidenc
 and one-line summaries — are one torch-free table, :data:`relightnet.names.SMOOTHING_METHODS`;
 every list a command accepts and every ``--smoothing`` help is derived from it. Every method
 smooths a whole recorded sequence (``smooth-light``: :func:`smooth_sequence`; the offline video
-jobs ``avatar``, ``compare``, ``evaluate --light``: :func:`smooth_video_lights`, which resolves
+jobs ``avatar``, ``compare``, ``evaluate light``: :func:`smooth_video_lights`, which resolves
 the name once and returns the method used); the *causal* ones also run frame by frame with
 explicit state (``relight-video``, ``export``'s ONNX graph: :func:`make_smoother`).
 ``pooled`` needs the per-frame evidence of a network that solves its light
@@ -169,7 +169,7 @@ class VideoSmoothing(NamedTuple):
 def smooth_video_lights(raw: torch.Tensor, method: str = "auto", evidence=None, prior=None, reg: float = 1e-2,
                         fps: float = 30.0, colour: torch.Tensor | None = None) -> VideoSmoothing:
     """Smooth a video's (T, K, 3) per-frame lights the way every offline video job does
-    (``avatar``, ``compare``, ``evaluate --light``); the method is resolved here, once.
+    (``avatar``, ``compare``, ``evaluate light``); the method is resolved here, once.
 
     ``method`` is ``auto`` or any method of :data:`relightnet.names.SMOOTHING_METHODS`.
     ``pooled`` shares the light across frames: the per-frame evidence of the light solve

@@ -1,4 +1,4 @@
-"""evaluate --light: per-family still metrics and drift/lag on generated clips (real generator, tiny sizes)."""
+"""evaluate light: per-family still metrics and drift/lag on generated clips (real generator, tiny sizes)."""
 
 import json
 
@@ -70,7 +70,7 @@ def test_cli_evaluate_light(tiny_dataset, tmp_path):
 
     net = _net("solve")
     ckpt = save_checkpoint(tmp_path / "m.pt", net, net.config, step=0, input_size=32)
-    rc = main(["evaluate", "--light", "--checkpoint", str(ckpt), "--data", str(tiny_dataset), "--out",
+    rc = main(["evaluate", "light", "--checkpoint", str(ckpt), "--data", str(tiny_dataset), "--out",
                str(tmp_path / "rep")])
     assert rc == 0
     assert "| all | 3 |" in (tmp_path / "rep" / "light_report.md").read_text()

@@ -45,10 +45,11 @@ def test_no_gain_in_the_light_errors_does_not_ship():
 
 
 def test_evaluate_ship_checks_its_options_before_any_work(tmp_path, capsys):
-    assert main(["evaluate", "--ship", "shipped", "x.pt", "--out", str(tmp_path / "r")]) == 1
-    assert "--ship: needs --data, --clips, --photos" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["evaluate", "ship", "shipped", "x.pt", "--out", str(tmp_path / "r")])
+    assert "the following arguments are required: --data, --clips, --photos" in capsys.readouterr().err
     (tmp_path / "photos").mkdir()
-    assert main(["evaluate", "--ship", "shipped", str(tmp_path / "x.pt"), "--data", str(tmp_path), "--clips",
+    assert main(["evaluate", "ship", "shipped", str(tmp_path / "x.pt"), "--data", str(tmp_path), "--clips",
                  str(tmp_path), "--photos", str(tmp_path / "photos"), "--out", str(tmp_path / "r")]) == 1
     assert "no photos" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
