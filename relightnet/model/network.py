@@ -31,12 +31,13 @@ from __future__ import annotations
 
 import contextlib
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import torch
 from torch import nn
 from torch.nn import functional as F
 
-from ..checks import InputError, ShapeError, check_shape
+from ..checks import InputError, ShapeError, check_choices, check_shape
 from ..color import srgb_to_linear
 from ..raster.interpolate import to_channels_first, to_channels_last
 from ..sh.irradiance import cone_transport
@@ -44,16 +45,22 @@ from ..sh.light_solve import Evidence, light_evidence, solve_light
 from .guided import FastGuidedUpsample, double_to, pool_input
 from .maps import shading_map
 
-__all__ = ["LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps", "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction",
-           "RelightNet", "normalize_input"]
+__all__ = ["LightMode", "TransportHead", "Encoder", "LIGHT_MODES", "TRANSPORT_HEADS", "ENCODERS", "cone_maps",
+           "DEFAULT_INPUT_SIZE", "NetConfig", "Prediction", "RelightNet", "normalize_input"]
 
 
 #: How the network gets its light (see the module docstring).
-LIGHT_MODES = ("head", "solve", "hybrid")
+LightMode = Literal["head", "solve", "hybrid"]
 #: How the network forms its transport (see the module docstring).
-TRANSPORT_HEADS = ("free", "cone")
+TransportHead = Literal["free", "cone"]
 #: What the network reads the person with (see the module docstring).
-ENCODERS = ("own", "pose")
+Encoder = Literal["own", "pose"]
+#: The choices of :data:`LightMode`, as a tuple.
+LIGHT_MODES = get_args(LightMode)
+#: The choices of :data:`TransportHead`.
+TRANSPORT_HEADS = get_args(TransportHead)
+#: The choices of :data:`Encoder`.
+ENCODERS = get_args(Encoder)
 #: Working size of a network whose checkpoint does not say what it was trained at.
 DEFAULT_INPUT_SIZE = 256
 
@@ -78,22 +85,16 @@ class NetConfig:
     levels: int = 4
     mask_head: bool = True
     light_hidden: int = 256
-    light_mode: str = "head"
+    light_mode: LightMode = "head"
     solve_reg: float = 1e-2
     input_size: int = DEFAULT_INPUT_SIZE
-    transport_head: str = "free"
-    encoder: str = "own"
+    transport_head: TransportHead = "free"
+    encoder: Encoder = "own"
     encoder_train_after: int = 0
     work_scale: int = 1
 
     def __post_init__(self) -> None:
-        if self.light_mode not in LIGHT_MODES:
-            raise InputError(f"net config light_mode: expected one of {LIGHT_MODES}, got {self.light_mode!r}")
-        if self.transport_head not in TRANSPORT_HEADS:
-            raise InputError(f"net config transport_head: expected one of {TRANSPORT_HEADS}, "
-                             f"got {self.transport_head!r}")
-        if self.encoder not in ENCODERS:
-            raise InputError(f"net config encoder: expected one of {ENCODERS}, got {self.encoder!r}")
+        check_choices(self, "net config")  # light_mode, transport_head, encoder
         if self.encoder_train_after not in (0, 2, 4, 8, 16):
             raise InputError("net config encoder_train_after: expected 0 (frozen) or a stride 2, 4, 8 or 16 of "
                              f"the pose network after which it trains, got {self.encoder_train_after!r}")
