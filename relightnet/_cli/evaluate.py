@@ -197,10 +197,15 @@ def _register_fit(esub) -> None:
                     "  relightnet evaluate fit --out reports/fit\n"
                     "  relightnet evaluate fit --clips 3 --frames 12 --res 256 --out reports/fit\n")
     _out_arg(p, "fit_report.md, fit_metrics.json")
-    p.add_argument("--clips", type=pos_int, default=FIT_CLIPS, help="generated clips (default: %(default)s)")
-    p.add_argument("--frames", type=pos_int, default=FIT_FRAMES, help="frames per clip (default: %(default)s)")
-    p.add_argument("--res", type=work_size, default=FIT_RES, help="clip size (default: %(default)s)")
+    _generated_args(p, (FIT_CLIPS, FIT_FRAMES, FIT_RES), ("generated clips", "frames per clip", "clip size"))
     p.set_defaults(func=run_fit)
+
+
+def _generated_args(p, defaults: tuple[int, int, int], what: tuple[str, str, str]) -> None:
+    """``--clips``, ``--frames`` and ``--res`` of a report on generated clips: their defaults and their words."""
+    for flag, kind, default, words in zip(("--clips", "--frames", "--res"), (pos_int, pos_int, work_size), defaults,
+                                          what, strict=True):
+        p.add_argument(flag, type=kind, default=default, help=f"{words} (default: %(default)s)")
 
 
 def _register_capture(esub) -> None:
@@ -211,9 +216,8 @@ def _register_capture(esub) -> None:
                     "  relightnet evaluate capture --clips 2 --frames 48 --out reports/capture\n")
     add_model_args(p, backend=False)
     _out_arg(p, "capture_report.md, capture_metrics.json")
-    p.add_argument("--clips", type=pos_int, default=CAPTURE_CLIPS, help="generated people (default: %(default)s)")
-    p.add_argument("--frames", type=pos_int, default=CAPTURE_FRAMES, help="frames per film (default: %(default)s)")
-    p.add_argument("--res", type=work_size, default=CAPTURE_RES, help="frame size (default: %(default)s)")
+    _generated_args(p, (CAPTURE_CLIPS, CAPTURE_FRAMES, CAPTURE_RES), ("generated people", "frames per film",
+                                                                      "frame size"))
     p.add_argument("--texture", type=pos_int, default=CAPTURE_TEXTURE, help="texture side (default: %(default)s)")
     p.set_defaults(func=run_capture)
 
