@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..checks import InputError
-from ..io.documents import clip, short
+from ..io.documents import clip, from_mapping, short
 
 __all__ = ["SPLITS", "HDRI_NAMES", "SynthConfig", "load_config", "sample_seed"]
 
@@ -172,10 +172,7 @@ class SynthConfig:
     def from_dict(cls, d: dict) -> SynthConfig:
         if not isinstance(d, dict):
             raise InputError(f"config: expected a mapping of config keys, got {type(d).__name__}")
-        unknown = set(d) - {f.name for f in dataclasses.fields(cls)}
-        if unknown:
-            raise InputError(f"config: unknown keys {short(sorted(map(str, unknown)))}")
-        return cls(**d)
+        return from_mapping(cls, d, "config")
 
 
 def load_config(path) -> SynthConfig:

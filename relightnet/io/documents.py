@@ -16,6 +16,7 @@ and :func:`short` is the one way an error message quotes a value from a file (at
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import reprlib
@@ -24,7 +25,8 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["MAX_DOCUMENT_BYTES", "MAX_DEPTH", "read_document", "parse_document", "short", "clip", "check_regular_file"]
+__all__ = ["MAX_DOCUMENT_BYTES", "MAX_DEPTH", "read_document", "parse_document", "short", "clip", "check_regular_file",
+           "from_mapping"]
 
 #: Largest YAML/JSON document read (bytes).
 MAX_DOCUMENT_BYTES = 16 << 20
@@ -172,3 +174,24 @@ def read_document(path: str | os.PathLike, what: str, yaml_ok: bool = True):
     except UnicodeDecodeError:
         raise InputError(f"{path}: the {what} is not UTF-8 text") from None
     return parse_document(text, f"{Path(path)}", what, yaml_ok=yaml_ok)
+
+
+def from_mapping(cls, value, where: str):
+    """A dataclass ``cls`` from a document's mapping (a config or one of its sections), its keys checked.
+
+    Args:
+        cls: the dataclass; its ``__init__`` checks the values.
+        value: a mapping of ``cls``'s field names (or already a ``cls``, returned as it is).
+        where: what the user calls the mapping; starts the error message.
+
+    Raises:
+        InputError: ``value`` is not a mapping, or has keys that are not fields of ``cls``.
+    """
+    if isinstance(value, cls):
+        return value
+    if not isinstance(value, dict):
+        raise InputError(f"{where}: expected a mapping, got {type(value).__name__}")
+    unknown = set(value) - {f.name for f in dataclasses.fields(cls)}
+    if unknown:
+        raise InputError(f"{where}: unknown keys {short(sorted(map(str, unknown)))}")
+    return cls(**value)

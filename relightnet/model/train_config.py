@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Literal
 
 from ..checks import InputError, check_choices
-from ..io.documents import clip, short
+from ..io.documents import clip, from_mapping, short
 from .losses import LossWeights
 from .network import NetConfig
 from .photo_input import PhotoInput, photo_input
@@ -67,14 +67,7 @@ class AugmentConfig:
 
 def _section(cls, value, name: str):
     """A section given as a mapping (or already typed) as ``cls``."""
-    if isinstance(value, cls):
-        return value
-    if not isinstance(value, dict):
-        raise InputError(f"train config {name}: expected a mapping, got {type(value).__name__}")
-    unknown = set(value) - {f.name for f in dataclasses.fields(cls)}
-    if unknown:
-        raise InputError(f"train config {name}: unknown keys {short(sorted(map(str, unknown)))}")
-    return cls(**value)
+    return from_mapping(cls, value, f"train config {name}")
 
 
 def _plain(value):
