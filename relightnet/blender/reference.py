@@ -200,13 +200,13 @@ def reference_comparison(
                          cycles=CyclesSettings(spp=spp, bounces=max(bounces)))
         next(iter(render_blend(blends["sh"], spp=1, bounces=0, threads=threads)))  # warm-up: kernel loading
         for b in bounces:
-            def prt(b=b):
+            def render_ours(b=b):
                 T = vertex_transport(v, f, n, prt=replace(prt, bounces=b), albedo=rho if b else None)
                 return T, render_mesh(v, f, T, albedo, L, camera, normals=n, light_frame="world", maps=True)
 
             if b == bounces[0]:
-                prt()  # warm-up: ray-engine start-up
-            (T, r), ours_s = _median_time(prt, repeat)
+                render_ours()  # warm-up: ray-engine start-up
+            (T, r), ours_s = _median_time(render_ours, repeat)
             r_lift = render_mesh(v, f, T, albedo, L_lift, camera, light_frame="world")
             ours = r.image[0] / CYCLES_TO_RELIGHTNET
             ours_lift = r_lift.image[0] / CYCLES_TO_RELIGHTNET
