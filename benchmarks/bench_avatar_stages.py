@@ -45,6 +45,7 @@ def make_target(path: Path, h: int, w: int, frames: int) -> Path:
     from relightnet.io import VideoWriter
     from relightnet.io.envmap import read_envmap
     from relightnet.pipeline import avatar_albedo
+    from relightnet.prt import PrtSettings
     from relightnet.raster import default_camera
     from relightnet.render import render_body_frames
     from relightnet.sh import preset_light
@@ -55,8 +56,8 @@ def make_target(path: Path, h: int, w: int, frames: int) -> Path:
     env = linear_to_srgb(env.permute(1, 2, 0).clamp(0, 1))
     body = AnnyBody()
     person = render_body_frames(body, make_motion("turn", frames), preset_light("sunset"), avatar_albedo(body),
-                                camera=default_camera((h, w), distance=2.6), n_frames=frames, n_dirs=16,
-                                visible_only=True)
+                                camera=default_camera((h, w), distance=2.6), n_frames=frames,
+                                prt=PrtSettings(n_dirs=16), visible_only=True)
     masks = path.with_name(path.stem + ".masks.mp4")
     with VideoWriter(path, fps=30, srgb=False) as v, VideoWriter(masks, fps=30) as m:
         for t, fr in enumerate(person):
@@ -75,7 +76,8 @@ def _cpu_s() -> float:
 def child_e2e(args) -> dict:
     """One run of the job; wall and CPU seconds (loading the model and the body excluded)."""
     from relightnet.body import AnnyBody
-    from relightnet.pipeline import avatar, make_predictor
+    from relightnet.pipeline import AvatarLook, avatar, make_predictor
+    from relightnet.prt import PrtSettings
     from relightnet.sh import preset_light
 
     body = AnnyBody()
@@ -84,8 +86,8 @@ def child_e2e(args) -> dict:
     masks = args.target.with_name(args.target.stem + ".masks.mp4") if args.mode == "estimate" else None
     with tempfile.TemporaryDirectory() as d:
         c0, t0 = _cpu_s(), time.perf_counter()
-        res = avatar(args.target, Path(d) / "out.mp4", model=model, body=body, light=light, target_masks=masks,
-                     n_dirs=args.n_dirs, progress=False)
+        res = avatar(args.target, Path(d) / "out.mp4", model=model, look=AvatarLook(body=body), light=light,
+                     target_masks=masks, prt=PrtSettings(n_dirs=args.n_dirs), progress=False)
         return {"frames": res.n_frames, "wall": time.perf_counter() - t0, "cpu": _cpu_s() - c0}
 
 

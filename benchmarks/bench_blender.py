@@ -32,8 +32,10 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 os.environ.setdefault("ANNY_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache" / "anny"))
 from common import table  # noqa: E402
 
+from relightnet.blender import CyclesSettings  # noqa: E402
 from relightnet.blender.reference import reference_comparison  # noqa: E402
 from relightnet.body import AnnyBody  # noqa: E402
+from relightnet.prt import PrtSettings  # noqa: E402
 
 
 def _pct(x: float) -> str:
@@ -57,8 +59,8 @@ def main() -> None:
     body = AnnyBody()
     bounces = [int(b) for b in args.bounces.split(",")]
     r = reference_comparison(body, {"pose": body.pose(args.pose)}, light=args.light, bounces=bounces, size=args.size,
-                             spp=args.spp, n_dirs=args.n_dirs, threads=args.threads, repeat=args.repeat,
-                             cycles_repeat=args.cycles_repeat)
+                             cycles=CyclesSettings(spp=args.spp, threads=args.threads),
+                             prt=PrtSettings(n_dirs=args.n_dirs), repeat=args.repeat, cycles_repeat=args.cycles_repeat)
     s = r.settings
     print(f"relightnet PRT vs Cycles: Anny '{args.pose}', light '{args.light}' (order-2 SH; lift "
           f"{', '.join(f'{x:.3f}' for x in s['lift'])}), {args.size}² px, {args.spp} spp, {args.n_dirs} PRT dirs, "

@@ -49,7 +49,8 @@ def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> flo
     Every run writes a fresh output, so the avatar never reuses earlier light estimates.
     """
     from relightnet.body import AnnyBody
-    from relightnet.pipeline import avatar, make_predictor, relight_video
+    from relightnet.pipeline import AvatarLook, avatar, make_predictor, relight_video
+    from relightnet.prt import PrtSettings
     from relightnet.sh import preset_light
 
     pred = make_predictor(backend)
@@ -57,8 +58,8 @@ def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> flo
     run = Path(tempfile.mkdtemp(dir=out))
     t0 = time.perf_counter()
     if job == "avatar":
-        res = avatar(video, run / "avatar.mkv", model=pred, body=body, target_masks=masks, n_dirs=n_dirs,
-                     progress=False)
+        res = avatar(video, run / "avatar.mkv", model=pred, look=AvatarLook(body=body), target_masks=masks,
+                     prt=PrtSettings(n_dirs=n_dirs), progress=False)
         if res.reused_estimates:
             raise RuntimeError("the benchmark must not reuse light estimates")
     else:
@@ -74,7 +75,7 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     from relightnet.io import VideoWriter, read_masks, read_video
     from relightnet.pipeline import avatar_albedo, make_predictor
     from relightnet.pipeline.avatar import _composite_covered
-    from relightnet.prt import vertex_transport
+    from relightnet.prt import PrtSettings, vertex_transport
     from relightnet.raster import default_camera, rasterize
     from relightnet.render import render_mesh
     from relightnet.temporal import smooth_video_lights
@@ -96,12 +97,12 @@ def stages(video, masks, n_dirs: int) -> list[list]:
     out = body({"pose": {k: v[:1] for k, v in motion["pose"].items()}, "trans": motion["trans"][:1]})
     v, n, f = out.verts[0], out.normals[0], out.faces
     rows.append([f"PRT transport ({n_dirs} dirs, occlusion)", median_ms(
-        lambda: vertex_transport(v, f, n, n_dirs=n_dirs), repeat=5)])
+        lambda: vertex_transport(v, f, n, prt=PrtSettings(n_dirs=n_dirs)), repeat=5)])
     cam = default_camera((h, w))
     seen = rasterize(cam.transform(v), f, cam.size).seen_vertices(f, len(v))
     rows.append([f"PRT transport, visible vertices only ({len(seen)} of {len(v)}; the job's)", median_ms(
-        lambda: vertex_transport(v, f, n, n_dirs=n_dirs, vertices=seen, manifold="ignore"), repeat=5)])
-    T = vertex_transport(v, f, n, n_dirs=n_dirs)
+        lambda: vertex_transport(v, f, n, prt=PrtSettings(n_dirs=n_dirs), vertices=seen, manifold="ignore"), repeat=5)])
+    T = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=n_dirs))
     tex, light = avatar_albedo(body), torch.rand(9, 3) * 0.2
     rows.append(["rasterize + shade (the job rasterizes once, before PRT)",
                  median_ms(lambda: render_mesh(v, f, T, tex, light, cam, normals=n), repeat=5)])

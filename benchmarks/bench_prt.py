@@ -26,7 +26,7 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.prt import EmbreeEngine, available_engines, vertex_rays, vertex_transport  # noqa: E402
+from relightnet.prt import EmbreeEngine, PrtSettings, available_engines, vertex_rays, vertex_transport  # noqa: E402
 from relightnet.prt.transport import transport_directions  # noqa: E402
 from relightnet.sh import light_to_world  # noqa: E402
 
@@ -148,7 +148,7 @@ def main() -> None:
             row = [d, b]
             for eng in engines:
                 def job(d=d, b=b, eng=eng):
-                    return vertex_transport(v, f, n, n_dirs=d, bounces=b, engine=eng)
+                    return vertex_transport(v, f, n, prt=PrtSettings(n_dirs=d, bounces=b, engine=eng))
 
                 row.append(median_ms(job, repeat=max(3, args.repeat // 2)))
             rows.append(row)

@@ -48,6 +48,7 @@ import mitsuba_scene as ms  # noqa: E402
 from common import table  # noqa: E402
 
 from relightnet.prt import (  # noqa: E402
+    PrtSettings,
     make_engine,
     mesh_scale,
     refined_transport,
@@ -279,8 +280,9 @@ def run_scene(mi, name, V, F, N, albedo, cam, light, bitmap, args, rows, picture
         for b in (0, 1):
             def prt(nd=nd, b=b):
                 if midpoints is not None:
-                    return refined_transport(V, F, N, midpoints, n_dirs=nd, bounces=b, albedo=alb_v if b else None)
-                return vertex_transport(V, F, N, n_dirs=nd, bounces=b, albedo=alb_v if b else None)
+                    return refined_transport(V, F, N, midpoints, prt=PrtSettings(n_dirs=nd, bounces=b),
+                                             albedo=alb_v if b else None)
+                return vertex_transport(V, F, N, prt=PrtSettings(n_dirs=nd, bounces=b), albedo=alb_v if b else None)
 
             T, t_prt = timed(prt, 1 if nd > 256 else args.repeat)
             r, t_ren = timed(lambda T=T: render_mesh(V, F, T, alb_v, light, cam, light_frame="world"), args.repeat)

@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
 from relightnet.body import AnnyBody, default_albedo, make_motion  # noqa: E402
-from relightnet.prt import vertex_transport  # noqa: E402
+from relightnet.prt import PrtSettings, vertex_transport  # noqa: E402
 from relightnet.raster import default_camera  # noqa: E402
 from relightnet.render.frame import TexturedAlbedo, render_mesh  # noqa: E402
 from relightnet.render.shading import composite, shade  # noqa: E402
@@ -65,7 +65,7 @@ def bench_frame(n: int = 9) -> list:
         with torch.no_grad():
             out = body(params)
         t1 = time.perf_counter()
-        T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64)
+        T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, prt=PrtSettings(n_dirs=64))
         t2 = time.perf_counter()
         r = render_mesh(out.verts[0], out.faces, T, tex, light, cam)
         t3 = time.perf_counter()

@@ -11,6 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "relightnet"
 MAX_FILE_LINES = 400
 MAX_FUNCTION_LINES = 80
+MAX_PARAMETERS = 12  # options that travel together go as one frozen settings object (docs/design.md)
 
 #: The floors of the package, bottom first (docs/design.md, "Layers"). A module may import its own
 #: subpackage and anything on a lower floor, never the same floor's other packages or a higher one;
@@ -95,6 +96,27 @@ def test_no_function_over_the_limit():
                 if n > MAX_FUNCTION_LINES:
                     long[f"{m}.{node.name}"] = n
     assert long == {}
+
+
+def _parameter_count(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    """Positional, keyword-only, ``*args`` and ``**kwargs`` parameters, ``self``/``cls`` not counted."""
+    a = node.args
+    names = [x.arg for x in (*a.posonlyargs, *a.args, *a.kwonlyargs)]
+    return sum(n not in ("self", "cls") for n in names) + (a.vararg is not None) + (a.kwarg is not None)
+
+
+def test_no_function_takes_too_many_parameters():
+    many = {}
+    for m, tree in TREES.items():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _parameter_count(node) > MAX_PARAMETERS:
+                many[f"{m}.{node.name}"] = _parameter_count(node)
+    assert many == {}
+
+
+def test_the_parameter_count_counts_every_kind():
+    f = ast.parse("def f(self, a, /, b, *c, d, **e): pass").body[0]
+    assert _parameter_count(f) == 5
 
 
 def test_no_private_name_imported_across_subpackages():

@@ -35,13 +35,14 @@ def _outfits(body, light) -> np.ndarray:
     from relightnet.body import make_motion
     from relightnet.names import OUTFITS
     from relightnet.pipeline.outfits import dressed_body
+    from relightnet.prt import PrtSettings
     from relightnet.render import render_body_frames
 
     cols = []
     for spec in (*OUTFITS, "random:3"):
         d = dressed_body(body, spec)
-        fr = list(render_body_frames(d, make_motion("walk", 12), light, d.albedo, size=(320, 192), n_dirs=64,
-                                     n_frames=12, visible_only=True))[9]
+        fr = list(render_body_frames(d, make_motion("walk", 12), light, d.albedo, camera=(320, 192),
+                                     prt=PrtSettings(n_dirs=64), n_frames=12, visible_only=True))[9]
         cols.append(_u8(fr.render.image[0] + 0.93 * (1 - fr.render.alpha[0][..., None])))
     return np.concatenate(cols, 1)
 
@@ -49,14 +50,15 @@ def _outfits(body, light) -> np.ndarray:
 def _closeups(body, light) -> list[np.ndarray]:
     from relightnet.body import default_albedo
     from relightnet.pipeline.smooth_albedo import smooth_default_albedo
-    from relightnet.prt import vertex_transport
+    from relightnet.prt import PrtSettings, vertex_transport
     from relightnet.raster import look_at, perspective_camera
     from relightnet.render import TexturedAlbedo, render_mesh
 
     out = body({"pose": body.pose("apose")})
     cam = perspective_camera(look_at(torch.tensor([0.0, 1.3, 0.95]), torch.tensor([0.0, 1.3, 0.0])), (320, 320),
                              fov_deg=35)
-    T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+    T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, prt=PrtSettings(n_dirs=64),
+                         manifold="ignore")
     old = default_albedo(body)
     panels = []
     for alb in (TexturedAlbedo(old.texture, body.uv, body.uv_faces), smooth_default_albedo(body)):
@@ -67,13 +69,15 @@ def _closeups(body, light) -> list[np.ndarray]:
 
 def _replaced(body, tmp: Path) -> list[np.ndarray]:
     from relightnet.io import read_image, read_video
+    from relightnet.pipeline import AvatarLook, AvatarPlacement
     from relightnet.pipeline.avatar import avatar
     from relightnet.pipeline.walk_target import walking_target
+    from relightnet.prt import PrtSettings
     from relightnet.sh import preset_light
 
     wt = walking_target(tmp, size=(320, 320), n_frames=16, suffix=".mp4", body=body)
-    avatar(wt.video, tmp / "av.mp4", light=preset_light("studio"), body=body, replace_person=True, outfit="casual",
-           n_dirs=32, progress=False)
+    avatar(wt.video, tmp / "av.mp4", light=preset_light("studio"), look=AvatarLook(body=body, outfit="casual"),
+           placement=AvatarPlacement(replace_person=True), prt=PrtSettings(n_dirs=32), progress=False)
     target = list(read_video(wt.video))[8]
     plate = (read_image(tmp / "av.plate.png") * 255).round().byte().numpy()
     frames = list(read_video(tmp / "av.mp4"))
@@ -82,7 +86,7 @@ def _replaced(body, tmp: Path) -> list[np.ndarray]:
 
 def _hems(body, light) -> np.ndarray:
     from relightnet.pipeline.outfits import DressedBody, draw_outfit
-    from relightnet.prt import vertex_transport
+    from relightnet.prt import PrtSettings, vertex_transport
     from relightnet.raster import look_at, perspective_camera
     from relightnet.render import render_mesh
 
@@ -95,7 +99,8 @@ def _hems(body, light) -> np.ndarray:
             cam = perspective_camera(look_at(torch.tensor(eye), torch.tensor(target)), (240, 240), fov_deg=35)
             for d in pair:
                 out = d()
-                T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+                T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, prt=PrtSettings(n_dirs=64),
+                                     manifold="ignore")
                 r = render_mesh(out.verts[0], out.faces, T, d.albedo, light, cam)
                 panels.append(_u8(r.image[0] + 0.93 * (1 - r.alpha[0][..., None])))
     cam = perspective_camera(look_at(torch.tensor([0.55, 0.3, 0.65]), torch.tensor([0.0, 0.1, 0.05])), (240, 240),
@@ -103,7 +108,8 @@ def _hems(body, light) -> np.ndarray:
     for spec in ("casual", "coat", "jacket", "dress"):  # sneaker, boot, dress shoe, flat
         d = DressedBody(body, draw_outfit(spec))
         out = d()
-        T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, n_dirs=64, manifold="ignore")
+        T = vertex_transport(out.verts[0], out.faces, out.normals[0], lmax=2, prt=PrtSettings(n_dirs=64),
+                             manifold="ignore")
         r = render_mesh(out.verts[0], out.faces, T, d.albedo, light, cam)
         panels.append(_u8(r.image[0] + 0.93 * (1 - r.alpha[0][..., None])))
     return np.concatenate(panels, 1)

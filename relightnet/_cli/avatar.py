@@ -22,6 +22,8 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.avatar import avatar
     from ..pipeline.backends import make_predictor
     from ..pipeline.scene import load_camera
+    from ..pipeline.settings import AvatarLook, AvatarPlacement, VideoLightSettings
+    from ..prt import PrtSettings
     from ..sh import load_light
     from ..sh.io import check_light_physics
 
@@ -53,14 +55,16 @@ def run(args: argparse.Namespace) -> int:
             light = plate_light.light
     predictor = None if light is not None else make_predictor(args.backend, args.checkpoint, args.device)
     camera = load_camera(args.camera, info.size) if args.camera else None
-    res = avatar(args.target, out, model=predictor, motion=motion, body=args.body, albedo=args.albedo,
-                 target_masks=args.target_masks, plate=args.plate, light=light, camera=camera, smoothing=args.smoothing,
-                 n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces, antialias=args.antialias,
-                 model_name=f"{args.backend}:{args.checkpoint or 'shipped'}", progress=not args.quiet,
-                 mask_source=args.mask_source, plate_light=plate_light if args.light_from == "both" else None,
-                 replace_person=args.replace_person, outfit=args.outfit,
-                 captured=in_path(args.avatar, "--avatar", "an avatar file from `relightnet capture`") if args.avatar
-                 else None)
+    captured = in_path(args.avatar, "--avatar", "an avatar file from `relightnet capture`") if args.avatar else None
+    look = AvatarLook(body=args.body, albedo=args.albedo, outfit=args.outfit, captured=captured,
+                      antialias=args.antialias)
+    lights = VideoLightSettings(smoothing=args.smoothing, mask_source=args.mask_source,
+                                model_name=f"{args.backend}:{args.checkpoint or 'shipped'}",
+                                plate_light=plate_light if args.light_from == "both" else None)
+    prt = PrtSettings(n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces)
+    placement = AvatarPlacement(plate=args.plate, camera=camera, replace_person=args.replace_person)
+    res = avatar(args.target, out, model=predictor, motion=motion, look=look, target_masks=args.target_masks,
+                 light=light, lights=lights, prt=prt, placement=placement, progress=not args.quiet)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 

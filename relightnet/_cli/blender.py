@@ -53,7 +53,7 @@ def _camera(spec: str, size: int):
 
 
 def run_export(args: argparse.Namespace) -> int:
-    from ..blender import export_body_scene
+    from ..blender import CyclesSettings, WorldLightSettings, export_body_scene
     from ..pipeline.scene import avatar_albedo, load_body
     from .inputs import load_single_light
 
@@ -63,9 +63,10 @@ def run_export(args: argparse.Namespace) -> int:
     params = _body_params(args, body)
     albedo = avatar_albedo(body, args.albedo)
     camera = _camera(args.camera, args.res)
+    world = WorldLightSettings(light_frame=args.light_frame, band_limit=args.band_limit, lmax=args.lmax,
+                               size=args.world_res, negative=args.negative)
     export_body_scene(out, body, params, args.light, albedo=albedo, camera=camera, size=args.res, fps=args.fps,
-                      light_frame=args.light_frame, band_limit=args.band_limit, lmax=args.lmax,
-                      world_size=args.world_res, negative=args.negative, spp=args.spp, bounces=args.bounces)
+                      world=world, cycles=CyclesSettings(spp=args.spp, bounces=args.bounces))
     logger.info("wrote %s", out)
     return 0
 

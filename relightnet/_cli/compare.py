@@ -15,12 +15,15 @@ logger = logging.getLogger("relightnet.compare")
 
 def run(args: argparse.Namespace) -> int:
     from ..pipeline.compare import compare
+    from ..pipeline.settings import PredictorSettings
+    from ..prt import PrtSettings
 
     in_path(args.data, "--data", "a dataset folder of clips made by 'relightnet synth --sequence T'")
-    res = compare(args.data, out_dir(args.out), checkpoint=args.checkpoint, split=args.split, clips=args.clips,
-                  n_dirs=args.n_dirs, smoothing=args.smoothing, device=args.device, progress=not args.quiet,
-                  prt_seed=args.prt_seed, source=args.source_light, size=args.size, bounces=args.bounces,
-                  backend=args.backend, cnn_albedo=args.cnn_albedo)
+    predictor = PredictorSettings(checkpoint=args.checkpoint, backend=args.backend, device=args.device, size=args.size)
+    prt = PrtSettings(n_dirs=args.n_dirs, seed=args.prt_seed, bounces=args.bounces)
+    res = compare(args.data, out_dir(args.out), predictor=predictor, split=args.split, clips=args.clips, prt=prt,
+                  smoothing=args.smoothing, progress=not args.quiet, source=args.source_light,
+                  cnn_albedo=args.cnn_albedo)
     s = res.metrics["summary"]["rows"]
     best = {(r["path"], r["light"]): r["rmse"] for r in s}
     logger.info("smoothed light: RMSE 2D %.4f, 3D %.4f (true light: 2D %.4f, 3D %.4f)", best[("2d", "smoothed")],

@@ -78,6 +78,7 @@ def _save_maps(d, kept: dict) -> None:
 def run_video(args: argparse.Namespace) -> int:
     from ..pipeline.backends import make_predictor
     from ..pipeline.relight_video import relight_video
+    from ..pipeline.settings import VideoLightSettings
 
     out = out_file(args.out, suffixes=(".mp4", ".mkv"), inputs=(args.video, args.masks, args.light, args.checkpoint))
     in_path(args.video, "VIDEO", "a video file")
@@ -85,9 +86,9 @@ def run_video(args: argparse.Namespace) -> int:
         in_path(args.masks, "--masks", "a folder of mask images or a mask video")
     light = load_single_light(args.light)
     model = make_predictor(args.backend, args.checkpoint, args.device)
-    relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable,
-                  smoothing=args.smoothing, progress=not args.quiet, detail=not args.cnn_albedo,
-                  mask_source=args.mask_source, alpha=args.alpha, soft_edges=not args.hard_edges,
+    lights = VideoLightSettings(smoothing=args.smoothing, mask_source=args.mask_source, alpha=args.alpha)
+    relight_video(model, args.video, args.masks, light, out, turntable_deg_per_s=args.turntable, lights=lights,
+                  progress=not args.quiet, detail=not args.cnn_albedo, soft_edges=not args.hard_edges,
                   steady=not args.no_carry, hdr=args.hdr)
     return 0
 

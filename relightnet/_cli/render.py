@@ -47,13 +47,14 @@ def _save_maps(folder: Path, r, transport_v=None, stem: str = "") -> None:
 
 def run_render(args: argparse.Namespace) -> int:
     from ..io import write_image
+    from ..prt import PrtSettings
     from ..render.jobs import render_mesh_file
 
     out = out_file(args.out, suffixes=(".png",))
     maps = out_dir(args.save_maps, "--save-maps") if args.save_maps else None
     light = load_single_light(args.light, lmax=args.lmax)
-    r = render_mesh_file(args.mesh, light, size=args.res, occlusion=args.occlusion, bounces=args.bounces,
-                         n_dirs=args.n_dirs)
+    prt = PrtSettings(n_dirs=args.n_dirs, occlusion=args.occlusion, bounces=args.bounces)
+    r = render_mesh_file(args.mesh, light, size=args.res, prt=prt)
     img, scale = _exposed(r.image[0], r.alpha[0], args.exposure)
     write_image(out, img)
     if maps is not None:
@@ -109,6 +110,7 @@ def _body_outputs(args) -> tuple[Path, Path | None, Path | None]:
 
 def run_render_body(args: argparse.Namespace) -> int:
     from ..io import VideoWriter, write_image
+    from ..prt import PrtSettings
     from ..render.jobs import render_body_frames
     from ..sh import load_light
     from ..sh.io import check_light_physics
@@ -132,9 +134,9 @@ def run_render_body(args: argparse.Namespace) -> int:
 
         body = captured_body(body, in_path(args.avatar, "--avatar", "an avatar file from `relightnet capture`"))
         albedo, vertex_albedo = body.albedo, None
-    frames = render_body_frames(body, params, light, albedo, size=args.res, n_dirs=args.n_dirs,
-                                occlusion=args.occlusion, bounces=args.bounces, seed=args.seed,
-                                maps=maps is not None, vertex_albedo=vertex_albedo)
+    prt = PrtSettings(n_dirs=args.n_dirs, occlusion=args.occlusion, bounces=args.bounces, seed=args.seed)
+    frames = render_body_frames(body, params, light, albedo, camera=args.res, prt=prt, maps=maps is not None,
+                                vertex_albedo=vertex_albedo)
     from tqdm import tqdm
 
     scale = None

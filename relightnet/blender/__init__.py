@@ -18,6 +18,7 @@ from .frames import (
 )
 from .geometry import MAX_SCENE_FACES, blend_face_count, check_blend_geometry
 from .scene import export_body_scene, export_scene
+from .settings import CyclesSettings, WorldLightSettings
 from .world import WorldLight, envmap_world_image, lift_sh, sh_world_image, world_light
 
 __all__ = [
@@ -25,7 +26,7 @@ __all__ = [
     "latlong_to_equirect",
     "BlenderCamera", "blender_camera",
     "WorldLight", "world_light", "sh_world_image", "envmap_world_image", "lift_sh",
-    "export_scene", "export_body_scene",
+    "export_scene", "export_body_scene", "CyclesSettings", "WorldLightSettings",
     "CYCLES_TO_RELIGHTNET", "CyclesFrame", "configure_cycles", "open_blend", "render_blend", "render_current",
     "MAX_SCENE_FACES", "blend_face_count", "check_blend_geometry",
 ]

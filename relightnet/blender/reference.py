@@ -28,17 +28,19 @@ import statistics
 import tempfile
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import torch
 
 from ..checks import InputError, check_shape
+from ..prt import PrtSettings
 from ..raster import Camera, default_camera
 from ..raster.morphology import erode as erode_mask
 from ..render.frame import TexturedAlbedo, render_mesh
 from .cycles import CYCLES_TO_RELIGHTNET, render_blend
 from .scene import export_scene
+from .settings import CyclesSettings
 from .world import world_light
 
 __all__ = ["masked_rel_rmse", "comparison_mask", "front_facing", "ReferenceResult", "reference_comparison"]
@@ -153,13 +155,11 @@ def reference_comparison(
     light: str = "city",
     bounces: Sequence[int] = (0, 1, 2),
     size: int = 128,
-    spp: int = 64,
-    n_dirs: int = 256,
+    cycles: CyclesSettings = CyclesSettings(),
+    prt: PrtSettings = PrtSettings(),
     camera: Camera | None = None,
-    threads: int | None = None,
     repeat: int = 3,
     cycles_repeat: int = 1,
-    seed: int = 0,
     erode: int = 0,
     workdir=None,
 ) -> ReferenceResult:
@@ -169,11 +169,11 @@ def reference_comparison(
         body: an Anny (or SMPL) body model. params: one frame's parameters.
         light: an environment map (preset name or ``.exr``/``.hdr``), fixed to the world.
         bounces: PRT interreflection bounces (and Cycles diffuse bounces) to compare.
-        size: square image size. spp: Cycles samples per pixel. n_dirs: PRT directions.
-        camera: one camera (default :func:`relightnet.raster.default_camera`).
-        threads: Cycles threads (None: all cores). repeat, cycles_repeat: timing repeats of
-            relightnet (after one warm-up run) and of Cycles (after one 1-spp warm-up render); medians.
-        seed: PRT direction set and Cycles noise seed. erode: mask erosion in pixels.
+        size: square image size. cycles: Cycles' samples per pixel and threads (None: all cores;
+            its bounces are ``bounces``). prt: the PRT directions and their seed, which also seeds
+            Cycles' noise (its bounces are ``bounces``). camera: default :func:`~relightnet.raster.default_camera`.
+        repeat, cycles_repeat: timing repeats of relightnet (after one warm-up run) and of Cycles
+            (after one 1-spp warm-up render); medians. erode: mask erosion in pixels.
         workdir: folder for the two .blend files (default: a temporary folder).
 
     Returns:
@@ -181,6 +181,7 @@ def reference_comparison(
     """
     from ..prt import vertex_transport
 
+    spp, threads, seed = cycles.spp, cycles.threads, prt.seed
     camera = default_camera(size) if camera is None else camera
     bounces = [int(b) for b in bounces]
     if not bounces or min(bounces) < 0:
@@ -195,17 +196,17 @@ def reference_comparison(
         blends = {}
         for name, wl in (("sh", wl_sh), ("env", wl_env)):
             blends[name] = Path(tmp) / f"{name}.blend"
-            export_scene(blends[name], v[None], f, wl, camera, albedo=albedo, normals=n, spp=spp,
-                         bounces=max(bounces))
+            export_scene(blends[name], v[None], f, wl, camera, albedo=albedo, normals=n,
+                         cycles=CyclesSettings(spp=spp, bounces=max(bounces)))
         next(iter(render_blend(blends["sh"], spp=1, bounces=0, threads=threads)))  # warm-up: kernel loading
         for b in bounces:
-            def prt(b=b):
-                T = vertex_transport(v, f, n, n_dirs=n_dirs, bounces=b, albedo=rho if b else None, seed=seed)
+            def render_ours(b=b):
+                T = vertex_transport(v, f, n, prt=replace(prt, bounces=b), albedo=rho if b else None)
                 return T, render_mesh(v, f, T, albedo, L, camera, normals=n, light_frame="world", maps=True)
 
             if b == bounces[0]:
-                prt()  # warm-up: ray-engine start-up
-            (T, r), ours_s = _median_time(prt, repeat)
+                render_ours()  # warm-up: ray-engine start-up
+            (T, r), ours_s = _median_time(render_ours, repeat)
             r_lift = render_mesh(v, f, T, albedo, L_lift, camera, light_frame="world")
             ours = r.image[0] / CYCLES_TO_RELIGHTNET
             ours_lift = r_lift.image[0] / CYCLES_TO_RELIGHTNET
@@ -223,7 +224,7 @@ def reference_comparison(
             res["cycles_sh"][b], res["cycles_env"][b] = cy_sh, cy_env
         cy2, _ = _cycles(blends["sh"], spp, bounces[-1], threads, seed + 1, 1)
         noise = masked_rel_rmse(cy2[..., :3], res["cycles_sh"][bounces[-1]][..., :3], mask) / math.sqrt(2)
-    settings = dict(light=light, size=size, spp=spp, n_dirs=n_dirs, lmax=2, erode=erode,
+    settings = dict(light=light, size=size, spp=spp, n_dirs=prt.n_dirs, lmax=2, erode=erode,
                     lift=[float(x) for x in (L_lift[0] - L[0]) / math.sqrt(4 * math.pi)],
                     pixels=int(mask.sum()), front_pixels=int(front.sum()))
     return ReferenceResult(rows, noise, mask, front, settings=settings, **res)

@@ -43,6 +43,7 @@ from ._bpy import quiet, reset
 from .camera import SENSOR_WIDTH_MM, blender_camera
 from .cycles import configure_cycles
 from .frames import world_to_blender
+from .settings import CyclesSettings, WorldLightSettings
 from .world import WorldLight
 
 logger = logging.getLogger(__name__)
@@ -207,8 +208,7 @@ def export_scene(
     uv: torch.Tensor | None = None,
     uv_faces: torch.Tensor | None = None,
     fps: float = 30.0,
-    spp: int = 64,
-    bounces: int = 4,
+    cycles: CyclesSettings = CyclesSettings(),
     metadata: Mapping | None = None,
 ) -> Path:
     """Write a Blender scene of a (possibly animated) mesh lit by a world light (module docstring).
@@ -224,7 +224,8 @@ def export_scene(
             (V, 3) linear per-vertex albedo, or None (grey 0.5).
         normals: (V, 3) vertex normals of a still mesh (kept as custom normals).
         uv, uv_faces: (Vt, 2), (F, 3) UVs when ``albedo`` is not a texture (optional).
-        fps: frame rate. spp, bounces: the file's Cycles samples and diffuse bounces.
+        fps: frame rate. cycles: the file's Cycles samples and diffuse bounces
+            (:class:`~relightnet.blender.CyclesSettings`; its threads are the renderer's, not the file's).
         metadata: extra JSON-able items for the scene's ``"relightnet"`` property.
 
     Returns:
@@ -261,7 +262,7 @@ def export_scene(
         scene.render.fps, scene.render.fps_base = fps_int, fps_base
         scene.frame_start, scene.frame_end = 1, n_frames
         scene.frame_set(1)
-        configure_cycles(scene, spp=spp, bounces=bounces, denoise=False)
+        configure_cycles(scene, spp=cycles.spp, bounces=cycles.bounces, denoise=False)
         scene["relightnet"] = json.dumps(meta)
 
     _save_blend(path, build)
@@ -328,13 +329,8 @@ def export_body_scene(
     camera: Camera | str | None = None,
     size=512,
     fps: float = 30.0,
-    light_frame: str = "camera",
-    band_limit: bool = False,
-    lmax: int = 2,
-    world_size: int = 128,
-    negative: str = "clamp",
-    spp: int = 64,
-    bounces: int = 4,
+    world: WorldLightSettings = WorldLightSettings(),
+    cycles: CyclesSettings = CyclesSettings(),
 ) -> Path:
     """Pose a body model (one frame or a motion) and export it with :func:`export_scene`.
 
@@ -346,8 +342,8 @@ def export_body_scene(
         albedo: TexturedAlbedo / (V, 3) / None (Anny's default outfit, grey 0.6 otherwise).
         camera: one camera, None (:func:`relightnet.raster.default_camera` of ``size``) or
             ``"fit"`` (:func:`relightnet.render.fit_camera` framing every frame of the motion).
-        light_frame, band_limit, lmax, world_size, negative: :func:`world_light` options.
-        fps, spp, bounces: :func:`export_scene` options.
+        world: the :func:`world_light` options (:class:`~relightnet.blender.WorldLightSettings`).
+        fps, cycles: :func:`export_scene` options.
 
     Returns:
         The path written.
@@ -365,7 +361,7 @@ def export_body_scene(
         if camera != "fit":
             raise InputError(f"camera: expected a Camera, None or 'fit', got {camera!r}")
         camera = fit_camera(out.verts.reshape(-1, 3), size)
-    wl = world_light(light, camera, light_frame, band_limit, lmax, world_size, negative)
+    wl = world_light(light, camera, world.light_frame, world.band_limit, world.lmax, world.size, world.negative)
     if albedo is None:
         if isinstance(body, AnnyBody):
             a = default_albedo(body)
@@ -376,5 +372,5 @@ def export_body_scene(
         raise ShapeError(f"albedo: expected ({out.verts.shape[1]}, 3), got {tuple(albedo.shape)}")
     normals = out.normals[0] if out.batch_size == 1 else None
     return export_scene(path, out.verts, out.faces, wl, camera, albedo=albedo, normals=normals, uv=out.uv,
-                        uv_faces=out.uv_faces, fps=fps, spp=spp, bounces=bounces,
-                        metadata={"light_frame": light_frame, "band_limit": bool(band_limit)})
+                        uv_faces=out.uv_faces, fps=fps, cycles=cycles,
+                        metadata={"light_frame": world.light_frame, "band_limit": bool(world.band_limit)})

@@ -26,7 +26,7 @@ from .base import (
     rotvec_to_matrix,
     vertex_normals,
 )
-from .garments import GarmentPiece, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
+from .garments import GarmentPiece, RingShape, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from .motion import MOTION_KINDS, make_motion
 from .motion_io import Z_UP_TO_Y_UP, Motion, load_motion, reorient_motion, save_motion
 from .shoes import SHOE_KINDS, shoe_surface
@@ -43,7 +43,7 @@ __all__ = [
     "AnnyMotion", "is_anny_motion", "load_anny_motion", "save_anny_motion",
     "REGIONS", "ANNY_PARTS", "Albedo", "anny_part_labels", "region_labels", "skin_color", "default_albedo",
     "vertex_to_texture",
-    "GarmentPiece", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip",
+    "GarmentPiece", "RingShape", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip",
     "SHOE_KINDS", "shoe_surface",
     "SubdividedFaces", "subdivide_faces", "midpoint_values",
 ]

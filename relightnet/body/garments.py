@@ -38,7 +38,7 @@ import torch
 from ..checks import InputError, check_shape
 from .base import vertex_normals
 
-__all__ = ["GarmentPiece", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip"]
+__all__ = ["GarmentPiece", "RingShape", "shell_surface", "ring_surface", "radial_directions", "hem_field", "iso_clip"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,10 +128,41 @@ def _ring_radii(points: torch.Tensor, centre: torch.Tensor, e1: torch.Tensor, e2
     return torch.maximum(out, torch.maximum(out.roll(1, 1), out.roll(-1, 1)))
 
 
+@dataclass(frozen=True)
+class RingShape:
+    """The shape of a :func:`ring_surface` beyond its rings: radius profile, folds, opening, cap.
+
+    Args:
+        min_radius, flare: the radius profile (metres): at least ``min_radius + flare · t`` (t: 0 at
+            the top ring, 1 at the bottom).
+        folds: ((k, amplitude, phase), ...) vertical folds.
+        open_rows: faces between rings ``open_rows`` and below within ``open_halfwidth`` radians of
+            the front are left out (a face opening); None: closed. (A ring index, not a height,
+            so that every frame of a clip has the same faces.)
+        cap: close the top with a fan around one vertex above the first ring.
+
+    Example:
+        >>> RingShape(min_radius=0.03, cap=True).flare
+        0.0
+    """
+
+    min_radius: float = 0.0
+    flare: float = 0.0
+    folds: tuple = ()
+    open_rows: int | None = None
+    open_halfwidth: float = 0.0
+    cap: bool = False
+
+    def __post_init__(self):
+        if not (self.min_radius >= 0 and self.open_halfwidth >= 0):
+            raise InputError(f"RingShape: expected min_radius, open_halfwidth >= 0, got {self.min_radius}, "
+                             f"{self.open_halfwidth}")
+        if any(len(f) != 3 for f in self.folds):
+            raise InputError(f"folds: expected (k, amplitude, phase) triples, got {self.folds!r}")
+
+
 def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor, y_top: float, y_bottom: float,
-                 n_rings: int, n_theta: int, clearance: float, min_radius: float = 0.0, flare: float = 0.0,
-                 folds: tuple = (), open_rows: int | None = None, open_halfwidth: float = 0.0,
-                 cap: bool = False) -> GarmentPiece:
+                 n_rings: int, n_theta: int, clearance: float, shape: RingShape = RingShape()) -> GarmentPiece:
     """A hanging surface of rings around the vertical axis through ``centre``.
 
     Ring i (of ``n_rings``, from ``y_top`` down to ``y_bottom``) has, at angle θ (0 at
@@ -146,17 +177,14 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
         centre: (3,) a point of the axis. front: (3,) horizontal direction the body faces.
         y_top, y_bottom: heights of the first and last rings (y_top > y_bottom).
         n_rings, n_theta: grid size (R ≥ 2, nθ ≥ 8).
-        clearance: gap to the body (metres). min_radius, flare: radius profile (metres).
-        folds: ((k, amplitude, phase), ...) vertical folds.
-        open_rows: faces between rings ``open_rows`` and below within ``open_halfwidth`` radians of
-            the front are left out (a face opening); None: closed. (A ring index, not a height,
-            so that every frame of a clip has the same faces.)
-        cap: close the top with a fan around one vertex above the first ring.
+        clearance: gap to the body (metres).
+        shape: a :class:`RingShape`: radius profile, folds, a face opening, a cap.
 
     Returns:
         :class:`GarmentPiece` with ``uv`` set; the seam column is duplicated (u = 0 and 1).
     """
     check_shape(points, ["N", 3], name="points")
+    min_radius, flare, folds, cap = shape.min_radius, shape.flare, shape.folds, shape.cap
     if not y_top > y_bottom or n_rings < 2 or n_theta < 8:
         raise InputError(f"ring_surface: expected y_top > y_bottom, n_rings >= 2, n_theta >= 8; got {y_top}, "
                          f"{y_bottom}, {n_rings}, {n_theta}")
@@ -180,7 +208,7 @@ def ring_surface(points: torch.Tensor, centre: torch.Tensor, front: torch.Tensor
     pos = c[None, None] * torch.tensor([1.0, 0.0, 1.0], dtype=torch.float64) + rr[..., None] * dirs[None]
     pos[..., 1] = ys[:, None]
     m = n_theta + 1
-    faces = _grid_faces(n_rings, n_theta, open_rows, open_halfwidth)
+    faces = _grid_faces(n_rings, n_theta, shape.open_rows, shape.open_halfwidth)
     verts = pos.reshape(-1, 3)
     u = (th / (2 * math.pi))[None].expand(n_rings, -1)
     v = (1 - t).expand(-1, m)

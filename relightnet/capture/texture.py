@@ -222,7 +222,7 @@ def frame_samples(table: TexelTable, verts: torch.Tensor, normals: torch.Tensor,
     Returns:
         :class:`TexelSamples`, or None when the frame sees no texel.
     """
-    from ..prt import vertex_transport
+    from ..prt import PrtSettings, vertex_transport
     from ..render.frame import light_in_world
     from ..render.shading import shading
 
@@ -242,8 +242,8 @@ def frame_samples(table: TexelTable, verts: torch.Tensor, normals: torch.Tensor,
     # The vertices of the texels kept: a sub-pixel triangle covers no pixel centre, yet its texels are seen.
     need = torch.zeros(verts.shape[0], dtype=torch.bool)
     need[tri.reshape(-1)] = True
-    T = vertex_transport(verts, faces, normals, lmax=lmax, n_dirs=options.n_dirs, vertices=torch.nonzero(need)[:, 0],
-                         manifold="ignore")
+    T = vertex_transport(verts, faces, normals, lmax=lmax, prt=PrtSettings(n_dirs=options.n_dirs),
+                         vertices=torch.nonzero(need)[:, 0], manifold="ignore")
     L = light_in_world(light.float(), camera)[0]
     s_v = shading(T, L)  # (V, 3)
     s = torch.einsum("mk,mkc->mc", bary, s_v[tri]).clamp_min(1e-4)

@@ -145,6 +145,7 @@ def turning_person(out_dir, body, light, n_frames: int = 48, size=(256, 256), se
     from ..color import linear_to_srgb
     from ..data.backgrounds import procedural_background
     from ..io import VideoWriter
+    from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.frame import TexturedAlbedo
     from ..render.jobs import render_body_frames
@@ -156,8 +157,8 @@ def turning_person(out_dir, body, light, n_frames: int = 48, size=(256, 256), se
     params = turning_params(body, n_frames, turns, pose, seed)
     bg, _ = procedural_background(np.random.default_rng([int(seed), 5]), max(h, w), 0.25)
     frames = render_body_frames(body, params, light, TexturedAlbedo(tex, body.uv, body.uv_faces),
-                                camera=default_camera((h, w)), n_frames=int(n_frames), n_dirs=int(n_dirs),
-                                visible_only=True)
+                                camera=default_camera((h, w)), n_frames=int(n_frames),
+                                prt=PrtSettings(n_dirs=int(n_dirs)), visible_only=True)
     video, masks = out / "source.mp4", out / "masks.mkv"
     with VideoWriter(video, fps=fps) as v, VideoWriter(masks, fps=fps, gray=True) as m:
         for fr in frames:

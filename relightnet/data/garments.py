@@ -37,7 +37,7 @@ import numpy as np
 import torch
 
 from ..body import REGIONS, region_labels
-from ..body.garments import GarmentPiece, radial_directions, ring_surface, shell_surface
+from ..body.garments import GarmentPiece, RingShape, radial_directions, ring_surface, shell_surface
 from ..checks import InputError
 
 __all__ = ["GARMENT_SLOTS", "DEFAULT_GARMENT_PROBS", "GARMENT_TYPES", "garment_probs", "sample_garments",
@@ -305,8 +305,8 @@ def dress_frame(g: dict, verts, normals, faces, joints, tab: GarmentTables, body
         y0 = float(root[1]) + 0.05
         y1 = max(y0 - g["skirt_length"], 0.08)
         n = max(8, int(round(g["skirt_length"] / 0.025)) + 1)
-        piece = ring_surface(verts[not_arm], root, front, y0, y1, n, 48, g["skirt_clearance"], flare=g["skirt_flare"],
-                             folds=tuple(tuple(f) for f in g["folds"]))
+        piece = ring_surface(verts[not_arm], root, front, y0, y1, n, 48, g["skirt_clearance"],
+                             shape=RingShape(flare=g["skirt_flare"], folds=tuple(tuple(f) for f in g["folds"])))
         pieces.append(("dress" if g["upper"] == "dress" else "skirt", piece,
                        REGIONS.index("top" if g["upper"] == "dress" else "bottom"), 0))
     coat = None
@@ -343,8 +343,9 @@ def _head_pieces(g, verts, normals, faces, tab, body, outfit, topo, frame, coat)
         pts = _enclosing(verts[not_arm & (verts[:, 1] > eye_y - 0.6)], coat, head, volume)
         y1 = eye_y - 0.2 - g["hair_length"]
         rows = topo.setdefault("hair_rows", _open_rows(top + volume, y1, 14, eye_y + 0.05))
-        piece = ring_surface(pts, head, front, top + volume, y1, 14, 48, volume, min_radius=0.03, open_rows=rows,
-                             open_halfwidth=math.radians(80), cap=True)
+        piece = ring_surface(pts, head, front, top + volume, y1, 14, 48, volume,
+                             shape=RingShape(min_radius=0.03, open_rows=rows, open_halfwidth=math.radians(80),
+                                             cap=True))
         hair = ("long_hair", piece, REGIONS.index("hair"), 2)
     if g["head"] == "hat":
         y1, y0 = eye_y + g["hat_depth"], top + volume + 0.012
@@ -352,14 +353,16 @@ def _head_pieces(g, verts, normals, faces, tab, body, outfit, topo, frame, coat)
         if inner is not None:  # above the hair's crown too
             y0 = max(y0, float(inner[:, 1].max()) + LAYER_GAP)
         pts = _enclosing(verts[tab.head], inner, head, volume + 0.012)
-        piece = ring_surface(pts, head, front, y0, y1, 10, 40, volume + 0.012, min_radius=0.03, cap=True)
+        piece = ring_surface(pts, head, front, y0, y1, 10, 40, volume + 0.012,
+                             shape=RingShape(min_radius=0.03, cap=True))
         out.append(("hat", piece, REGIONS.index("hair"), 1))
     elif g["head"] == "hood":
         c = g["hood_clearance"]
         pts = _enclosing(verts[not_arm & (verts[:, 1] > eye_y - 0.45)], coat, head, c)
         rows = topo.setdefault("hood_rows", _open_rows(top + c, eye_y - 0.3, 16, eye_y + 0.07))
-        piece = ring_surface(pts, head, front, top + c, eye_y - 0.3, 16, 48, c, min_radius=0.03, open_rows=rows,
-                             open_halfwidth=math.radians(60), cap=True)
+        piece = ring_surface(pts, head, front, top + c, eye_y - 0.3, 16, 48, c,
+                             shape=RingShape(min_radius=0.03, open_rows=rows, open_halfwidth=math.radians(60),
+                                             cap=True))
         out.append(("hood", piece, REGIONS.index("top"), 1))
     return out + ([hair] if hair is not None else [])
 

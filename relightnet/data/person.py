@@ -25,7 +25,7 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..prt import refined_transport, vertex_transport
+from ..prt import PrtSettings, refined_transport, vertex_transport
 from ..raster import texture_pixels
 from ..sh import rotation_world_to_light, sh_rotation_matrix
 from .clothed import ClothedMesh, clothed_mesh
@@ -123,8 +123,8 @@ def person_transport(cfg: SynthConfig, person: PersonStage, seen: torch.Tensor |
         seen = torch.as_tensor(seen, dtype=torch.bool)
         if seen.shape != (T, V):
             raise InputError(f"seen: expected ({T}, {V}) bool, got {tuple(seen.shape)}")
-    kw = dict(lmax=cfg.lmax, n_dirs=cfg.n_dirs, seed=person.dir_seed, threads=torch.get_num_threads(),
-              manifold="ignore")
+    prt = PrtSettings(n_dirs=cfg.n_dirs, seed=person.dir_seed, threads=torch.get_num_threads())
+    kw = dict(lmax=cfg.lmax, manifold="ignore")
     grey = vertex_colors(m).mean(1) if person.bounce else None
     occ, un = [], []
     for t in range(T):
@@ -132,9 +132,10 @@ def person_transport(cfg: SynthConfig, person: PersonStage, seen: torch.Tensor |
         keep = None
         if not person.bounce:
             keep = torch.nonzero(~m.hidden if seen is None else ~m.hidden & seen[t]).flatten()
-        occ.append(refined_transport(v, m.faces, n, m.midpoints, bounces=int(person.bounce), albedo=grey,
-                                     vertices=keep, **kw))
-        un.append(vertex_transport(v, m.faces, n, occlusion=False, **kw))
+        occ.append(refined_transport(v, m.faces, n, m.midpoints, prt=dataclasses.replace(prt,
+                                                                                         bounces=int(person.bounce)),
+                                     albedo=grey, vertices=keep, **kw))
+        un.append(vertex_transport(v, m.faces, n, prt=dataclasses.replace(prt, occlusion=False), **kw))
     return dataclasses.replace(person, transport=torch.stack(occ), transport_unoccluded=torch.stack(un))
 
 

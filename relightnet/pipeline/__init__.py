@@ -34,6 +34,8 @@ _EXPORTS = {
     "relight_video": "relight_video",
     "avatar_albedo": "scene", "load_body": "scene", "load_camera": "scene", "motion_params": "scene",
     "open_motion": "scene",
+    "AvatarLook": "settings", "AvatarPlacement": "settings", "PredictorSettings": "settings",
+    "VideoLightSettings": "settings",
     "boundary_jaggedness": "smooth_albedo", "smooth_default_albedo": "smooth_albedo",
     "estimate_video_evidence": "video_lights", "estimate_video_lights": "video_lights",
     "WalkingTarget": "walk_target", "walking_target": "walk_target",

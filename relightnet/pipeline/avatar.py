@@ -36,13 +36,15 @@ import torch
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, frame_times, read_video, video_info
 from ..names import VIDEO_SMOOTHING
+from ..prt import PrtSettings
 from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
-from .clean_plate import check_camera_start, check_stand_in, stand_in_frames
+from .clean_plate import check_camera_start, stand_in_frames
 from .outfits import avatar_look
 from .scene import load_body, open_motion
+from .settings import AvatarLook, AvatarPlacement, VideoLightSettings
 from .video_lights import (
     VideoEstimates,
     estimate_video_evidence,
@@ -152,15 +154,16 @@ def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     return composite_covered(fg, r.frags.region.to_frame(r.frags.pix), torch.from_numpy(bg)).numpy()
 
 
-def _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file: Path,
-                  fps: float, progress: bool, plate_light=None) -> _TargetLight:
+def _light_stages(model, target, target_masks, lights: VideoLightSettings, lights_file: Path, fps: float,
+                  progress: bool) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
-    ``lights_file`` when its fingerprint matches), smoothed over time; with ``plate_light``, each
+    ``lights_file`` when its fingerprint matches), smoothed over time; with ``lights.plate_light``, each
     smoothed light combined with it (:func:`relightnet.sh.combine_person_plate`)."""
+    mask_source, smoothing, plate_light = lights.mask_source, lights.smoothing, lights.plate_light
     if model is None:
         raise InputError("model: give a model (or predictor) to estimate the light, or a light")
     predict = as_predictor(model)
-    fp = lights_fingerprint(target, target_masks, model_name, mask_source)
+    fp = lights_fingerprint(target, target_masks, lights.model_name, mask_source)
     cached = read_light_estimates(lights_file, fp)
     if cached is not None:
         logger.info("reusing the light estimates in %s", lights_file)
@@ -247,13 +250,13 @@ def _camera_for(camera: Camera | None, size) -> Camera:
     return camera
 
 
-def _check_options(out, smoothing: str, replace_person: bool, plate, camera) -> Path:
-    """The checks that need nothing read: the output's type, the smoothing, --replace-person's exclusions."""
+def _check_options(out, smoothing: str) -> Path:
+    """The checks that need nothing read: the output's type, the smoothing (--replace-person's exclusions:
+    :class:`~relightnet.pipeline.AvatarPlacement`)."""
     out = Path(out)
     if out.suffix.lower() not in (".mp4", ".mkv"):
         raise InputError(f"{out}: expected an .mp4 or .mkv output path")
     check_smoothing(smoothing, VIDEO_SMOOTHING)
-    check_stand_in(replace_person, plate, camera)
     return out
 
 
@@ -263,20 +266,13 @@ def avatar(
     out,
     model=None,
     motion="walk",
-    body="anny",
-    albedo="default",
+    look: AvatarLook = AvatarLook(),
     target_masks=None,
-    plate=None,
     light: torch.Tensor | None = None,
-    camera: Camera | None = None,
-    smoothing: str = "auto",
-    n_dirs: int = 64,
-    occlusion: bool = True,
-    bounces: int = 0,
-    antialias: bool = False,
-    model_name: str = "model",
-    progress: bool = True, mask_source: str = "segment", plate_light=None,
-    replace_person: bool = False, outfit: str | None = None, captured=None,
+    lights: VideoLightSettings = VideoLightSettings(),
+    prt: PrtSettings = PrtSettings(n_dirs=64),
+    placement: AvatarPlacement = AvatarPlacement(),
+    progress: bool = True,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -287,54 +283,49 @@ def avatar(
         motion: a motion preset (``walk``, ``turn``, ``idle``, ``arm_raise``; made as long as the
             video), an SMPL motion file (.npz, with an SMPL ``body``) or body parameters with a
             leading frame axis.
-        body: ``"anny"``, ``"smpl:PATH"`` or a body model.
-        albedo: ``"default"``, a texture image path (sRGB, in the body's UV layout), a (V, 3)
-            per-vertex albedo or a :class:`~relightnet.render.TexturedAlbedo`.
-        target_masks: masks of the person in the target (folder or mask video); None: ``mask_source``.
-        plate: what to composite over: None (the target's frames), a clean-plate video of the
-            same size (the scene without the person) or one image.
+        look: an :class:`~relightnet.pipeline.AvatarLook`: the body, its albedo, an outfit or a
+            captured person's avatar file (``relightnet capture``; :func:`.avatar_look`), and the
+            silhouette's antialiasing (about 24 ms per 512² frame).
+        target_masks: masks of the person in the target (folder or mask video); None: ``lights.mask_source``.
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
-        camera: the avatar's camera (default: :func:`~relightnet.raster.default_camera` at the
-            video's size: full body, standing at the origin).
-        smoothing: one of :data:`relightnet.names.VIDEO_SMOOTHING`.
-        n_dirs, occlusion, bounces: PRT options.
-        antialias: smooth the avatar's silhouette against the background (analytic edge
-            antialiasing at the silhouette pixels; about 24 ms per 512² frame).
-        model_name: names the model in the resume fingerprint (e.g. the checkpoint path).
-        mask_source: without ``target_masks``: ``segment`` (the person segmentation) or ``head``
-            (the model's mask head); :mod:`relightnet.segment.sources`.
-        plate_light: a :class:`relightnet.sh.Plate`, combined with the estimates (``sh.combine_person_plate``).
-        replace_person, outfit, captured: take the person's place (:func:`.clean_plate.stand_in`); dress, or a
-            captured person's avatar file (``relightnet capture``) performs (:func:`.avatar_look`).
+        lights: a :class:`~relightnet.pipeline.VideoLightSettings`: the smoothing (one of
+            :data:`relightnet.names.VIDEO_SMOOTHING`), the mask source, the model's name in the resume
+            fingerprint and a plate light combined with the estimates (``sh.combine_person_plate``).
+        prt: the PRT options (:class:`~relightnet.prt.PrtSettings`; by default 64 directions).
+        placement: an :class:`~relightnet.pipeline.AvatarPlacement`: a clean plate to composite over, the
+            avatar's camera, or taking the person's place (:func:`.clean_plate.stand_in`).
+        progress: show a tqdm bar.
 
     Returns:
         :class:`AvatarResult`.
     """
-    out = _check_options(out, smoothing, replace_person, plate, camera)
+    smoothing, mask_source, plate = lights.smoothing, lights.mask_source, placement.plate
+    out = _check_options(out, smoothing)
     info = video_info(target)
-    base, body_model, tex = avatar_look(load_body(body), albedo, outfit, captured)
+    base, body_model, tex = avatar_look(load_body(look.body), look.albedo, look.outfit, look.captured)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, base, info.fps)
-    backgrounds = _backgrounds(plate, target, info.size, replace_person, target_masks, mask_source)  # likewise
+    backgrounds = _backgrounds(plate, target, info.size, placement.replace_person, target_masks,
+                               mask_source)  # likewise
     lights_file, plot = _side_paths(out)
     if light is None:
-        lit = _light_stages(model, target, target_masks, mask_source, model_name, smoothing, lights_file, info.fps,
-                            progress, plate_light)
+        lit = _light_stages(model, target, target_masks, lights, lights_file, info.fps, progress)
         n = lit.raw.shape[0]
     else:
         n = count_frames(target)  # from the container, else by decoding (streaming)
         lit = _TargetLight(_given_light(light, n))
     params, n = _motion_for(motion_frames, n)
     smoothed = lit.smoothed[:n]
-    if replace_person:  # over the clean plate, standing where the person stands in each frame
+    camera = placement.camera
+    if placement.replace_person:  # over the clean plate, standing where the person stands in each frame
         backgrounds, camera, params = stand_in_frames(target, out, n, body_model, target_masks, mask_source, params)
     camera = _camera_for(camera, info.size)
     method = lit.method or smoothing  # the file and the plot name the method used
     write_video_lights(lights_file, plot, lit.smoothed, lit.fingerprint, lit.estimates, lit.outliers, lit.switches,
                        method, title=f"{Path(target).name}: light of the target, {method}")
-    frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, n_dirs=n_dirs,
-                                occlusion=occlusion, bounces=bounces, n_frames=n, visible_only=True, box=True)
-    written = _render_stages(out, target, backgrounds, frames, n, info.fps, antialias, camera, body_model.faces,
+    frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, prt=prt, n_frames=n,
+                                visible_only=True, box=True)
+    written = _render_stages(out, target, backgrounds, frames, n, info.fps, look.antialias, camera, body_model.faces,
                              progress, plate or target)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
     return AvatarResult(written, out, lights_file, plot, lit.raw, smoothed, lit.reused, lit.outliers, lit.switches)

@@ -44,6 +44,7 @@ def reproject(report, source, fb, out: Path | None = None, mask_out: Path | None
     from ..color import linear_to_srgb
     from ..fit.job import media_frames
     from ..fit.preview import fit_camera
+    from ..prt import PrtSettings
     from ..render.jobs import render_body_frames
     from .capture_job import frame_masks
 
@@ -53,8 +54,8 @@ def reproject(report, source, fb, out: Path | None = None, mask_out: Path | None
     cb = CapturedBody(fb.body, report.avatar)
     camera = fit_camera(result)
     params = {"pose": fb.full_pose(result.pose), "trans": result.trans}
-    renders = render_body_frames(cb, params, report.lights, cb.albedo, camera=camera, n_frames=T, n_dirs=64,
-                                 visible_only=True, box=True)
+    renders = render_body_frames(cb, params, report.lights, cb.albedo, camera=camera, n_frames=T,
+                                 prt=PrtSettings(n_dirs=64), visible_only=True, box=True)
     sq, n_px, ious, used = 0.0, 0, [], 0
     with _writers(out, mask_out, fps, photo) as write:
         for fr, img, mask in zip(renders, frames, frame_masks(report.fit.masks, T)):

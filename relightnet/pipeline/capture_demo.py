@@ -52,10 +52,12 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
     from ..capture.texture import TextureOptions
     from ..fit import FitOptions
     from ..io import write_side_by_side
+    from ..prt import PrtSettings
     from ..render.frame import TexturedAlbedo
     from .avatar import avatar
     from .capture_job import CaptureOptions, capture_file
     from .scene import open_motion
+    from .settings import AvatarLook, AvatarPlacement
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -65,12 +67,15 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
     # The source's camera is the default one (35°): given, as a user gives --fov for a lens they know.
     rep = capture_file(truth.video, out / "person.avatar.npz", model,
                        CaptureOptions(texture=TextureOptions(size=512, n_dirs=n_dirs), fit=FitOptions(fov_deg=35.0)))
-    moved = avatar(target, out / "avatar.mp4", model=model, motion="walk", body=body, target_masks=target_masks,
-                   plate=plate, n_dirs=n_dirs, progress=progress, captured=rep.out)
+    moved = avatar(target, out / "avatar.mp4", model=model, motion="walk", look=AvatarLook(body=body, captured=rep.out),
+                   target_masks=target_masks, placement=AvatarPlacement(plate=plate), prt=PrtSettings(n_dirs=n_dirs),
+                   progress=progress)
     params, _ = open_motion("walk", body, fps)(n_frames)
     params = dict(params, phenotype=truth.params["phenotype"])
-    true = avatar(target, out / "truth.mp4", motion=params, body=body, plate=plate, n_dirs=n_dirs, progress=progress,
-                  light=true_light[:n_frames], albedo=TexturedAlbedo(truth.texture, body.uv, body.uv_faces))
+    true = avatar(target, out / "truth.mp4", motion=params,
+                  look=AvatarLook(body=body, albedo=TexturedAlbedo(truth.texture, body.uv, body.uv_faces)),
+                  placement=AvatarPlacement(plate=plate), prt=PrtSettings(n_dirs=n_dirs), progress=progress,
+                  light=true_light[:n_frames])
     sbs = write_side_by_side(out / "side_by_side.mp4", [truth.video, moved.video, true.video], fps)
     err = albedo_error(rep.avatar.texture, truth.texture, rep.seen)
     return {"capture_source": truth.video, "capture_avatar_file": rep.out, "capture_avatar": moved.video,

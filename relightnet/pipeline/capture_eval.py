@@ -100,13 +100,14 @@ def _new_params(body, phenotype) -> dict:
 
 def _render(body_like, params, light, texture, size) -> tuple[torch.Tensor, torch.Tensor]:
     """(N, H, W, 3) linear premultiplied images and (N, H, W) bool masks of the re-render."""
+    from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.frame import TexturedAlbedo
     from ..render.jobs import render_body_frames
 
     albedo = TexturedAlbedo(texture, body_like.uv, body_like.uv_faces)
     frames = list(render_body_frames(body_like, params, light, albedo, camera=default_camera(size),
-                                     n_frames=len(NEW_ANGLES), n_dirs=64, visible_only=True))
+                                     n_frames=len(NEW_ANGLES), prt=PrtSettings(n_dirs=64), visible_only=True))
     return (torch.stack([f.render.image[0] for f in frames]).float(),
             torch.stack([f.render.alpha[0] > 0.5 for f in frames]))
 

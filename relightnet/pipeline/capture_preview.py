@@ -32,6 +32,7 @@ def turntable_views(captured, size: int = 384, angles=VIEW_ANGLES, light: torch.
     """(N, size, size·3/4, 3) linear renders of a :class:`~relightnet.capture.CapturedBody` turned by ``angles``
     (degrees) in the A-pose, over black, framed to the person's height."""
     from ..body import pose_preset
+    from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
 
@@ -49,7 +50,7 @@ def turntable_views(captured, size: int = 384, angles=VIEW_ANGLES, light: torch.
     h = max(top - bottom, 0.3)  # the default camera frames 1.7 m from 3 m: a taller or shorter person alike
     camera = default_camera(size_hw, distance=3.0 * h / 1.7, target=(0.0, (top + bottom) / 2, 0.0))
     frames = render_body_frames(captured, params, neutral_light() if light is None else light, captured.albedo,
-                                camera=camera, n_dirs=64, visible_only=True)
+                                camera=camera, prt=PrtSettings(n_dirs=64), visible_only=True)
     return torch.stack([f.render.image[0] for f in frames])
 
 

@@ -52,6 +52,7 @@ import torch
 
 from ..checks import InputError, check_device
 from ..names import VIDEO_SMOOTHING
+from ..prt import PrtSettings
 from ..temporal.registry import check_smoothing
 from ..threads import torch_threads
 from .compare_clip import (
@@ -64,6 +65,7 @@ from .compare_clip import (
     compare_clip,
     source_light,
 )
+from .settings import PredictorSettings
 
 logger = logging.getLogger(__name__)
 
@@ -131,8 +133,9 @@ def _one_thread_geometry(cfg, split, index, T, assets):
         return clip_geometry(cfg, split, index, T, assets)
 
 
-def _check_options(smoothing, n_dirs, clips, bounces, source, size) -> None:
-    """Every option of :func:`compare` checked before any work (InputError naming it)."""
+def _check_options(smoothing, n_dirs, clips, bounces, source) -> None:
+    """Every option of :func:`compare` checked before any work (InputError naming it; the CNN's size:
+    :class:`~relightnet.pipeline.PredictorSettings`)."""
     from ..sh import preset_names
 
     check_smoothing(smoothing, VIDEO_SMOOTHING)
@@ -141,8 +144,6 @@ def _check_options(smoothing, n_dirs, clips, bounces, source, size) -> None:
             raise InputError(f"{name}: expected an integer >= {lo}, got {v!r}")
     if source not in preset_names():
         raise InputError(f"source: expected a preset name ({', '.join(preset_names())}), got {source!r}")
-    if size is not None and (isinstance(size, bool) or not isinstance(size, int) or size < 16 or size % 16):
-        raise InputError(f"size: expected a positive multiple of 16, got {size!r}")
 
 
 def _clip_record(index: int, meta: dict, clip: dict, out: ClipOutputs) -> dict:
@@ -207,10 +208,9 @@ def _write_report(stage: Path, records, light_arrays, settings: dict, secs: dict
 
 
 @torch.no_grad()
-def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int | None = None, n_dirs: int = 64,
-            smoothing: str = "auto", device: str = "cpu", progress: bool = True, prt_seed: int = 0,
-            source: str = "studio", size: int | None = None, bounces: int = 0, backend: str = "torch",
-            body=None, cnn_albedo: bool = False) -> CompareResult:
+def compare(data_dir, out_dir, predictor: PredictorSettings = PredictorSettings(), split: str = "test",
+            clips: int | None = None, prt: PrtSettings = PrtSettings(n_dirs=64), smoothing: str = "auto",
+            progress: bool = True, source: str = "studio", body=None, cnn_albedo: bool = False) -> CompareResult:
     """Compare the 2D and 3D paths on the clips of a sequence dataset and write a report (module docstring).
 
     Args:
@@ -218,18 +218,18 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
         out_dir: the report folder (made if needed; the files of an earlier report are replaced).
             Everything is made in a hidden folder beside it and moved in at the end, so a failed
             run leaves nothing.
-        checkpoint: the CNN's checkpoint (default: the shipped model); with ``backend="onnx"`` also an
-            ``.onnx`` file (a checkpoint is exported once, :func:`~relightnet.pipeline.backends.make_predictor`).
+        predictor: the CNN (:class:`~relightnet.pipeline.PredictorSettings`: its checkpoint, default the
+            shipped model, or with ``backend="onnx"`` also an ``.onnx`` file, exported once,
+            :func:`~relightnet.pipeline.backends.make_predictor`; the device, ``"cpu"`` or ``"cuda"``,
+            PRT and rasterization run on the CPU; the working size, default its training size).
         split: which split's clips.
         clips: the first N clips (default: all).
-        n_dirs, prt_seed, bounces: the 3D path's PRT directions, their rotation seed, interreflections.
+        prt: the 3D path's PRT (:class:`~relightnet.prt.PrtSettings`: directions, their rotation seed,
+            interreflections; by default 64 directions).
         smoothing: one of :data:`relightnet.names.VIDEO_SMOOTHING` (default ``auto``: ``pooled`` for a
             network that solves its light, else ``hermite``).
-        device: for the CNN (``"cpu"``, ``"cuda"``); PRT and rasterization run on the CPU.
         progress: show a tqdm bar (frames/s).
         source: preset name of the 2D path's source light.
-        size: the CNN's working size, a multiple of 16 (default: its training size).
-        backend: where the CNN runs, ``"torch"`` or ``"onnx"`` (CPU).
         body: an :class:`~relightnet.body.AnnyBody` or ``SynthAssets`` to reuse (default: a new one).
         cnn_albedo: the 2D path relights the CNN's albedo (default: the photo's, as relight-video).
 
@@ -245,13 +245,15 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
     from .backends import make_predictor
 
     t_start = time.perf_counter()
-    _check_options(smoothing, n_dirs, clips, bounces, source, size)
-    dev = check_device(device, "device")
+    n_dirs, prt_seed, bounces, checkpoint = prt.n_dirs, prt.seed, prt.bounces, predictor.checkpoint
+    _check_options(smoothing, n_dirs, clips, bounces, source)
+    dev = check_device(predictor.device, "device")
     cfg, files = _open_data(data_dir, split)
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: exists and is not a folder")
-    predictor = make_predictor(backend, checkpoint, str(dev), size=size)
+    backend = predictor.backend
+    predictor = make_predictor(backend, checkpoint, str(dev), size=predictor.size)
     assets = assets_for(body)
     settings = {"data": str(Path(data_dir)), "split": split,
                 "checkpoint": str(shipped_checkpoint() if checkpoint is None else Path(checkpoint)),
@@ -259,8 +261,7 @@ def compare(data_dir, out_dir, checkpoint=None, split: str = "test", clips: int 
                 "smoothing_options": {"outlier_eps": "3mad", "switches": "auto"}, "n_dirs": n_dirs,
                 "prt_seed": prt_seed, "bounces": bounces, "source_light": source, "source_level": 1.0,
                 "albedo_2d": "cnn" if cnn_albedo else "photo", "dataset": cfg.to_dict()}
-    opts = {"n_dirs": n_dirs, "prt_seed": prt_seed, "smoothing": smoothing, "source": source, "bounces": bounces,
-            "cnn_albedo": cnn_albedo}
+    opts = {"prt": prt, "smoothing": smoothing, "source": source, "cnn_albedo": cnn_albedo}
     stage = R.staging_dir(out_dir)
     try:
         (stage / "plots").mkdir()

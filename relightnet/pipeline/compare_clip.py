@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import torch
@@ -22,6 +22,7 @@ import torch
 from ..checks import InputError, sh_order_from_count
 from ..color import linear_to_srgb
 from ..io.image import to_uint8
+from ..prt import PrtSettings
 from ..render.shading import composite, shade
 from ..sh.io import resize_sh
 from ..sh.light_solve import stack_evidence
@@ -116,7 +117,7 @@ def _render_3d(maps: dict, light: torch.Tensor) -> torch.Tensor:
     return composite(fg, maps["alpha"], torch.zeros_like(fg))
 
 
-def _clip_transport(geometry, t: int, lmax: int, n_dirs: int, bounces: int, prt_seed) -> torch.Tensor:
+def _clip_transport(geometry, t: int, lmax: int, prt) -> torch.Tensor:
     """Frame ``t``'s PRT (V, K) in the camera's light frame, cast in the frame the generator casts it in
     (the person's world frame, before the view's yaw: the same directions there), its garments'
     midpoints ray cast only at shadow edges as there (:func:`relightnet.prt.refined_transport`), and
@@ -128,13 +129,14 @@ def _clip_transport(geometry, t: int, lmax: int, n_dirs: int, bounces: int, prt_
     R, tr = w2c[:3, :3], w2c[:3, 3]
     v_world = ((geometry.verts[t].double() - tr) @ R).float()  # v_cam = R v_world + tr
     n_world = (geometry.normals[t].double() @ R).float()
-    Tw = refined_transport(v_world, geometry.faces, n_world, geometry.midpoints, lmax=lmax, n_dirs=n_dirs,
-                           bounces=bounces, seed=prt_seed, threads=torch.get_num_threads(), manifold="ignore")
+    if prt.threads is None:
+        prt = replace(prt, threads=torch.get_num_threads())
+    Tw = refined_transport(v_world, geometry.faces, n_world, geometry.midpoints, lmax=lmax, prt=prt, manifold="ignore")
     return transport_to_camera(Tw, R, lmax)
 
 
-def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | None = 0, smoothing: str = "auto",
-                 source: str = "studio", bounces: int = 0, tick=None, cnn_albedo: bool = False) -> ClipOutputs:
+def compare_clip(model, clip: dict, geometry, prt: PrtSettings = PrtSettings(n_dirs=64), smoothing: str = "auto",
+                 source: str = "studio", tick=None, cnn_albedo: bool = False) -> ClipOutputs:
     """Run both paths on one clip (module docstring of :mod:`relightnet.pipeline.compare`).
 
     Args:
@@ -142,8 +144,9 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
             training size) or a predictor of :mod:`relightnet.pipeline.backends` (torch or ONNX).
         clip: the clip's arrays as stored (numpy, leading T): :data:`CLIP_FIELDS`.
         geometry: its :class:`~relightnet.data.render_sample.ClipGeometry` (T frames).
-        n_dirs, prt_seed, bounces: the 3D path's PRT (directions, their rotation, interreflections; a
-            bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default).
+        prt: the 3D path's PRT (:class:`~relightnet.prt.PrtSettings`: directions, their rotation seed,
+            interreflections; a bounce reflects off 0.5-grey surfaces, ``vertex_transport``'s default;
+            threads: the torch threads when None).
         smoothing: a name of :data:`~relightnet.names.VIDEO_SMOOTHING`.
         source: preset name of the 2D path's source light.
         tick: optional callable, called after every frame.
@@ -172,7 +175,7 @@ def compare_clip(model, clip: dict, geometry, n_dirs: int = 64, prt_seed: int | 
         photos.append(to_uint8(src[t]).permute(2, 0, 1))  # the 2D path's input photo
         preds.append(_cpu_float(predict.crop(photos[-1], mask[t])))
         c1 = time.perf_counter()
-        Tv = _clip_transport(geometry, t, lmax, n_dirs, bounces, prt_seed)
+        Tv = _clip_transport(geometry, t, lmax, prt)
         c2 = time.perf_counter()
         rend = render_mesh(geometry.verts[t], geometry.faces, Tv, geometry.albedo, true[t], geometry.camera,
                            maps=True)

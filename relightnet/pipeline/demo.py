@@ -76,6 +76,7 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     from ..data import SynthConfig, generate_sequence
     from ..io import atomic_write, write_side_by_side
     from ..model import load_model
+    from ..prt import PrtSettings
     from ..sh import render_presets
     from ..temporal import light_error
     from ..temporal.plot import light_curves_png
@@ -83,6 +84,7 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     from .backends import TorchPredictor
     from .capture_demo import capture_demo
     from .motion_demo import motion_transfer_demo
+    from .settings import AvatarLook, AvatarPlacement
     from .walk_target import replaced_person_demo
 
     out = Path(out_dir)
@@ -96,8 +98,9 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     paths.update(_write_target(out, sample))
 
     logger.info("demo 2/7: avatar lit by the target's estimated light")
-    res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk", body=body,
-                 target_masks=paths["masks"], plate=paths["plate"], n_dirs=n_dirs, progress=progress)
+    res = avatar(paths["target"], out / "avatar.mp4", model=TorchPredictor(model), motion="walk",
+                 look=AvatarLook(body=body), target_masks=paths["masks"],
+                 placement=AvatarPlacement(plate=paths["plate"]), prt=PrtSettings(n_dirs=n_dirs), progress=progress)
     paths["avatar"], paths["avatar_lights"] = res.video, res.lights_file
     paths["side_by_side"] = write_side_by_side(out / "side_by_side.mp4", [paths["target"], res.video],
                                                sample.meta["fps"])
@@ -145,11 +148,12 @@ def _run_compare(out: Path, body, clips: int, size: int, frames: int, n_dirs: in
     """Generate ``clips`` test sequences (held-out env maps) and compare the 2D and 3D paths on them."""
     from ..data import SynthConfig
     from ..data.synth import run_synth
+    from ..prt import PrtSettings
     from .compare import compare
 
     data = out.parent / "sequences"
     cfg = SynthConfig(seed=0, res=size, n_dirs=max(n_dirs, 64), shard_size=clips,
                       counts={"train": 0, "val": 0, "test": clips}, sequence_frames=frames)
     run_synth(data, cfg, workers=0, progress=progress, body=body)
-    compare(data, out, split="test", n_dirs=n_dirs, progress=progress, body=body)
+    compare(data, out, split="test", prt=PrtSettings(n_dirs=n_dirs), progress=progress, body=body)
     return out

@@ -40,6 +40,7 @@ def walking_source(path, size: int, n_frames: int, body, fps: float = 30.0, seed
     from ..color import linear_to_srgb
     from ..data.backgrounds import procedural_background
     from ..io import VideoWriter
+    from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
     from ..sh import ambient_light, directional_light
@@ -52,7 +53,7 @@ def walking_source(path, size: int, n_frames: int, body, fps: float = 30.0, seed
     light = ambient_light(0.3) + directional_light(torch.tensor([1.0, 0.4, -0.6]), 2.2)
     bg, _ = procedural_background(np.random.default_rng(seed), size, 0.25)
     frames = render_body_frames(dressed, motion, light, dressed.albedo, camera=default_camera((size, size)),
-                                n_frames=n_frames, n_dirs=32, visible_only=True)
+                                n_frames=n_frames, prt=PrtSettings(n_dirs=32), visible_only=True)
     with VideoWriter(path, fps=fps) as v:
         for fr in frames:
             a = fr.render.alpha[0][..., None]
@@ -83,7 +84,9 @@ def motion_transfer_demo(out_dir, target, target_masks, plate, size: int, n_fram
     """
     from ..fit import FitBody, fit_file, pa_mpjpe, to_default_avatar
     from ..io import write_side_by_side
+    from ..prt import PrtSettings
     from .avatar import avatar
+    from .settings import AvatarLook, AvatarPlacement
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -92,7 +95,8 @@ def motion_transfer_demo(out_dir, target, target_masks, plate, size: int, n_fram
     fb = FitBody(body)
     fitted = fit_file(source, fb=fb)
     res = avatar(target, out / "avatar.mp4", model=model, motion=to_default_avatar(fitted.motion, fb).body_params(),
-                 body=body, target_masks=target_masks, plate=plate, n_dirs=n_dirs, progress=progress)
+                 look=AvatarLook(body=body), target_masks=target_masks, placement=AvatarPlacement(plate=plate),
+                 prt=PrtSettings(n_dirs=n_dirs), progress=progress)
     sbs = write_side_by_side(out / "side_by_side.mp4", [source, res.video], fps)
     with torch.no_grad():
         true_out = body(truth)

@@ -32,6 +32,7 @@ from ..temporal.registry import check_smoothing, make_smoother, resolve_smoothin
 from .backends import as_predictor
 from .relight_bands import relight_over_photo
 from .relight_image import to_model_order
+from .settings import VideoLightSettings
 from .steady_maps import MapCarry
 
 logger = logging.getLogger(__name__)
@@ -55,9 +56,8 @@ def person_in_most(shares, min_share: float = PERSON_SHARE) -> bool:
 
 @torch.no_grad()
 def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_per_s: float = 0.0,
-                  smoothing: str = "auto", progress: bool = True, detail: bool = True,
-                  mask_source: str = "segment", alpha: float = 0.3, soft_edges: bool = True,
-                  steady: bool = True, hdr: bool = False) -> int:
+                  lights: VideoLightSettings = VideoLightSettings(), progress: bool = True, detail: bool = True,
+                  soft_edges: bool = True, steady: bool = True, hdr: bool = False) -> int:
     """Relight every frame of ``video`` with ``light`` and write ``out`` (mp4/mkv).
 
     Args:
@@ -65,20 +65,19 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
         video: input video file (its frames' times and its sound, if any, are kept in ``out``:
             a variable frame rate stays so; :mod:`relightnet.io.timestamps`).
         masks: folder of per-frame mask images (sorted) or a mask video, one per frame, or None
-            (``mask_source``: the person segmentation, or the CNN's mask head); a frame whose mask
+            (``lights.mask_source``: the person segmentation, or the CNN's mask head); a frame whose mask
             is empty (the person out of view) is written unchanged; segmented, a video with nobody
             in its first :data:`NO_PERSON_S` seconds is refused then.
         light: (K, 3) new light (camera-relative light frame).
         out: output video path (written atomically).
         turntable_deg_per_s: turn the new light about the up axis at this rate.
-        smoothing: how the source-light estimate is smoothed, a causal method
-            (:data:`~relightnet.names.STREAMING_SMOOTHING`: ``auto``, ``pooled``, ``ema``,
-            ``one-euro``, ``fir``, ``gated-one-euro``, ``none``). A number is the former spelling
-            (deprecated): the EMA weight ``alpha`` with ``auto``, 1 meaning ``none``.
+        lights: a :class:`~relightnet.pipeline.VideoLightSettings`: ``smoothing``, how the source-light
+            estimate is smoothed, a causal method (:data:`~relightnet.names.STREAMING_SMOOTHING`: ``auto``,
+            ``pooled``, ``ema``, ``one-euro``, ``fir``, ``gated-one-euro``, ``none``); ``mask_source``, without
+            ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`); ``alpha``, ``ema``'s
+            weight of the newest frame, in (0, 1].
         detail: relight each frame's own albedo (frame / predicted shading under the smoothed
             source light; :func:`~relightnet.model.photo_albedo`); False relights the CNN's albedo.
-        mask_source: without ``masks``: ``segment`` or ``head`` (:mod:`relightnet.segment.sources`).
-        alpha: ``ema``'s weight of the newest frame, in (0, 1].
         soft_edges: each frame's person composited with a soft matte in its border band
             (:func:`~relightnet.segment.matte.soft_composite`); False pastes with the mask as it is.
         steady: carry the CNN's maps from frame to frame along the optical flow
@@ -94,7 +93,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
 
     if not math.isfinite(turntable_deg_per_s) or abs(turntable_deg_per_s) > 1e6:
         raise InputError(f"turntable: expected degrees per second (a finite number), got {turntable_deg_per_s}")
-    smoothing, alpha = _smoothing_spelling(smoothing, alpha)
+    mask_source = lights.mask_source
+    smoothing, alpha = _smoothing_spelling(lights.smoothing, lights.alpha)
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")

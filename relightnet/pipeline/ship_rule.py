@@ -62,6 +62,7 @@ def ship_figures(model, data, clips, photos, device: str = "cpu") -> dict:
     from .compare import compare
     from .light_eval import split_lights, still_metrics
     from .photo_checks import photo_checks
+    from .settings import PredictorSettings
 
     net = load_model(model, device=device)
     out: dict = {}
@@ -71,7 +72,7 @@ def ship_figures(model, data, clips, photos, device: str = "cpu") -> dict:
         est, true, sources = split_lights(net, data, "test", photo=photo)
         out[f"light_error_{how}"] = float(still_metrics(est, true, sources)["all"]["error"]["median"])
     with tempfile.TemporaryDirectory(prefix=".relightnet-ship-") as tmp:
-        summary = compare(clips, Path(tmp) / "compare", checkpoint=model, device=device,
+        summary = compare(clips, Path(tmp) / "compare", predictor=PredictorSettings(checkpoint=model, device=device),
                           progress=False).metrics["summary"]
     out["compare_light_error"] = float(summary["light"]["raw"]["relative"])
     checks = photo_checks(model, photos, device=device)["median"]

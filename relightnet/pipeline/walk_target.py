@@ -70,6 +70,7 @@ def walking_target(out_dir, size=(256, 256), n_frames: int = 48, fps: float = 30
     from ..body import AnnyBody, make_motion
     from ..color import linear_to_srgb
     from ..io import VideoWriter
+    from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
     from ..sh import ambient_light, directional_light
@@ -96,8 +97,8 @@ def walking_target(out_dir, size=(256, 256), n_frames: int = 48, fps: float = 30
     ever = np.zeros((H, W), bool)
     always = np.ones((H, W), bool)
     paths = out / f"target{suffix}", out / f"masks{suffix}"
-    frames = render_body_frames(body, motion, light, avatar_albedo(body), camera=camera, occlusion=False,
-                                n_frames=n_frames, visible_only=True)
+    frames = render_body_frames(body, motion, light, avatar_albedo(body), camera=camera,
+                                prt=PrtSettings(n_dirs=64, occlusion=False), n_frames=n_frames, visible_only=True)
     with VideoWriter(paths[0], fps=fps) as v, VideoWriter(paths[1], fps=fps) as vm:
         for fr in frames:
             a = fr.render.alpha[0]
@@ -119,15 +120,17 @@ def replaced_person_demo(out_dir, size: int, n_frames: int, body, n_dirs: int = 
     plate's PSNR against the true background over the pixels the
     person covered and uncovered. Returns the paths and figures by name."""
     from ..io import read_image
+    from ..prt import PrtSettings
     from ..sh import ambient_light, directional_light
     from .avatar import avatar
     from .clean_plate import plate_psnr
+    from .settings import AvatarLook, AvatarPlacement
 
     out = Path(out_dir)
     wt = walking_target(out, size=(size, size), n_frames=n_frames, suffix=".mp4", body=body)
     light = ambient_light(0.35) + directional_light(torch.tensor([1.0, 0.5, 0.8]), 2.0)  # the target's own light
-    avatar(wt.video, out / "avatar.mp4", light=light, body=body, target_masks=wt.masks, replace_person=True,
-           outfit=outfit, n_dirs=n_dirs, progress=progress)
+    avatar(wt.video, out / "avatar.mp4", light=light, look=AvatarLook(body=body, outfit=outfit), target_masks=wt.masks,
+           placement=AvatarPlacement(replace_person=True), prt=PrtSettings(n_dirs=n_dirs), progress=progress)
     plate = (read_image(out / "avatar.plate.png") * 255).round().to(torch.uint8).numpy()
     # Over the pixels the person covered in some frame and uncovered in another (true masks); what the job
     # had to inpaint there (its segmentation masks are dilated) counts against the plate.

@@ -36,6 +36,7 @@ from ..checks import InputError, check_shape
 from ..sh import light_to_world, sh_basis, sh_count
 from .interreflection import bounce_operator, check_albedo
 from .mesh_checks import check_mesh, check_normals, mesh_scale
+from .settings import PrtSettings
 from .transport import cast_lit, transport_directions
 from .visibility import RayEngine, VertexRays, make_engine, vertex_rays
 
@@ -123,17 +124,17 @@ def _bounce(T0, rays: list[VertexRays], hits: list, faces, weights, verts, rho, 
     return total[:, :, 0] if c == 1 else total
 
 
-def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: int = 256, bounces: int = 0,
-                      albedo=None, seed: int | None = 0, engine: str | RayEngine = "auto", offset: float = 1e-4,
-                      threads: int | None = None, vertices=None, manifold: str = "warn",
-                      threshold: float = SHADOW_EDGE, return_cast: bool = False):
+def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, prt: PrtSettings = PrtSettings(),
+                      albedo=None, vertices=None, manifold: str = "warn", threshold: float = SHADOW_EDGE,
+                      return_cast: bool = False):
     """Per-vertex SH transport (occluded) of a subdivided mesh, midpoints ray cast only at shadow edges.
 
     Args:
         verts: (V, 3), faces: (F, 3), normals: (V, 3) as for :func:`~relightnet.prt.vertex_transport`.
         midpoints: (M, 3) int64 rows (midpoint vertex m, endpoint a, endpoint b): m lies on edge a–b
             (:attr:`relightnet.body.SubdividedFaces.midpoints`); endpoints are not midpoints.
-        lmax, n_dirs, bounces, albedo, seed, engine, offset, threads, manifold: as for ``vertex_transport``.
+        lmax, prt, albedo, manifold: as for ``vertex_transport``; ``prt`` (a
+            :class:`~relightnet.prt.PrtSettings`) with ``occlusion`` (every vertex is ray cast here).
         vertices: (N,) indices of the only rows wanted (others 0); not with ``bounces``. The rows
             wanted equal those of the full computation bit for bit.
         threshold: the endpoints' visibility difference ``d`` above which a midpoint is ray cast
@@ -145,8 +146,9 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: i
         (M,) bool, True for the midpoints that were ray cast (False for those not wanted).
     """
     sh_count(lmax)
-    if int(bounces) != bounces or bounces < 0:
-        raise InputError(f"bounces: expected an integer >= 0, got {bounces!r}")
+    if not isinstance(prt, PrtSettings) or not prt.occlusion:
+        raise InputError(f"prt: expected PrtSettings with occlusion=True (refined transport casts rays), got {prt!r}")
+    bounces = prt.bounces
     if not 0 <= threshold <= 1:
         raise InputError(f"threshold: expected a value in [0, 1], got {threshold!r}")
     verts, faces = check_mesh(verts, faces, manifold=manifold)
@@ -165,10 +167,10 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: i
         want[idx] = True
     is_mid = torch.zeros(nv, dtype=torch.bool)
     is_mid[mid[:, 0]] = True
-    dirs_light, weights = transport_directions(n_dirs, seed)
+    dirs_light, weights = transport_directions(prt.n_dirs, prt.seed)
     dirs = light_to_world(dirs_light)
     Yw = sh_basis(dirs_light, lmax, check=False) * weights[:, None]
-    eng = make_engine(verts, faces, engine, threads)
+    eng = make_engine(verts, faces, prt.engine, prt.threads)
     scale = mesh_scale(verts)
     cast_v, wm = _rows(want, is_mid, mid)
     # Every row of n·ω and of the projection below is one product over the whole mesh: BLAS sums a row in
@@ -176,11 +178,11 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, n_dirs: i
     # which vertices are wanted (a subset's rows equal the full computation's, bit for bit).
     cos = normals @ dirs.T
     lit = np.zeros((nv, dirs.shape[0]), dtype=np.float32)  # visibility × cosine of every row wanted
-    rays, hits = _cast(eng, cast_v, verts, normals, dirs, cos, offset, scale, bool(bounces), lit)
+    rays, hits = _cast(eng, cast_v, verts, normals, dirs, cos, prt.offset, scale, bool(bounces), lit)
     shadow = _midpoint_rows(torch.from_numpy(lit), cos, wm, float(threshold))
     all_rays, all_hits = [rays], [hits]
     if bool(shadow.any()):
-        rays_m, hits_m = _cast(eng, wm[shadow, 0], verts, normals, dirs, cos, offset, scale, bool(bounces), lit)
+        rays_m, hits_m = _cast(eng, wm[shadow, 0], verts, normals, dirs, cos, prt.offset, scale, bool(bounces), lit)
         all_rays.append(rays_m)
         all_hits.append(hits_m)
     T = torch.from_numpy(lit) @ Yw

@@ -18,7 +18,8 @@ from ..checks import InputError
 from ..sh import fibonacci_sphere, light_to_world, random_fibonacci_sphere, sh_basis, sh_count
 from .interreflection import bounce_operator, check_albedo, interreflect
 from .mesh_checks import check_mesh, check_normals, mesh_scale
-from .visibility import RayEngine, make_engine, vertex_rays
+from .settings import PrtSettings
+from .visibility import make_engine, vertex_rays
 
 __all__ = ["transport_directions", "vertex_transport"]
 
@@ -78,14 +79,8 @@ def vertex_transport(
     faces,
     normals,
     lmax: int = 2,
-    n_dirs: int = 256,
-    occlusion: bool = True,
-    bounces: int = 0,
+    prt: PrtSettings = PrtSettings(),
     albedo=None,
-    seed: int | None = 0,
-    engine: str | RayEngine = "auto",
-    offset: float = 1e-4,
-    threads: int | None = None,
     vertices: torch.Tensor | None = None,
     manifold: str = "warn",
 ) -> torch.Tensor:
@@ -96,16 +91,12 @@ def vertex_transport(
             counter-clockwise seen from outside (that side is the front).
         normals: (V, 3) unit world-frame normals.
         lmax: SH order (K = (lmax+1)²).
-        n_dirs: directions D of the shared quadrature set.
-        occlusion: cast rays (True) or use the unshadowed cosine lobe (False).
-        bounces: diffuse interreflection bounces (needs ``occlusion``).
+        prt: a :class:`~relightnet.prt.PrtSettings`: the directions D of the shared quadrature
+            set, occlusion (cast rays, or the unshadowed cosine lobe), interreflection bounces,
+            the direction set's seed, the ray engine, origin offset and threads.
         albedo: diffuse albedo in [0, 1] of the reflecting surfaces for
             ``bounces ≥ 1``: a float, (V,) grey, or (V, 3) RGB. None means 0.5 grey.
             The receiver's own albedo is *not* in T (pixel = albedo ⊙ (T·L)).
-        seed: rotation of the direction set (deterministic); None = unrotated.
-        engine: ray engine (see :func:`relightnet.prt.make_engine`).
-        offset: ray origin offset along the normal, relative to the bounding-box diagonal.
-        threads: ray-casting threads.
         vertices: (M,) indices of the only vertices whose transport is wanted (e.g. those of
             the faces a camera sees); the others get 0. Rays still hit the whole mesh, so the
             wanted rows equal those of the full computation. Not with ``bounces``, which
@@ -117,26 +108,25 @@ def vertex_transport(
         (V, K) float32 transport, or (V, K, 3) when ``bounces ≥ 1`` and the
         albedo is RGB (V, 3): bounced light takes the colour of what it hits.
     """
+    if not isinstance(prt, PrtSettings):
+        raise InputError(f"prt: expected a PrtSettings, got {type(prt).__name__}")
+    bounces = prt.bounces
     sh_count(lmax)
-    if int(bounces) != bounces or bounces < 0:
-        raise InputError(f"bounces: expected an integer >= 0, got {bounces!r}")
-    if bounces and not occlusion:
-        raise InputError("bounces >= 1 needs occlusion=True: light only bounces off surfaces that block it")
     verts, faces = check_mesh(verts, faces, manifold=manifold)
     normals = check_normals(normals, verts.shape[0])
     rho = check_albedo(0.5 if albedo is None else albedo, verts.shape[0]) if bounces else None
-    dirs_light, weights = transport_directions(n_dirs, seed)
+    dirs_light, weights = transport_directions(prt.n_dirs, prt.seed)
     dirs_world = light_to_world(dirs_light)
     Yw = sh_basis(dirs_light, lmax, check=False) * weights[:, None]  # (D, K)
     idx = _vertex_subset(vertices, verts.shape[0], bounces)
-    if not occlusion:  # cheap: every vertex
+    if not prt.occlusion:  # cheap: every vertex
         cos = (normals @ dirs_world.T).clamp_min(0)
         return (cos @ Yw).contiguous()
     if idx is not None and idx.numel() == 0:
         return torch.zeros(verts.shape[0], Yw.shape[1])
     sub_v, sub_n = (verts, normals) if idx is None else (verts[idx], normals[idx])
-    rays = vertex_rays(sub_v, sub_n, dirs_world, offset, scale=mesh_scale(verts))
-    eng = make_engine(verts, faces, engine, threads)
+    rays = vertex_rays(sub_v, sub_n, dirs_world, prt.offset, scale=mesh_scale(verts))
+    eng = make_engine(verts, faces, prt.engine, prt.threads)
     lit, hits = cast_lit(eng, rays, bool(bounces))
     T = torch.from_numpy(lit) @ Yw
     if idx is not None:

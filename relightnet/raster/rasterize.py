@@ -115,12 +115,14 @@ def _homogeneous(cx, cy, cz, cw):
     return rows, zplane, det
 
 
-def _bary_kernel(pix, t, rows, zplane, gid, B: int, F: int, h: int, w: int, top: int, left: int, H: int, W: int):
+def _bary_kernel(pix, t, rows, zplane, gid, grid: tuple[int, int, int, int, int, int, int, int]):
     """Barycentrics (3, N) float64, NDC depth (N,) and face index (N,) of covered pixels.
 
     pix: flat indices into the B·h·w pixels of the window at (top, left) of the (H, W) frame; the
     pixel centres' NDC are the frame's (for the whole frame the same operations as without a window).
+    grid: ``(B, F, h, w, top, left, H, W)``, the batch, the faces per mesh, the window and the frame.
     """
+    B, F, h, w, top, left, H, W = grid
     pf = pix.to(torch.float64)
     if B > 1:
         pf = pf - torch.floor(pf / (h * w)) * (h * w)
@@ -227,7 +229,7 @@ def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backface
     hw = win.height * win.width
     zb = ZBuffer(B * hw, n, dev)
     base = torch.div(gid, F, rounding_mode="floor").to(torch.float64) * hw
-    rasterize_spans(zb, X, Y, lo_y, hi_y, zplane, det, base, H, W, cull_backfaces, k,
+    rasterize_spans(zb, X, Y, lo_y, hi_y, zplane, det, base, (H, W), cull_backfaces, k,
                     (win.top, win.left, win.width))
     pix, t = zb.winners()
     del zb  # the z-buffer and its candidates before the covered pixels' barycentrics
@@ -235,10 +237,10 @@ def rasterize(verts_clip: torch.Tensor, faces: torch.Tensor, size, cull_backface
     bary = torch.empty(3, pix.shape[0], dtype=out_dtype, device=dev)
     depth = torch.empty(pix.shape[0], dtype=out_dtype, device=dev)
     face = torch.empty_like(pix)
+    grid = (B, F, win.height, win.width, win.top, win.left, H, W)
     for a in range(0, pix.shape[0], _BARY_CHUNK):  # float64 temporaries of a chunk at a time
         s = slice(a, a + _BARY_CHUNK)
-        bary[:, s], depth[s], face[s] = k["bary"](pix[s], t[s], rows, zplane, gid, B, F, win.height, win.width,
-                                                  win.top, win.left, H, W)
+        bary[:, s], depth[s], face[s] = k["bary"](pix[s], t[s], rows, zplane, gid, grid)
     return Fragments(pix, face, bary.T, depth, shape, window)
 
 

@@ -156,16 +156,17 @@ class ZBuffer:
         return torch.cat(pix_l), torch.cat(key_l) & mask
 
 
-def rasterize_spans(zb: ZBuffer, X, Y, lo_y, hi_y, zplane, det, base, H: int, W: int,
+def rasterize_spans(zb: ZBuffer, X, Y, lo_y, hi_y, zplane, det, base, size: tuple[int, int],
                     cull_backfaces: bool, kernels, window: tuple[int, int, int]) -> None:
     """Z-test every covered pixel of the snapped triangles X, Y (3, n) into ``zb``.
 
     lo_y, hi_y: (n,) first/last pixel row (the frame's, within the window); zplane (3, n) NDC
     depth = zplane · (u, v, 1); det (n,) 0 for degenerate triangles; base (n,) flat offset of each
-    triangle's image in ``zb``; H, W the frame's size; window (top, left, width): the window's first
+    triangle's image in ``zb``; size (H, W) the frame's; window (top, left, width): the window's first
     row and column and its width (``zb`` holds the window's pixels). ``kernels`` maps kernel names to
     callables (eager or compiled).
     """
+    H, W = size
     slots = torch.tensor(_SLOTS, device=X.device)
     Ds, Gs, Gys, zc, zx, zy, nrows = kernels["edge"](X, Y, zplane, det, lo_y, hi_y, slots,
                                                       cull_backfaces, H, W)

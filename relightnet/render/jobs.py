@@ -17,7 +17,7 @@ import torch
 from ..body.base import vertex_normals
 from ..checks import InputError, sh_order_from_count
 from ..io.documents import clip
-from ..prt import check_mesh, vertex_transport
+from ..prt import PrtSettings, check_mesh, vertex_transport
 from ..raster import Camera, Window, default_camera, look_at, perspective_camera, rasterize, screen_box
 from .frame import RenderOutput, TexturedAlbedo, render_mesh
 
@@ -89,8 +89,8 @@ def fit_camera(verts: torch.Tensor, size, fov_deg: float = 35.0, margin: float =
                               far=dist + 4 * float(radius))
 
 
-def render_mesh_file(path, light: torch.Tensor, size=512, occlusion: bool = True, bounces: int = 0,
-                     n_dirs: int = 256, albedo=(0.8, 0.8, 0.8), seed: int = 0) -> RenderOutput:
+def render_mesh_file(path, light: torch.Tensor, size=512, prt: PrtSettings = PrtSettings(),
+                     albedo=(0.8, 0.8, 0.8)) -> RenderOutput:
     """Render a mesh file under an SH light with PRT transport (the seed's teapot demo).
 
     The light is fixed to the world (an environment around the mesh), seen from a camera
@@ -100,15 +100,15 @@ def render_mesh_file(path, light: torch.Tensor, size=512, occlusion: bool = True
         path: mesh file.
         light: (K, 3) SH light in the world's light frame.
         size: output (H, W) or int.
-        occlusion, bounces, n_dirs: PRT options of :func:`relightnet.prt.vertex_transport`.
+        prt: the PRT options (:class:`relightnet.prt.PrtSettings`).
 
     Returns:
         :class:`RenderOutput` with maps.
     """
     mesh = load_mesh(path, albedo)
     lmax = sh_order_from_count(light.shape[-2], "light")
-    T = vertex_transport(mesh.verts, mesh.faces, mesh.normals, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion,
-                         bounces=bounces, albedo=mesh.albedo if bounces else None, seed=seed)
+    T = vertex_transport(mesh.verts, mesh.faces, mesh.normals, lmax=lmax, prt=prt,
+                         albedo=mesh.albedo if prt.bounces else None)
     return render_mesh(mesh.verts, mesh.faces, T, mesh.albedo, light, fit_camera(mesh.verts, size),
                        normals=mesh.normals, light_frame="world", maps=True)
 
@@ -158,12 +158,8 @@ def render_body_frames(
     params: Mapping,
     light: torch.Tensor,
     albedo: torch.Tensor | TexturedAlbedo,
-    camera: Camera | None = None,
-    size=512,
-    n_dirs: int = 64,
-    occlusion: bool = True,
-    bounces: int = 0,
-    seed: int = 0,
+    camera: Camera | int | tuple[int, int] | None = 512,
+    prt: PrtSettings = PrtSettings(n_dirs=64),
     maps: bool = False,
     vertex_albedo: torch.Tensor | None = None,
     n_frames: int | None = None,
@@ -179,8 +175,10 @@ def render_body_frames(
             ``Motion.body_params()``), or without it for a single frame.
         light: (K, 3) for all frames or (T, K, 3) per frame, relative to the camera.
         albedo: (V, 3) per-vertex albedo or a :class:`TexturedAlbedo`.
-        camera: one camera (default: :func:`relightnet.raster.default_camera` of ``size``).
-        n_dirs, occlusion, bounces, seed: PRT options (transport is recomputed per pose).
+        camera: one camera, or the image size (H, W) or int of the
+            :func:`relightnet.raster.default_camera` to use (None: 512).
+        prt: the PRT options (:class:`relightnet.prt.PrtSettings`; transport is recomputed per
+            pose); by default 64 directions.
         maps: also produce the transport/albedo/normal/depth maps.
         vertex_albedo: (V, 3) albedo for interreflection when ``albedo`` is a texture
             (default: ``albedo`` itself when per-vertex, else 0.5 grey).
@@ -199,7 +197,7 @@ def render_body_frames(
     Yields:
         :class:`BodyFrame` per frame.
     """
-    camera = default_camera(size) if camera is None else camera
+    camera = camera if isinstance(camera, Camera) else default_camera(512 if camera is None else camera)
     if n_frames is not None and (isinstance(n_frames, bool) or int(n_frames) < 1 or int(chunk) < 1):
         raise InputError(f"n_frames, chunk: expected integers >= 1, got {n_frames}, {chunk}")
 
@@ -226,9 +224,9 @@ def render_body_frames(
             v, nrm = out.verts[i], out.normals[i]
             L = light[t if light.shape[0] == n else 0] if light.dim() == 3 else light
             with torch.no_grad():
-                win, frags, seen = _visible(camera, v, out.faces, box, visible_only and not bounces)
-                T = vertex_transport(v, out.faces, nrm, lmax=lmax, n_dirs=n_dirs, occlusion=occlusion,
-                                     bounces=bounces, albedo=bounce_albedo, seed=seed, vertices=seen, manifold="ignore")
+                win, frags, seen = _visible(camera, v, out.faces, box, visible_only and not prt.bounces)
+                T = vertex_transport(v, out.faces, nrm, lmax=lmax, prt=prt, albedo=bounce_albedo, vertices=seen,
+                                     manifold="ignore")
                 r = render_mesh(v, out.faces, T, albedo, L, camera, normals=nrm, maps=maps, frags=frags, window=win)
             yield BodyFrame(t, r, T, v)
             del r, T, frags  # the next frame is rendered without this one's (a frame at the pixel limit: ~0.5 GB)

@@ -10,7 +10,7 @@ from relightnet.blender.reference import masked_rel_rmse
 from relightnet.body import vertex_normals
 from relightnet.checks import InputError
 from relightnet.io import read_envmap, read_image
-from relightnet.prt import vertex_transport
+from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.raster import look_at, perspective_camera
 from relightnet.render import render_mesh
 from relightnet.sh import ambient_light, directional_light, rotate_sh, sh_to_envmap
@@ -38,7 +38,7 @@ def sphere_case(tmp_path_factory):
     assert sh_to_envmap(L, 64).min() > 0  # no clamping: Cycles sees exactly this band-limited world
     cam = perspective_camera(look_at(torch.tensor([1.5, 1.8, 2.2]), torch.tensor([0.0, 0.85, 0.0])), 64, fov_deg=30)
     alb = torch.tensor([0.7, 0.6, 0.5]).expand(len(v), 3).contiguous()
-    T = vertex_transport(v, f, n, occlusion=False, n_dirs=1024)
+    T = vertex_transport(v, f, n, prt=PrtSettings(occlusion=False, n_dirs=1024))
     ours = render_mesh(v, f, T, alb, L, cam)  # light_frame="camera", as in the avatar pipeline
     export_scene(tmp / "s.blend", v, f, world_light(L, cam, size=64), cam, albedo=alb, normals=n)
     frames = list(render_blend(tmp / "s.blend", tmp / "out", spp=8, bounces=0, filter_width=0.01))

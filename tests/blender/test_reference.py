@@ -5,8 +5,10 @@ import math
 import pytest
 import torch
 
+from relightnet.blender import CyclesSettings
 from relightnet.blender.reference import comparison_mask, front_facing, masked_rel_rmse, reference_comparison
 from relightnet.checks import InputError, ShapeError
+from relightnet.prt import PrtSettings
 from relightnet.raster import default_camera
 from relightnet.sh import save_light
 
@@ -46,7 +48,7 @@ def test_comparison_mask_and_front_facing():
 
 def test_tiny_reference_run(anny_body, tmp_path):
     r = reference_comparison(anny_body, {"pose": anny_body.pose("apose")}, light="sunset", bounces=(0, 1), size=48,
-                             spp=16, n_dirs=32, repeat=1, workdir=tmp_path)
+                             cycles=CyclesSettings(spp=16), prt=PrtSettings(n_dirs=32), repeat=1, workdir=tmp_path)
     assert [row["bounces"] for row in r.rows] == [0, 1]
     assert list(tmp_path.iterdir()) == []  # the .blend files lived in a temporary folder
     for row in r.rows:

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.blender import blender_camera, export_body_scene, export_scene, world_light, world_to_blender
+from relightnet.blender import (
+    WorldLightSettings,
+    blender_camera,
+    export_body_scene,
+    export_scene,
+    world_light,
+    world_to_blender,
+)
 from relightnet.blender.cycles import open_blend, read_image_pixels
 from relightnet.body import default_albedo, make_motion
 from relightnet.checks import InputError, ShapeError
@@ -82,7 +89,7 @@ def test_animation_is_one_shape_key_per_frame(tmp_path, anny_body, albedo):
 
     params = make_motion("walk", 3, fps=29.97)
     path = export_body_scene(tmp_path / "w.blend", anny_body, params, "studio", albedo=albedo, size=32,
-                             fps=29.97, camera="fit", band_limit=True, world_size=16)
+                             fps=29.97, camera="fit", world=WorldLightSettings(band_limit=True, size=16))
     out = anny_body(params)
     scene = open_blend(path)
     assert (scene.frame_start, scene.frame_end) == (1, 3)

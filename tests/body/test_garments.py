@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from relightnet.body import REGIONS, region_labels
-from relightnet.body.garments import hem_field, iso_clip, radial_directions, ring_surface, shell_surface
+from relightnet.body.garments import RingShape, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from relightnet.checks import InputError
 
 
@@ -56,7 +56,7 @@ def test_ring_surface_encloses_the_body_and_hangs(anny_body, posed):
     root = joints[anny_body.joint_index("root")]
     front = torch.tensor([0.0, 0.0, 1.0])
     y0, y1, clearance = float(root[1]) + 0.05, float(root[1]) - 0.55, 0.015
-    piece = ring_surface(verts, root, front, y0, y1, 25, 48, clearance, flare=0.05)
+    piece = ring_surface(verts, root, front, y0, y1, 25, 48, clearance, shape=RingShape(flare=0.05))
     assert piece.verts.shape == (25 * 49, 3) and piece.faces.shape == (2 * 24 * 48, 3)
     assert piece.uv.shape == (25 * 49, 2)
     assert float(piece.uv.min()) >= 0 and float(piece.uv.max()) <= 1
@@ -85,9 +85,10 @@ def test_ring_surface_opening_and_cap(anny_body, posed):
     head = joints[anny_body.joint_index("head")]
     front = torch.tensor([0.0, 0.0, 1.0])
     top = float(verts[:, 1].max())
-    closed = ring_surface(verts, head, front, top + 0.02, top - 0.4, 12, 40, 0.02, min_radius=0.03, cap=True)
-    opened = ring_surface(verts, head, front, top + 0.02, top - 0.4, 12, 40, 0.02, min_radius=0.03, cap=True,
-                          open_rows=4, open_halfwidth=math.radians(60))
+    closed = ring_surface(verts, head, front, top + 0.02, top - 0.4, 12, 40, 0.02,
+                          shape=RingShape(min_radius=0.03, cap=True))
+    opened = ring_surface(verts, head, front, top + 0.02, top - 0.4, 12, 40, 0.02,
+                          shape=RingShape(min_radius=0.03, cap=True, open_rows=4, open_halfwidth=math.radians(60)))
     assert closed.faces.shape[0] == 2 * 11 * 40 + 40
     removed = closed.faces.shape[0] - opened.faces.shape[0]
     assert removed > 0 and removed % 2 == 0
@@ -155,7 +156,7 @@ def test_hem_field_is_zero_on_the_border_and_one_inside():
     assert torch.allclose(g, (d / 0.2).clamp_max(1.0), atol=1e-6)
     # A closed surface has no border (a seam of coincident vertices is none either): 1 everywhere.
     ring = ring_surface(torch.randn(200, 3) * 0.1, torch.zeros(3), torch.tensor([0.0, 0.0, 1.0]), 0.3, -0.3, 6, 16,
-                        0.01, cap=True)
+                        0.01, shape=RingShape(cap=True))
     g = hem_field(ring.faces, ring.verts)
     bottom = ring.verts[:, 1] < -0.29
     assert float(g[bottom].max()) < 1e-6 and float(g[~bottom].min()) > 0.1  # the seam column is no border

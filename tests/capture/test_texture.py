@@ -6,14 +6,13 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.capture import TextureOptions, capture_person
-from relightnet.capture import surface_texels
-from relightnet.capture.texture import TextureFusion, TexelSamples, weighted_median
+from relightnet.capture import TextureOptions, capture_person, surface_texels
+from relightnet.capture.texture import TexelSamples, TextureFusion, weighted_median
 from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb
 from relightnet.fit import FIT_BONES, FitBody, FitResult, default_intrinsics
 from relightnet.fit.preview import fit_camera, fit_meshes
-from relightnet.prt import vertex_transport
+from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.render.frame import TexturedAlbedo, render_mesh
 from relightnet.sh import ambient_light, directional_light
 
@@ -42,7 +41,7 @@ def turning(anny_body):
     for t in range(T):
         out = fit_meshes(res, fb, t, t + 1)
         v, n = out.verts[0], out.normals[0]
-        r = render_mesh(v, out.faces, vertex_transport(v, out.faces, n, n_dirs=64),
+        r = render_mesh(v, out.faces, vertex_transport(v, out.faces, n, prt=PrtSettings(n_dirs=64)),
                         TexturedAlbedo(tex, anny_body.uv, anny_body.uv_faces), light, cam)
         frames.append(linear_to_srgb(r.image[0].clamp(0, 1)).permute(2, 0, 1))
         masks.append(r.alpha[0] > 0.5)

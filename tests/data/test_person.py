@@ -21,7 +21,7 @@ from relightnet.data.person import (
 )
 from relightnet.data.render_sample import CLIP_KEY, _seen, _streams, _view_stage, clip_geometry, render_clip
 from relightnet.data.textures import paint_albedo, sample_outfit
-from relightnet.prt import vertex_transport
+from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.raster import Fragments, perspective_camera
 from relightnet.render import light_in_world
 from relightnet.sh import cosine_lobe_per_coeff, sh_basis
@@ -50,7 +50,7 @@ def test_transport_turns_with_the_view(assets):
         out = body(pose=body.pose("arms_down"))
     v, n, f = out.verts[0], out.normals[0], body.faces
     Q = _rotation(0.7, 0.2)
-    Tw = vertex_transport(v, f, n, n_dirs=64, seed=3, manifold="ignore")
+    Tw = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=64, seed=3), manifold="ignore")
     Tc = transport_to_camera(Tw, Q, 2)
     # Shading is the same whether the light is taken in the camera's frame or the world's.
     L = torch.randn(9, 3, generator=torch.Generator().manual_seed(0))
@@ -59,7 +59,7 @@ def test_transport_turns_with_the_view(assets):
     Lw = light_in_world(L, cam)[0]
     torch.testing.assert_close(Tc @ L, Tw @ Lw, atol=2e-5, rtol=1e-5)
     # Unoccluded, it is the closed form at the camera-frame normals (quadrature error of 1024 directions).
-    Tu = transport_to_camera(vertex_transport(v, f, n, occlusion=False, n_dirs=1024, seed=3), Q, 2)
+    Tu = transport_to_camera(vertex_transport(v, f, n, prt=PrtSettings(occlusion=False, n_dirs=1024, seed=3)), Q, 2)
     n_cam = n.double() @ Q.T
     from relightnet.sh import world_to_light
 

@@ -33,6 +33,7 @@ def person_clip(path: Path, n: int, small: tuple[int, int] = SMALL, up: int = UP
     from relightnet.io import VideoWriter
     from relightnet.pipeline.scene import avatar_albedo
     from relightnet.pipeline.walk_target import _background
+    from relightnet.prt import PrtSettings
     from relightnet.raster import default_camera
     from relightnet.render.jobs import render_body_frames
     from relightnet.sh import ambient_light, directional_light
@@ -42,7 +43,7 @@ def person_clip(path: Path, n: int, small: tuple[int, int] = SMALL, up: int = UP
     light = ambient_light(0.35) + directional_light(torch.tensor([1.0, 0.5, 0.8]), 2.0)
     bg = _background(small, 0)
     frames = render_body_frames(body, motion, light, avatar_albedo(body), camera=default_camera(small),
-                                occlusion=False, n_frames=n, visible_only=True)
+                                prt=PrtSettings(n_dirs=64, occlusion=False), n_frames=n, visible_only=True)
     with VideoWriter(path, fps=fps) as w:
         for fr in frames:
             a = fr.render.alpha[0]

@@ -9,7 +9,9 @@ import torch
 from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import VideoWriter, read_video, video_info, write_image
+from relightnet.pipeline import AvatarLook, AvatarPlacement, VideoLightSettings
 from relightnet.pipeline.avatar import avatar
+from relightnet.prt import PrtSettings
 from relightnet.render import render_body_frames
 from relightnet.sh import save_light
 
@@ -44,7 +46,8 @@ def model():
 def test_avatar_writes_video_lights_and_plot(target, model, anny_body, tmp_path):
     video, masks, _ = target
     out = tmp_path / "avatar.mkv"
-    res = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=16, progress=False)
+    res = avatar(video, out, model=model, look=AvatarLook(body=anny_body), target_masks=masks,
+                 prt=PrtSettings(n_dirs=16), progress=False)
     frames = list(read_video(out))
     assert res.n_frames == N and len(frames) == N and frames[0].shape == (RES, RES, 3)
     assert video_info(out).fps == 15
@@ -68,10 +71,11 @@ def test_avatar_given_light_is_the_render_composited(target, anny_body, tmp_path
 
     video, _, true = target
     out = tmp_path / "given.mkv"
-    res = avatar(video, out, light=true, body=anny_body, motion="walk", n_dirs=16, progress=False)
+    res = avatar(video, out, light=true, look=AvatarLook(body=anny_body), motion="walk", prt=PrtSettings(n_dirs=16),
+                 progress=False)
     assert res.lights_raw is None and torch.equal(res.lights_smoothed, true.float())
-    want = render_body_frames(anny_body, make_motion("walk", N, fps=15), true, avatar_albedo(anny_body), size=RES,
-                              n_dirs=16)
+    want = render_body_frames(anny_body, make_motion("walk", N, fps=15), true, avatar_albedo(anny_body), camera=RES,
+                              prt=PrtSettings(n_dirs=16))
     for got, (bg, fr) in zip(read_video(out), zip(read_video(video), want, strict=True), strict=True):
         a = fr.render.alpha[0][..., None]
         exp = linear_to_srgb(fr.render.image[0].clamp(0, 1)) * a + torch.from_numpy(bg) / 255 * (1 - a)
@@ -81,13 +85,15 @@ def test_avatar_given_light_is_the_render_composited(target, anny_body, tmp_path
 def test_avatar_reuses_light_estimates(target, model, anny_body, tmp_path):
     video, masks, _ = target
     out = tmp_path / "a.mkv"
-    first = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
-    again = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
+    first = avatar(video, out, model=model, look=AvatarLook(body=anny_body), target_masks=masks,
+                   prt=PrtSettings(n_dirs=8), progress=False)
+    again = avatar(video, out, model=model, look=AvatarLook(body=anny_body), target_masks=masks,
+                   prt=PrtSettings(n_dirs=8), progress=False)
     assert not first.reused_estimates and again.reused_estimates
     assert torch.equal(first.lights_raw, again.lights_raw)
     # A different model name (another checkpoint) does not reuse them.
-    other = avatar(video, out, model=model, body=anny_body, target_masks=masks, n_dirs=8, model_name="x",
-                   progress=False)
+    other = avatar(video, out, model=model, look=AvatarLook(body=anny_body), target_masks=masks,
+                   prt=PrtSettings(n_dirs=8), lights=VideoLightSettings(model_name="x"), progress=False)
     assert not other.reused_estimates
 
 
@@ -112,19 +118,22 @@ def test_avatar_mask_head_and_onnx_backend_agree(target, model, anny_body, tmp_p
             break
     out = tmp_path / "mh.mkv"
     if refused is None:
-        res = avatar(video, out, model=model, body=anny_body, n_dirs=8, progress=False, mask_source="head")
+        res = avatar(video, out, model=model, look=AvatarLook(body=anny_body), prt=PrtSettings(n_dirs=8),
+                     progress=False, lights=VideoLightSettings(mask_source="head"))
         assert res.n_frames == N and torch.isfinite(res.lights_raw).all()
     else:
         assert "mask head" in str(refused)
         with pytest.raises(InputError, match="mask head"):
-            avatar(video, out, model=model, body=anny_body, n_dirs=8, progress=False, mask_source="head")
+            avatar(video, out, model=model, look=AvatarLook(body=anny_body), prt=PrtSettings(n_dirs=8), progress=False,
+                   lights=VideoLightSettings(mask_source="head"))
         assert not out.exists() and not list(tmp_path.glob("mh*"))
     monkeypatch.setenv("RELIGHTNET_CACHE", str(tmp_path / "cache"))
     onnx = make_predictor("onnx")
     assert list((tmp_path / "cache").glob("*.onnx"))
-    a = avatar(video, tmp_path / "o.mkv", model=onnx, body=anny_body, target_masks=masks, n_dirs=8, progress=False)
-    t = avatar(video, tmp_path / "t.mkv", model=TorchPredictor(model), body=anny_body, target_masks=masks,
-               n_dirs=8, progress=False)
+    a = avatar(video, tmp_path / "o.mkv", model=onnx, look=AvatarLook(body=anny_body), target_masks=masks,
+               prt=PrtSettings(n_dirs=8), progress=False)
+    t = avatar(video, tmp_path / "t.mkv", model=TorchPredictor(model), look=AvatarLook(body=anny_body),
+               target_masks=masks, prt=PrtSettings(n_dirs=8), progress=False)
     torch.testing.assert_close(a.lights_raw, t.lights_raw, atol=1e-3, rtol=1e-3)
 
 
@@ -201,8 +210,8 @@ def test_avatar_with_an_smpl_motion_file_shorter_than_the_video(target, tmp_path
     rng = np.random.default_rng(0)
     np.savez(motion, poses=(0.1 * rng.standard_normal((N - 1, 72))).astype(np.float32),
              betas=np.zeros(10, np.float32), trans=np.zeros((N - 1, 3), np.float32))
-    res = avatar(video, tmp_path / "s.mkv", light=true[0], body=f"smpl:{smpl}", motion=motion, n_dirs=8,
-                 progress=False)
+    res = avatar(video, tmp_path / "s.mkv", light=true[0], look=AvatarLook(body=f"smpl:{smpl}"), motion=motion,
+                 prt=PrtSettings(n_dirs=8), progress=False)
     frames = list(read_video(res.video))
     assert len(frames) == N - 1
     # the lights file describes the target: one light per target frame, also those past the motion's end
@@ -213,13 +222,14 @@ def test_avatar_over_a_clean_plate(target, anny_body, tmp_path):
     video, _, true = target
     plate = tmp_path / "plate.png"
     write_image(plate, np.full((RES, RES, 3), 77, np.uint8), srgb=False)
-    res = avatar(video, tmp_path / "p.mkv", light=true[0], body=anny_body, plate=plate, n_dirs=8, progress=False)
+    res = avatar(video, tmp_path / "p.mkv", light=true[0], look=AvatarLook(body=anny_body),
+                 placement=AvatarPlacement(plate=plate), prt=PrtSettings(n_dirs=8), progress=False)
     frames = list(read_video(res.video))
     assert len(frames) == N and (frames[0][:, :4] == 77).all() and (frames[0] != 77).any()
     write_image(tmp_path / "small.png", np.zeros((RES // 2, RES, 3), np.uint8), srgb=False)
     with pytest.raises(InputError, match="small.png"):
-        avatar(video, tmp_path / "q.mkv", light=true[0], body=anny_body, plate=tmp_path / "small.png",
-               progress=False)
+        avatar(video, tmp_path / "q.mkv", light=true[0], look=AvatarLook(body=anny_body),
+               placement=AvatarPlacement(plate=tmp_path / "small.png"), progress=False)
     assert not (tmp_path / "q.mkv").exists()
 
 
@@ -232,8 +242,8 @@ def test_smpl_motion_longer_or_shorter_than_the_video(target, tmp_path, extra):
     g = np.random.default_rng(0)
     np.savez(motion, poses=(0.1 * g.standard_normal((t, 72))).astype(np.float32), betas=np.zeros(10, np.float32),
              trans=np.zeros((t, 3), np.float32))
-    res = avatar(video, tmp_path / "s.mkv", light=true[0], body=f"smpl:{smpl}", motion=str(motion), n_dirs=8,
-                 progress=False)
+    res = avatar(video, tmp_path / "s.mkv", light=true[0], look=AvatarLook(body=f"smpl:{smpl}"), motion=str(motion),
+                 prt=PrtSettings(n_dirs=8), progress=False)
     assert res.n_frames == min(N, t) == len(list(read_video(res.video)))
 
 
@@ -241,9 +251,10 @@ def test_antialias_changes_only_the_silhouette(target, anny_body, tmp_path):
     from relightnet.raster import silhouette_pixels
 
     video, _, true = target
-    kw = dict(light=true[0], body=anny_body, motion="idle", n_dirs=8, progress=False)
-    hard = list(read_video(avatar(video, tmp_path / "h.mkv", **kw).video))
-    soft = list(read_video(avatar(video, tmp_path / "s.mkv", antialias=True, **kw).video))
+    kw = dict(light=true[0], motion="idle", prt=PrtSettings(n_dirs=8), progress=False)
+    hard = list(read_video(avatar(video, tmp_path / "h.mkv", look=AvatarLook(body=anny_body), **kw).video))
+    soft = list(read_video(avatar(video, tmp_path / "s.mkv", look=AvatarLook(body=anny_body, antialias=True),
+                                  **kw).video))
     src = list(read_video(video))
     for h, s, b in zip(hard, soft, src, strict=True):
         covered = torch.from_numpy((h != b).any(-1))
@@ -278,8 +289,8 @@ def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
     from relightnet.sh import preset_light
 
     light = preset_light("studio") * 3  # bright: some pixels above 1 (clamped)
-    fr = next(render_body_frames(anny_body, make_motion("walk", 1), light, avatar_albedo(anny_body), size=(40, 32),
-                                 n_dirs=8, n_frames=1, visible_only=True))
+    fr = next(render_body_frames(anny_body, make_motion("walk", 1), light, avatar_albedo(anny_body), camera=(40, 32),
+                                 prt=PrtSettings(n_dirs=8), n_frames=1, visible_only=True))
     r = fr.render
     assert (r.image > 1).any() and 0 < r.alpha.mean() < 1
     bg = np.random.default_rng(0).integers(0, 256, (40, 32, 3), dtype=np.uint8)
@@ -321,7 +332,7 @@ def test_composite_of_the_box_render_is_the_frames(anny_body, target_at):
     from relightnet.sh import preset_light
 
     cam = default_camera((40, 32), target=target_at)
-    kw = dict(camera=cam, n_dirs=8, occlusion=False, n_frames=2, visible_only=True)
+    kw = dict(camera=cam, prt=PrtSettings(n_dirs=8, occlusion=False), n_frames=2, visible_only=True)
     args = (anny_body, make_motion("walk", 2), preset_light("studio"), avatar_albedo(anny_body))
     bg = np.random.default_rng(1).integers(0, 256, (40, 32, 3), dtype=np.uint8)
     for full, box in zip(render_body_frames(*args, **kw), render_body_frames(*args, box=True, **kw), strict=True):
@@ -343,7 +354,7 @@ def test_avatar_is_written_on_the_targets_timeline(anny_body, tmp_path):
     out = tmp_path / "avatar.mp4"
     light = torch.zeros(9, 3)
     light[0] = 2.0
-    res = avatar(target, out, light=light, body=anny_body, n_dirs=16, progress=False)
+    res = avatar(target, out, light=light, look=AvatarLook(body=anny_body), prt=PrtSettings(n_dirs=16), progress=False)
     assert res.n_frames == len(times)
     assert np.abs(media.av_offsets(target, out)).max() <= 2e-3  # half a frame would be 17 ms
     shown, heard = media.decoded_frame_times(out), media.click_times(out)

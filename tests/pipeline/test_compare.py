@@ -9,7 +9,9 @@ from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import read_image, read_video, video_info
 from relightnet.model import NetConfig, RelightNet, save_checkpoint
+from relightnet.pipeline import PredictorSettings
 from relightnet.pipeline.compare import compare
+from relightnet.prt import PrtSettings
 
 pytestmark = pytest.mark.slow  # whole 2D-vs-3D comparisons on generated clips (CNN, PRT, renders), 1-2 min each
 
@@ -83,7 +85,7 @@ def test_bad_inputs_write_nothing(seq_dir, tiny_dataset, tmp_path, capsys):
     with pytest.raises(InputError, match="smoothing"):
         compare(seq_dir, out, smoothing="kalman")
     with pytest.raises(InputError, match="n_dirs"):
-        compare(seq_dir, out, n_dirs=0)
+        compare(seq_dir, out, prt=PrtSettings(n_dirs=0))
     assert _no_leftovers(tmp_path, "rep")
 
 
@@ -94,7 +96,7 @@ def test_failure_mid_run_leaves_nothing(seq_dir, tmp_path, anny_body):
     (data / "test-00001.npz").write_bytes(b"PK\x03\x04 truncated")
     out = tmp_path / "deep" / "rep"
     with pytest.raises(InputError, match="test-00001.npz"):
-        compare(data, out, n_dirs=8, progress=False, body=anny_body)
+        compare(data, out, prt=PrtSettings(n_dirs=8), progress=False, body=anny_body)
     assert not (tmp_path / "deep").exists() and not list(tmp_path.glob(".rep.*"))
 
 
@@ -106,18 +108,19 @@ def test_onnx_backend_matches_torch(seq_dir, tmp_path, anny_body):
     net = RelightNet(cfg).eval()
     save_checkpoint(tmp_path / "tiny.pt", net, cfg)
     export_onnx(net, tmp_path / "tiny.onnx", smoothing="none", example_size=32)
-    kw = dict(clips=1, n_dirs=8, size=32, progress=False, body=anny_body)
-    a = compare(seq_dir, tmp_path / "torch", checkpoint=tmp_path / "tiny.pt", **kw).metrics
-    b = compare(seq_dir, tmp_path / "onnx", checkpoint=tmp_path / "tiny.onnx", backend="onnx", **kw).metrics
+    kw = dict(clips=1, prt=PrtSettings(n_dirs=8), progress=False, body=anny_body)
+    a = compare(seq_dir, tmp_path / "torch", PredictorSettings(checkpoint=tmp_path / "tiny.pt", size=32), **kw).metrics
+    onnx = PredictorSettings(checkpoint=tmp_path / "tiny.onnx", backend="onnx", size=32)
+    b = compare(seq_dir, tmp_path / "onnx", onnx, **kw).metrics
     assert b["settings"]["backend"] == "onnx" and b["settings"]["size"] == 32
     la, lb = a["clips"][0]["light"], b["clips"][0]["light"]
     assert lb["raw"]["per_frame"] == pytest.approx(la["raw"]["per_frame"], rel=1e-3, abs=1e-5)
     for ra, rb in zip(a["summary"]["rows"], b["summary"]["rows"], strict=True):
         assert rb["rmse"] == pytest.approx(ra["rmse"], rel=1e-3, abs=1e-5), (ra["path"], ra["light"])
     with pytest.raises(InputError, match="backend"):
-        compare(seq_dir, tmp_path / "x", backend="tensorrt", **kw)
+        compare(seq_dir, tmp_path / "x", PredictorSettings(backend="tensorrt", size=32), **kw)
     with pytest.raises(InputError, match="needs --backend onnx"):
-        compare(seq_dir, tmp_path / "x", checkpoint=tmp_path / "tiny.onnx", **kw)
+        compare(seq_dir, tmp_path / "x", PredictorSettings(checkpoint=tmp_path / "tiny.onnx", size=32), **kw)
     assert _no_leftovers(tmp_path, "x")
 
 

@@ -9,6 +9,7 @@ import torch
 
 from relightnet.pipeline.compare_clip import LIGHTS, PATHS, ClipOutputs, clip_metrics, compare_clip, source_light
 from relightnet.pipeline.compare_report import json_safe
+from relightnet.prt import PrtSettings
 
 from .conftest import RES, T
 
@@ -18,11 +19,12 @@ pytestmark = pytest.mark.slow  # one clip through both paths with PRT, about a m
 def test_3d_path_with_the_truths_prt_reproduces_the_ground_truth(clip0, model):
     # With the ground truth's own directions (count and seed), the 3D path is the generator's renderer.
     _, meta, clip, geo = clip0
-    out = compare_clip(model, clip, geo, n_dirs=meta["prt"]["n_dirs"], prt_seed=meta["prt"]["direction_seed"])
+    out = compare_clip(model, clip, geo,
+                       prt=PrtSettings(n_dirs=meta["prt"]["n_dirs"], seed=meta["prt"]["direction_seed"]))
     np.testing.assert_array_equal(out.alpha_3d.numpy(), clip["mask"])
     np.testing.assert_allclose(out.renders[("3d", "true")].numpy(), clip["image"], atol=1e-5, rtol=0)
     # With other directions it differs only by quadrature noise.
-    other = compare_clip(model, clip, geo, n_dirs=64, prt_seed=0, smoothing="none")
+    other = compare_clip(model, clip, geo, prt=PrtSettings(n_dirs=64, seed=0), smoothing="none")
     m = clip["mask"] > 0
     d = np.abs(other.renders[("3d", "true")].numpy() - clip["image"])[m]
     assert 0 < d.mean() < 0.03
@@ -31,7 +33,7 @@ def test_3d_path_with_the_truths_prt_reproduces_the_ground_truth(clip0, model):
 def test_compare_clip_outputs(clip0, model):
     _, _, clip, geo = clip0
     ticks = []
-    out = compare_clip(model, clip, geo, n_dirs=16, smoothing="none", tick=lambda: ticks.append(1))
+    out = compare_clip(model, clip, geo, prt=PrtSettings(n_dirs=16), smoothing="none", tick=lambda: ticks.append(1))
     assert len(ticks) == T
     assert set(out.renders) == {(p, n) for p in PATHS for n in LIGHTS}
     m = clip["mask"] > 0
@@ -57,11 +59,11 @@ def test_compare_clip_outputs(clip0, model):
         gt_panel = to_uint8(torch.from_numpy(clip["image"][t] * mk[t] + clip["background"][t] * (1 - mk[t])))
         np.testing.assert_array_equal(frames[t, :, 3 * RES:], gt_panel.numpy())
     # The Hermite smoother returns a sequence of the same shape.
-    sm = compare_clip(model, clip, geo, n_dirs=16, smoothing="hermite")
+    sm = compare_clip(model, clip, geo, prt=PrtSettings(n_dirs=16), smoothing="hermite")
     assert sm.lights["smoothed"].shape == (T, 9, 3) and torch.isfinite(sm.lights["smoothed"]).all()
     # The 2D path relights the photo's albedo by default; cnn_albedo relights the CNN's. The 3D path
     # does not change.
-    cnn = compare_clip(model, clip, geo, n_dirs=16, smoothing="none", cnn_albedo=True)
+    cnn = compare_clip(model, clip, geo, prt=PrtSettings(n_dirs=16), smoothing="none", cnn_albedo=True)
     torch.testing.assert_close(cnn.renders[("3d", "true")], out.renders[("3d", "true")])
     assert not torch.allclose(cnn.renders[("2d", "true")], out.renders[("2d", "true")])
 

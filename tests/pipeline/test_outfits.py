@@ -11,7 +11,7 @@ from relightnet.data.garments import garment_types
 from relightnet.io import read_image
 from relightnet.names import OUTFITS
 from relightnet.pipeline.outfits import OUTFIT_SLOTS, DressedBody, draw_outfit
-from relightnet.prt import vertex_transport
+from relightnet.prt import PrtSettings, vertex_transport
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +92,7 @@ def test_cloth_shadows_the_body_in_the_one_prt(coat, anny_body):
     V = anny_body.num_verts
     naked = anny_body()
     torso = torch.nonzero((naked.verts[0, :, 1] > 1.0) & (naked.verts[0, :, 1] < 1.3)).flatten()
-    kw = dict(lmax=1, n_dirs=64, seed=0, occlusion=True, vertices=torso, manifold="ignore")
+    kw = dict(lmax=1, prt=PrtSettings(n_dirs=64, seed=0, occlusion=True), vertices=torso, manifold="ignore")
     dressed = vertex_transport(out.verts[0], out.faces, out.normals[0], **kw)[torso, 0]
     bare = vertex_transport(naked.verts[0], naked.faces, naked.normals[0], **kw)[torso, 0]
     assert float(dressed.mean()) < 0.5 * float(bare.mean())

@@ -3,6 +3,7 @@ import pytest
 
 from relightnet.cli import main
 from relightnet.io import read_video, video_info
+from relightnet.pipeline import VideoLightSettings
 
 pytestmark = pytest.mark.slow  # video jobs through the CLI (segmentation, CNN per frame, encoding)
 
@@ -117,10 +118,11 @@ def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys)
               "--out", str(tmp_path / "x.mkv")])
     assert e.value.code == 2 and "hermite" in capsys.readouterr().err
     with pytest.raises(InputError, match="alpha"):
-        relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "y.mkv", alpha=0)
+        relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "y.mkv",
+                      lights=VideoLightSettings(alpha=0))
     with pytest.raises(InputError, match="smoothing"):  # the EMA weight is alpha=, no longer a number here
         relight_video(make_predictor("torch"), video, masks, preset_light("studio"), tmp_path / "z.mkv",
-                      smoothing=1.0, progress=False)
+                      lights=VideoLightSettings(smoothing=1.0), progress=False)
 
 
 def test_a_clip_of_nobody_is_refused_after_its_first_seconds(tmp_path, masked_clip, capsys):

@@ -8,6 +8,7 @@ import trimesh
 from relightnet.checks import InputError, ShapeError
 from relightnet.prt import (
     BounceOperator,
+    PrtSettings,
     bounce_operator,
     check_albedo,
     interreflect,
@@ -66,8 +67,8 @@ def cavity():
 def test_white_furnace_conserves_energy():
     # Under uniform light, white Lambertian surfaces receive E = π everywhere: T_0 → π·Y0.
     v, f, n = merge(grid(), sphere())
-    direct = vertex_transport(v, f, n, n_dirs=1024, bounces=0)
-    full = vertex_transport(v, f, n, n_dirs=1024, bounces=12, albedo=1.0)
+    direct = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=1024, bounces=0))
+    full = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=1024, bounces=12), albedo=1.0)
     target = math.pi * Y0
     assert direct[:, 0].min() < 0.7 * target  # strong shadows without bounces
     assert (full[:, 0] / target - 1).abs().max() < 5e-3
@@ -75,7 +76,7 @@ def test_white_furnace_conserves_energy():
 
 def test_bounces_add_energy_and_converge():
     v, f, n = cavity()
-    Ts = [vertex_transport(v, f, n, n_dirs=256, bounces=b, albedo=0.7) for b in range(4)]
+    Ts = [vertex_transport(v, f, n, prt=PrtSettings(n_dirs=256, bounces=b), albedo=0.7) for b in range(4)]
     for a, b in zip(Ts[:-1], Ts[1:], strict=True):
         assert (b[:, 0] >= a[:, 0] - 1e-7).all()  # DC never loses energy
     floor = v[:, 1] < -0.99
@@ -88,19 +89,21 @@ def test_bounces_add_energy_and_converge():
 def test_albedo_zero_means_no_bounce():
     v, f, n = cavity()
     torch.testing.assert_close(
-        vertex_transport(v, f, n, n_dirs=64, bounces=3, albedo=0.0), vertex_transport(v, f, n, n_dirs=64)
+        vertex_transport(v, f, n, prt=PrtSettings(n_dirs=64, bounces=3), albedo=0.0),
+        vertex_transport(v, f, n, prt=PrtSettings(n_dirs=64)),
     )
 
 
 def test_rgb_albedo_colours_each_channel():
     v, f, n = cavity()
     rgb = torch.tensor([0.9, 0.5, 0.1]).expand(len(v), 3)
-    T = vertex_transport(v, f, n, n_dirs=128, bounces=2, albedo=rgb)
+    T = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=128, bounces=2), albedo=rgb)
     assert T.shape == (len(v), 9, 3) and T.dtype == torch.float32
     for c in range(3):
-        grey = vertex_transport(v, f, n, n_dirs=128, bounces=2, albedo=float(rgb[0, c]))
+        grey = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=128, bounces=2), albedo=float(rgb[0, c]))
         torch.testing.assert_close(T[..., c], grey, atol=1e-6, rtol=1e-5)
-    per_vertex_grey = vertex_transport(v, f, n, n_dirs=128, bounces=2, albedo=torch.full((len(v),), 0.5))
+    per_vertex_grey = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=128, bounces=2),
+                                       albedo=torch.full((len(v),), 0.5))
     torch.testing.assert_close(per_vertex_grey, T[..., 1], atol=1e-6, rtol=1e-5)
 
 
@@ -108,8 +111,8 @@ def test_back_faces_block_but_do_not_reflect():
     receiver = grid(3, 0.2, 0.0, up=True)
     for up in (True, False):
         v, f, n = merge(receiver, grid(9, 4.0, 1.0, up=up))
-        direct = vertex_transport(v, f, n, n_dirs=256)
-        bounced = vertex_transport(v, f, n, n_dirs=256, bounces=2, albedo=1.0)
+        direct = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=256))
+        bounced = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=256, bounces=2), albedo=1.0)
         assert direct[:9, 0].max() < 0.2 * math.pi * Y0  # the sheet shades the receiver
         if up:  # the receiver sees the sheet's underside (its back): nothing comes back
             torch.testing.assert_close(bounced[:9], direct[:9], atol=0, rtol=0)
@@ -131,7 +134,8 @@ def test_operator_is_built_once_and_reused():
     T0 = torch.from_numpy(lit) @ (sh_basis(dirs_l, 2) * w[:, None])
     for albedo in (0.3, 0.8):
         mine = interreflect(T0, op, check_albedo(albedo, len(v)), 2)
-        torch.testing.assert_close(mine, vertex_transport(v, f, n, n_dirs=128, bounces=2, albedo=albedo))
+        torch.testing.assert_close(mine, vertex_transport(v, f, n, prt=PrtSettings(n_dirs=128, bounces=2),
+                                                          albedo=albedo))
     torch.testing.assert_close(interreflect(T0, op, check_albedo(0.5, len(v)), 0), T0)
 
 

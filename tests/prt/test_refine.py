@@ -9,7 +9,7 @@ import trimesh
 
 from relightnet.body import midpoint_values, subdivide_faces
 from relightnet.checks import InputError, ShapeError
-from relightnet.prt import SHADOW_EDGE, refined_transport, transport_directions, vertex_transport
+from relightnet.prt import SHADOW_EDGE, PrtSettings, refined_transport, transport_directions, vertex_transport
 from relightnet.sh import light_to_world, sh_basis
 
 Y0 = 0.5 / math.sqrt(math.pi)
@@ -41,8 +41,8 @@ def _atol(n_dirs):
 
 def test_cast_rows_equal_direct_ray_casting():
     v, f, n, mid = _scene()
-    full = vertex_transport(v, f, n, n_dirs=128, seed=1)
-    T, cast = refined_transport(v, f, n, mid, n_dirs=128, seed=1, return_cast=True)
+    full = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=128, seed=1))
+    T, cast = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=128, seed=1), return_cast=True)
     rows = torch.ones(len(v), dtype=torch.bool)
     rows[mid[~cast, 0]] = False  # originals and ray-cast midpoints
     torch.testing.assert_close(T[rows], full[rows], rtol=0, atol=_atol(128))
@@ -53,7 +53,7 @@ def test_cast_rows_equal_direct_ray_casting():
     # middle lit), so the estimate is exact there, but for rays grazing the ball's silhouette (tangent
     # within float precision, which Embree may call either way): at most one or two directions per row.
     dirs_l, w = transport_directions(128, 1)
-    T0 = refined_transport(v, f, n, mid, n_dirs=128, seed=1, threshold=0.0)
+    T0 = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=128, seed=1), threshold=0.0)
     err = (T0 - full).abs().max(1).values
     one_dir = float(w.max()) * float(sh_basis(dirs_l, 2).abs().max())
     assert float((err > _atol(128)).float().mean()) < 0.01 and float(err.max()) <= 2 * one_dir
@@ -72,16 +72,17 @@ def test_unshadowed_midpoints_are_the_closed_form_of_their_own_normal():
     sub = subdivide_faces(f, len(v), torch.ones(len(f), dtype=torch.bool))
     vm = midpoint_values(v, sub.edges)
     nm = midpoint_values(v, sub.edges, unit=True)
-    T, cast = refined_transport(vm, sub.faces, nm, sub.midpoints, n_dirs=256, return_cast=True)
+    T, cast = refined_transport(vm, sub.faces, nm, sub.midpoints, prt=PrtSettings(n_dirs=256), return_cast=True)
     assert not cast.any()  # a convex body casts no shadow on itself
-    free = vertex_transport(vm, sub.faces, nm, n_dirs=256, occlusion=False)
+    free = vertex_transport(vm, sub.faces, nm, prt=PrtSettings(n_dirs=256, occlusion=False))
     torch.testing.assert_close(T, free, rtol=0, atol=_atol(256))
 
 
 def test_bounce_and_vertex_subset():
     v, f, n, mid = _scene(13)
-    full = vertex_transport(v, f, n, n_dirs=64, bounces=1, albedo=0.5)
-    T, cast = refined_transport(v, f, n, mid, n_dirs=64, bounces=1, albedo=0.5, threshold=0.0, return_cast=True)
+    full = vertex_transport(v, f, n, prt=PrtSettings(n_dirs=64, bounces=1), albedo=0.5)
+    T, cast = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=64, bounces=1), albedo=0.5, threshold=0.0,
+                                return_cast=True)
     # threshold 0: the direct rows are exact (test above, grazing rays aside), so the bounce of every cast
     # vertex is too: rays that hit the ground interpolate the same vertex values.
     rows = torch.ones(len(v), dtype=torch.bool)
@@ -89,23 +90,24 @@ def test_bounce_and_vertex_subset():
     err = (T[rows] - full[rows]).abs().max(1).values
     assert float((err > 4 * _atol(64)).float().mean()) < 0.01
     # A midpoint not cast takes its endpoints' mean bounce on top of its exact direct row.
-    direct = refined_transport(v, f, n, mid, n_dirs=64, threshold=0.0)
+    direct = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=64), threshold=0.0)
     b = T - direct
     e = mid[~cast]
     torch.testing.assert_close(b[e[:, 0]], 0.5 * (b[e[:, 1]] + b[e[:, 2]]), rtol=0, atol=4 * _atol(64))
     # A subset: the same rows bit for bit (one projection over every row, whichever are cast), zeros
     # elsewhere (midpoints wanted pull in their endpoints' rays only).
-    alone = refined_transport(v, f, n, mid, n_dirs=64)
+    alone = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=64))
     for want in (torch.cat([mid[::7, 0], torch.tensor([0, 5, len(v) - len(mid) - 1])]), mid[1::3, 0],
                  torch.arange(1, len(v), 5), torch.tensor([len(v) - 1])):
-        sub = refined_transport(v, f, n, mid, n_dirs=64, vertices=want)
+        sub = refined_transport(v, f, n, mid, prt=PrtSettings(n_dirs=64), vertices=want)
         assert torch.equal(sub[want], alone[want])
     rest = torch.ones(len(v), dtype=torch.bool)
     rest[want] = False
     assert (sub[rest] == 0).all()
     # No midpoints: plain vertex_transport.
     none = torch.zeros(0, 3, dtype=torch.int64)
-    torch.testing.assert_close(refined_transport(v, f, n, none, n_dirs=64), vertex_transport(v, f, n, n_dirs=64),
+    prt = PrtSettings(n_dirs=64)
+    torch.testing.assert_close(refined_transport(v, f, n, none, prt=prt), vertex_transport(v, f, n, prt=prt),
                                rtol=0, atol=_atol(64))
 
 
@@ -122,4 +124,4 @@ def test_bad_inputs_raise():
     with pytest.raises(InputError, match="threshold"):
         refined_transport(v, f, n, mid, threshold=1.5)
     with pytest.raises(InputError, match="bounces"):
-        refined_transport(v, f, n, mid, bounces=1, vertices=torch.tensor([0]))
+        refined_transport(v, f, n, mid, prt=PrtSettings(bounces=1), vertices=torch.tensor([0]))

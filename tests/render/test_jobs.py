@@ -5,6 +5,7 @@ import trimesh
 
 from relightnet.body import default_albedo, make_motion
 from relightnet.checks import InputError
+from relightnet.prt import PrtSettings
 from relightnet.render.frame import TexturedAlbedo
 from relightnet.render.jobs import fit_camera, load_mesh, render_body_frames, render_mesh_file
 from relightnet.sh import ambient_light, directional_light
@@ -46,8 +47,8 @@ def test_fit_camera_frames_the_mesh():
 def test_shadow_under_the_sphere(tmp_path):
     path = sphere_over_plane(tmp_path / "sp.ply")
     up = directional_light([0.0, 0.0, 1.0], 1.0, sharpness=20.0) + ambient_light(0.05)
-    occ = render_mesh_file(path, up, size=96, n_dirs=128)
-    flat = render_mesh_file(path, up, size=96, n_dirs=128, occlusion=False)
+    occ = render_mesh_file(path, up, size=96, prt=PrtSettings(n_dirs=128))
+    flat = render_mesh_file(path, up, size=96, prt=PrtSettings(n_dirs=128, occlusion=False))
     # Ground pixels: normals pointing up. Under the sphere (image centre column) occlusion darkens them.
     ground = (occ.normals[0][..., 1] > 0.99) & (occ.alpha[0] > 0)
     dark = (occ.image[0].mean(-1) < 0.5 * flat.image[0].mean(-1)) & ground
@@ -57,7 +58,7 @@ def test_shadow_under_the_sphere(tmp_path):
     far = ground & ((cols - 48).abs() > 22)[None, :]
     assert far.sum() > 20
     assert (occ.image[0][far] - flat.image[0][far]).abs().mean() < 0.05 * flat.image[0][far].mean()
-    bounced = render_mesh_file(path, up, size=96, n_dirs=128, bounces=1)
+    bounced = render_mesh_file(path, up, size=96, prt=PrtSettings(n_dirs=128, bounces=1))
     assert bounced.image[0][ground].mean() > occ.image[0][ground].mean()
 
 
@@ -66,8 +67,8 @@ def test_render_body_frames_streams_a_motion(anny_body):
     motion = make_motion("walk", 3, seed=1)
     alb = default_albedo(anny_body, texture_size=64)
     frames = list(render_body_frames(anny_body, motion, ambient_light(1.0) + directional_light([1.0, 0.0, 0.0]),
-                                     TexturedAlbedo(alb.texture, anny_body.uv, anny_body.uv_faces), size=64,
-                                     n_dirs=16, maps=True, vertex_albedo=alb.vertex))
+                                     TexturedAlbedo(alb.texture, anny_body.uv, anny_body.uv_faces), camera=64,
+                                     prt=PrtSettings(n_dirs=16), maps=True, vertex_albedo=alb.vertex))
     assert [f.index for f in frames] == [0, 1, 2]
     for f in frames:
         assert f.render.image.shape == (1, 64, 64, 3) and f.transport.shape == (anny_body.num_verts, 9)
@@ -75,7 +76,7 @@ def test_render_body_frames_streams_a_motion(anny_body):
     assert not torch.equal(frames[0].render.image, frames[2].render.image)
     seq = torch.stack([ambient_light(1.0)] * 2)
     with pytest.raises(InputError, match="2 frames but the motion has 3"):
-        list(render_body_frames(anny_body, motion, seq, alb.vertex, size=32, n_dirs=8))
+        list(render_body_frames(anny_body, motion, seq, alb.vertex, camera=32, prt=PrtSettings(n_dirs=8)))
 
 
 @pytest.mark.slow
@@ -90,9 +91,9 @@ def test_visible_only_transport_gives_the_same_frames(anny_body):
     motion = make_motion("arm_raise", 3, seed=2)
     light = ambient_light(0.5) + directional_light([0.3, 0.8, 0.5])
     alb = torch.full((anny_body.num_verts, 3), 0.6)
-    full = list(render_body_frames(anny_body, motion, light, alb, size=64, n_dirs=16))
-    fast = list(render_body_frames(anny_body, motion, light, alb, size=64, n_dirs=16, visible_only=True,
-                                   n_frames=3, chunk=2))
+    full = list(render_body_frames(anny_body, motion, light, alb, camera=64, prt=PrtSettings(n_dirs=16)))
+    fast = list(render_body_frames(anny_body, motion, light, alb, camera=64, prt=PrtSettings(n_dirs=16),
+                                   visible_only=True, n_frames=3, chunk=2))
     assert len(fast) == 3
     ulps = 400 * torch.finfo(torch.float32).eps
     for a, b in zip(full, fast, strict=True):
@@ -116,7 +117,7 @@ def test_box_renders_the_frame_there(anny_body):
     alb = torch.full((anny_body.num_verts, 3), 0.6)
     for target, where in (((0.0, 0.85, 0.0), "inside"), ((0.45, 0.5, 0.0), "cut"), ((9.0, 0.85, 0.0), "off")):
         cam = default_camera((48, 36), target=target)
-        kw = dict(camera=cam, n_dirs=8, occlusion=False, visible_only=True)
+        kw = dict(camera=cam, prt=PrtSettings(n_dirs=8, occlusion=False), visible_only=True)
         full = list(render_body_frames(anny_body, motion, light, alb, **kw))
         box = list(render_body_frames(anny_body, motion, light, alb, box=True, **kw))
         for a, b in zip(full, box, strict=True):
@@ -138,7 +139,7 @@ def test_interleaved_frame_streams_leave_grad_mode_as_it_was(anny_body):
     its state: two interleaved streams left grad mode off for the rest of the process)."""
     motion = make_motion("walk", 2, seed=1)
     alb = default_albedo(anny_body, texture_size=16).vertex
-    kw = dict(size=16, n_dirs=4, occlusion=False, n_frames=2, chunk=1)
+    kw = dict(camera=16, prt=PrtSettings(n_dirs=4, occlusion=False), n_frames=2, chunk=1)
     assert torch.is_grad_enabled()
     for a, b in zip(render_body_frames(anny_body, motion, ambient_light(1.0), alb, **kw),
                     render_body_frames(anny_body, motion, ambient_light(1.0), alb, **kw), strict=True):
