@@ -1,8 +1,8 @@
 """Every ``>>>`` example in the package's docstrings runs, and none drifts from what it shows.
 
 The modules are the ones whose source holds an example; each runs with Python's doctest machinery
-(ELLIPSIS and NORMALIZE_WHITESPACE on), in a temporary working folder. A module whose optional
-package is missing (bpy, gradio) is skipped, not failed. :data:`MIN_EXAMPLES` keeps the set from
+(ELLIPSIS and NORMALIZE_WHITESPACE on), in a temporary working folder; every such module must import
+in the test environment (none needs bpy). :data:`MIN_EXAMPLES` keeps the set from
 silently shrinking: it counts the docstrings with at least one example that ran (examples marked
 ``+SKIP`` do not run).
 """
@@ -29,15 +29,9 @@ def _module_name(path: Path) -> str:
 MODULES = sorted(_module_name(p) for p in ROOT.rglob("*.py") if ">>>" in p.read_text(encoding="utf-8"))
 
 
-def _run(name: str) -> tuple[int, int, str] | None:
-    """(failed, docstrings whose examples ran, report) of module ``name``; None when an optional
-    package it imports is missing."""
-    try:
-        module = importlib.import_module(name)
-    except ModuleNotFoundError as e:
-        if e.name and not e.name.startswith("relightnet"):
-            return None
-        raise
+def _run(name: str) -> tuple[int, int, str]:
+    """(failed, docstrings whose examples ran, report) of module ``name``."""
+    module = importlib.import_module(name)
     out = io.StringIO()
     runner = doctest.DocTestRunner(optionflags=FLAGS)
     failed = ran = 0
@@ -52,7 +46,7 @@ def results(tmp_path_factory):
     """The run of every module's examples, once per test module: {module: (failed, docstrings, report)}."""
     import os
 
-    done: dict[str, tuple[int, int, str] | None] = {}
+    done: dict[str, tuple[int, int, str]] = {}
     here = os.getcwd()
     os.chdir(tmp_path_factory.mktemp("doctests"))
     try:
@@ -65,12 +59,10 @@ def results(tmp_path_factory):
 
 @pytest.mark.parametrize("name", MODULES)
 def test_examples_run(results, name):
-    if results[name] is None:
-        pytest.skip(f"{name}: an optional package is missing")
     failed, _, report = results[name]
     assert failed == 0, report
 
 
 def test_enough_examples_run(results):
-    ran = sum(r[1] for r in results.values() if r is not None)
+    ran = sum(r[1] for r in results.values())
     assert ran >= MIN_EXAMPLES, f"the examples of {ran} docstrings ran, expected at least {MIN_EXAMPLES}"

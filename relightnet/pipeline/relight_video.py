@@ -94,7 +94,8 @@ def relight_video(model, video, masks, light: torch.Tensor, out, turntable_deg_p
     if not math.isfinite(turntable_deg_per_s) or abs(turntable_deg_per_s) > 1e6:
         raise InputError(f"turntable: expected degrees per second (a finite number), got {turntable_deg_per_s}")
     mask_source = lights.mask_source
-    smoothing, alpha = _smoothing_spelling(lights.smoothing, lights.alpha)
+    check_smoothing(lights.smoothing, STREAMING_SMOOTHING)  # the EMA weight: checked by VideoLightSettings
+    smoothing, alpha = lights.smoothing, float(lights.alpha)
     predict = as_predictor(model)
     if masks is None and mask_source == "head" and not predict.has_mask_head:
         raise InputError("--mask-source head: this model has no mask head; give --masks or use 'segment'")
@@ -182,14 +183,6 @@ def _person_gate(video, fps: float):
             raise InputError(f"{video}: no person found in most of its first {NO_PERSON_S:g} s (frames 0-{t}); "
                              "expected a video showing a person (give --masks if they enter later)")
     return gate
-
-
-def _smoothing_spelling(smoothing, alpha: float) -> tuple[str, float]:
-    """``(method, alpha)`` checked: a name of :data:`~relightnet.names.STREAMING_SMOOTHING` and an EMA weight."""
-    check_smoothing(smoothing, STREAMING_SMOOTHING)
-    if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
-        raise InputError(f"alpha: expected a weight in (0, 1], got {alpha!r}")
-    return smoothing, float(alpha)
 
 
 def _smoother(smoothing: str, has_evidence: bool, predict, alpha: float):
