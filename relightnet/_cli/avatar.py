@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     prt = PrtSettings(n_dirs=args.n_dirs, occlusion=not args.no_occlusion, bounces=args.bounces)
     placement = AvatarPlacement(plate=args.plate, camera=camera, replace_person=args.replace_person)
     res = avatar(args.target, out, model=predictor, motion=motion, look=look, target_masks=args.target_masks,
-                 light=light, lights=lights, prt=prt, placement=placement, progress=not args.quiet)
+                 light=light, lights=lights, prt=prt, placement=placement, progress=not args.quiet, hdr=args.hdr)
     logger.info("wrote %s (%d frames); lights %s; light curves %s", res.video, res.n_frames, res.lights_file, res.plot)
     return 0
 
@@ -84,7 +84,8 @@ def register(sub) -> None:
         "  relightnet avatar --motion-from dancer.mp4 --target clip.mp4 --out transfer.mp4\n"
         "  relightnet avatar --avatar me.avatar.npz --motion-from dancer.mp4 --target clip.mp4 --out me_dancing.mp4\n"
         "  relightnet avatar --target empty_room.mp4 --light-from plate --out a.mp4   # no person to read\n"
-        "  relightnet avatar --target clip.mp4 --plate room.jpg --light-from both --out a.mp4\n",
+        "  relightnet avatar --target clip.mp4 --plate room.jpg --light-from both --out a.mp4\n"
+        "  relightnet avatar --target iphone_hlg.mov --motion walk --hdr --out avatar_hdr.mp4   # HDR kept\n",
     )
     p.add_argument("--target", required=True, help="target video (its size and frame rate are kept)")
     p.add_argument("--target-masks", help="masks of the person in the target: folder of images or a mask video "
@@ -130,6 +131,10 @@ def register(sub) -> None:
     p.add_argument("--no-occlusion", action="store_true", help="cosine transport without visibility")
     p.add_argument("--antialias", action=argparse.BooleanOptionalAction, default=True,
                    help="smooth the avatar's silhouette against the background (default: on; ~24 ms per 512² frame)")
+    p.add_argument("--hdr", action="store_true",
+                   help="keep an HDR target (HLG or PQ) HDR: the avatar over the target's own HDR frames, 10-bit "
+                        "BT.2020 with its transfer, HEVC in .mp4, ffv1 in .mkv (default: tone-mapped to SDR, as the "
+                        "frames are read); not with --plate or --replace-person")
     p.add_argument("--out", required=True, help="output video (.mp4/.mkv); OUT.lights.npz/.png are written beside it")
     add_model_args(p)
     p.set_defaults(func=run)

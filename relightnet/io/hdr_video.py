@@ -49,7 +49,7 @@ from .hdr import (
 from .video import VideoWriter, _count_checked, _open
 
 __all__ = ["HdrFormat", "hdr_format", "read_linear_video", "linear_to_signal", "ycbcr_codes", "hdr_from_sdr",
-           "HdrVideoWriter", "HdrClip", "HDR_GAIN_MAX"]
+           "hdr_behind", "HdrVideoWriter", "HdrClip", "HDR_GAIN_MAX"]
 
 _BT709_TO_BT2020 = np.linalg.inv(BT2020_TO_BT709)
 _CODES = {".mp4": ("libx265", "yuv420p10le"), ".mkv": ("ffv1", "yuv444p10le")}
@@ -185,6 +185,30 @@ def hdr_from_sdr(edited: torch.Tensor, sdr: torch.Tensor, hdr: torch.Tensor) -> 
     return (hdr - s).mul_(gain).add_(e)
 
 
+def hdr_behind(composite: torch.Tensor, sdr: torch.Tensor, hdr: torch.Tensor, drawn: torch.Tensor) -> torch.Tensor:
+    """Carry a composite over a frame's SDR reading to its HDR original: the pixels the job drew
+    (an avatar, its antialiased edge) are the composite's, every other pixel is the HDR frame's own:
+    ``composite + (hdr - sdr) * (1 - drawn)``. Unlike :func:`hdr_from_sdr`, a drawn pixel takes
+    nothing from the frame behind it (a gain between an avatar and the background it hides means
+    nothing).
+
+    Args:
+        composite: (3, H, W) the job's output, sRGB: float in [0, 1] or uint8.
+        sdr: (3, H, W) the frame as the job read it (the reader's tone-mapped sRGB), float or uint8.
+        hdr: (3, H, W) float32 the frame as linear light (:func:`read_linear_video`).
+        drawn: (H, W) bool or float in [0, 1], the share of each pixel the job drew.
+
+    Returns:
+        (3, H, W) float32 linear light relative to reference white, for :class:`HdrVideoWriter`.
+    """
+    check_shape(hdr, [3, "H", "W"], name="hdr frame")
+    check_shape(composite, list(hdr.shape), name="composite frame")
+    check_shape(sdr, list(hdr.shape), name="sdr frame")
+    check_shape(drawn, list(hdr.shape[1:]), name="drawn")
+    e, s = (srgb_to_linear(x.float() / 255 if x.dtype == torch.uint8 else x.float()) for x in (composite, sdr))
+    return (hdr - s).mul_(1 - drawn.float()).add_(e)
+
+
 class HdrVideoWriter(VideoWriter):
     """:class:`~relightnet.io.VideoWriter` for HDR frames: ``write`` takes (H, W, 3) or (3, H, W) float
     linear light relative to reference white (:func:`hdr_from_sdr`), written as ``fmt`` (module
@@ -261,13 +285,15 @@ class HdrClip:
             raise InputError(f"{path}: not an HDR video (its frames are not tagged HLG or PQ); --hdr expects one")
         self.path, self.fmt, self._frames, self._t = path, fmt, read_linear_video(path), 0
 
-    def carry(self, edited: torch.Tensor, sdr: torch.Tensor) -> torch.Tensor:
+    def carry(self, edited: torch.Tensor, sdr: torch.Tensor, drawn: torch.Tensor | None = None) -> torch.Tensor:
         """The next frame's HDR output: ``edited`` ((H, W, 3) or (3, H, W), uint8 or float sRGB) the
-        job's output for ``sdr`` ((3, H, W) the frame as it read it) → (3, H, W) float32 linear light."""
+        job's output for ``sdr`` ((3, H, W) or (H, W, 3) the frame as it read it) → (3, H, W) float32
+        linear light: an edit of the frame carried over by :func:`hdr_from_sdr`, or with ``drawn`` ((H, W),
+        what a composite drew over the frame) by :func:`hdr_behind`."""
         hdr = next(self._frames, None)
         if hdr is None:
             raise InputError(f"{self.path}: frame {self._t}: the HDR reading ended before the frames did")
         self._t += 1
-        if edited.ndim == 3 and edited.shape[-1] == 3 and edited.shape[0] != 3:
-            edited = edited.permute(2, 0, 1)
-        return hdr_from_sdr(edited, sdr, hdr)
+        edited, sdr = (x.permute(2, 0, 1) if x.ndim == 3 and x.shape[-1] == 3 and x.shape[0] != 3 else x
+                       for x in (edited, sdr))
+        return hdr_from_sdr(edited, sdr, hdr) if drawn is None else hdr_behind(edited, sdr, hdr, drawn)

@@ -35,6 +35,7 @@ import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
 from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, frame_times, read_video, video_info
+from ..io.hdr_video import HdrClip, HdrVideoWriter
 from ..names import VIDEO_SMOOTHING
 from ..prt import PrtSettings
 from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
@@ -182,7 +183,7 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
     """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
-    (H, W, 3) uint8 (:func:`_composite_covered`); with ``antialias``, the silhouette's pixels then
+    ((H, W, 3) uint8 (:func:`_composite_covered`), (H, W) bool the pixels drawn); with ``antialias``, the silhouette's pixels then
     get what analytic edge antialiasing of the whole composited frame gives there
     (:func:`relightnet.raster.antialias_pixels`: the colours of the pixels along the silhouette
     only, no float copy of the frame; a frame at the pixel limit is 150 MB in float). The render may
@@ -192,9 +193,11 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     from ..color import linear_to_srgb
 
     out = _composite_covered(r, bg)
-    if not antialias:
-        return out
     to_frame = r.frags.region.to_frame  # the window's flat pixel indices → the frame's
+    drawn = torch.zeros(out.shape[:2], dtype=torch.bool)
+    drawn.view(-1)[to_frame(r.frags.pix)] = True
+    if not antialias:
+        return out, drawn
     flat = torch.from_numpy(out).view(-1, 3)  # the background where not covered
 
     def color_at(idx):  # fg·α + bg·(1−α) with α in {0, 1}, in [0, 1]
@@ -207,24 +210,30 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     sil = silhouette_pixels(r.frags.mask[0])[None]
     idx, colors = antialias_pixels(color_at, r.frags, camera.transform(verts), faces, sil)
     flat[to_frame(idx)] = colors.clamp_(0, 1).mul_(255).round_().to(torch.uint8)
-    return out
+    drawn.view(-1)[to_frame(idx)] = True
+    return out, drawn
 
 
 def _render_stages(out: Path, target, backgrounds, frames, n: int, fps: float, antialias: bool, camera: Camera,
-                   faces: torch.Tensor, progress: bool, source) -> int:
+                   faces: torch.Tensor, progress: bool, source, clip: HdrClip | None = None) -> int:
     """Stages 3–5, render → composite → write, streaming, on the target's timeline (its frame times
-    and sound): returns the frames written."""
+    and sound): returns the frames written. ``clip``: the target's HDR frames, the composite carried
+    over to them (:meth:`~relightnet.io.hdr_video.HdrClip.carry` with the pixels drawn)."""
     from tqdm import tqdm
 
     times = frame_times(target)  # None: the target states no times, the frames follow at its average rate
     written = 0
-    with VideoWriter(out, fps=fps, srgb=False, audio_from=target) as writer:
+    with (VideoWriter(out, fps=fps, srgb=False, audio_from=target) if clip is None else
+          HdrVideoWriter(out, clip.fmt, fps=fps, audio_from=target)) as writer:
         pairs = zip(backgrounds, frames, strict=False)
         for bg, fr in tqdm(pairs, total=n, desc="avatar", unit="frame", disable=not progress):
             if written == n:
                 break
             time = float(times[written]) if times is not None and written < len(times) else None
-            writer.write(_composite_frame(fr.render, bg, antialias, camera, fr.verts, faces), time=time)
+            frame, drawn = _composite_frame(fr.render, bg, antialias, camera, fr.verts, faces)
+            if clip is not None:
+                frame = clip.carry(torch.from_numpy(frame), torch.from_numpy(np.ascontiguousarray(bg)), drawn)
+            writer.write(frame, time=time)
             del bg, fr  # the next frame is decoded and rendered without this one's
             written += 1
         if written < n:
@@ -250,6 +259,13 @@ def _camera_for(camera: Camera | None, size) -> Camera:
     return camera
 
 
+def _hdr_clip(target, placement: AvatarPlacement) -> HdrClip:
+    """``hdr=True``'s checks before any work: the target's own frames behind the avatar, the target HDR."""
+    if placement.plate is not None or placement.replace_person:
+        raise InputError("--hdr keeps the target's own frames HDR: not with --plate or --replace-person")
+    return HdrClip(target)  # an SDR target is refused here
+
+
 def _check_options(out, smoothing: str) -> Path:
     """The checks that need nothing read: the output's type, the smoothing (--replace-person's exclusions:
     :class:`~relightnet.pipeline.AvatarPlacement`)."""
@@ -273,6 +289,7 @@ def avatar(
     prt: PrtSettings = PrtSettings(n_dirs=64),
     placement: AvatarPlacement = AvatarPlacement(),
     progress: bool = True,
+    hdr: bool = False,
 ) -> AvatarResult:
     """Render an avatar into a target video, lit by the target's (estimated, smoothed) light.
 
@@ -295,6 +312,10 @@ def avatar(
         placement: an :class:`~relightnet.pipeline.AvatarPlacement`: a clean plate to composite over, the
             avatar's camera, or taking the person's place (:func:`.clean_plate.stand_in`).
         progress: show a tqdm bar.
+        hdr: keep an HLG or PQ target HDR: the avatar is composited over the target's own frames read as
+            linear light (:func:`relightnet.io.hdr_video.hdr_behind`), written as the target's format
+            (:class:`~relightnet.io.hdr_video.HdrVideoWriter`); an SDR target, a plate or
+            ``replace_person`` is refused before any work.
 
     Returns:
         :class:`AvatarResult`.
@@ -302,6 +323,7 @@ def avatar(
     smoothing, mask_source, plate = lights.smoothing, lights.mask_source, placement.plate
     out = _check_options(out, smoothing)
     info = video_info(target)
+    clip = _hdr_clip(target, placement) if hdr else None
     base, body_model, tex = avatar_look(load_body(look.body), look.albedo, look.outfit, look.captured)
     # A bad motion fails now, not after the light pass; a motion file or mapping is read once, here.
     motion_frames = open_motion(motion, base, info.fps)
@@ -326,6 +348,6 @@ def avatar(
     frames = render_body_frames(body_model, params, smoothed, tex, camera=camera, prt=prt, n_frames=n,
                                 visible_only=True, box=True)
     written = _render_stages(out, target, backgrounds, frames, n, info.fps, look.antialias, camera, body_model.faces,
-                             progress, plate or target)
+                             progress, plate or target, clip)
     logger.info("wrote %s (%d frames), %s, %s", out, written, lights_file, plot)
     return AvatarResult(written, out, lights_file, plot, lit.raw, smoothed, lit.reused, lit.outliers, lit.switches)

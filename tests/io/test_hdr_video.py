@@ -13,6 +13,7 @@ from relightnet.io.hdr_video import (
     HdrClip,
     HdrFormat,
     HdrVideoWriter,
+    hdr_behind,
     hdr_format,
     hdr_from_sdr,
     linear_to_signal,
@@ -125,6 +126,24 @@ def test_hdr_from_sdr_keeps_untouched_pixels_and_scales_relit_ones():
     assert float(out[:, 0, 0].max()) <= 1.0 + hdr[:, 0, 0].max() * HDR_GAIN_MAX
     with pytest.raises(ValueError, match="edited frame"):
         hdr_from_sdr(sdr[:, :5], sdr, hdr)
+
+
+def test_hdr_behind_keeps_the_frame_where_nothing_is_drawn():
+    from relightnet.color import srgb_to_linear
+
+    hdr = _light() * 1.5
+    sdr = (torch.rand(3, 32, 48, generator=torch.Generator().manual_seed(2)) * 255).round().to(torch.uint8)
+    drawn = torch.zeros(32, 48, dtype=torch.bool)
+    drawn[8:20, 10:30] = True
+    composite = sdr.clone()
+    composite[:, drawn] = 7  # an avatar, dark: a gain to the bright frame behind it would bring its highlights
+    out = hdr_behind(composite, sdr, hdr, drawn)
+    torch.testing.assert_close(out[:, ~drawn], hdr[:, ~drawn], rtol=0, atol=1e-6)
+    torch.testing.assert_close(out[:, drawn], srgb_to_linear(torch.full((3, int(drawn.sum())), 7 / 255)))
+    half = hdr_behind(composite, sdr, hdr, drawn.float() * 0.5)  # a partly drawn pixel keeps half the HDR part
+    torch.testing.assert_close(half, (out + hdr_behind(composite, sdr, hdr, drawn.float() * 0)) / 2)
+    with pytest.raises(ValueError, match="drawn"):
+        hdr_behind(composite, sdr, hdr, drawn[:5])
 
 
 def test_an_sdr_clip_is_refused_before_any_frame(tmp_path):

@@ -337,9 +337,12 @@ def test_composite_of_the_box_render_is_the_frames(anny_body, target_at):
     bg = np.random.default_rng(1).integers(0, 256, (40, 32, 3), dtype=np.uint8)
     for full, box in zip(render_body_frames(*args, **kw), render_body_frames(*args, box=True, **kw), strict=True):
         assert box.render.frags.window is not None and full.render.frags.window is None
-        got = [_composite_frame(box.render, bg, aa, cam, box.verts, anny_body.faces) for aa in (False, True)]
-        for aa, g in zip((False, True), got, strict=True):
-            assert np.array_equal(g, _composite_frame(full.render, bg, aa, cam, full.verts, anny_body.faces))
+        got, drawn = zip(*(_composite_frame(box.render, bg, aa, cam, box.verts, anny_body.faces)
+                           for aa in (False, True)), strict=True)
+        for aa, g, d in zip((False, True), got, drawn, strict=True):
+            want, want_drawn = _composite_frame(full.render, bg, aa, cam, full.verts, anny_body.faces)
+            assert np.array_equal(g, want) and torch.equal(d, want_drawn)
+            assert torch.equal(d, torch.from_numpy((g != bg).any(-1)) | d)  # every pixel changed is drawn
         visible = target_at[0] < 5
         assert (got[0] != bg).any() == visible and (got[1] != got[0]).any() == visible  # antialiasing did work
 
@@ -360,3 +363,41 @@ def test_avatar_is_written_on_the_targets_timeline(anny_body, tmp_path):
     shown, heard = media.decoded_frame_times(out), media.click_times(out)
     np.testing.assert_allclose(np.diff(shown), np.diff(times), rtol=0, atol=1e-3)  # VFR stays VFR
     assert shown[0] - heard[0] == pytest.approx(0.0, abs=2e-3)  # the video starts as the click, 0.5 s in
+
+
+def test_avatar_keeps_an_hdr_target_hdr(target, anny_body, tmp_path, capsys):
+    """--hdr: the avatar over the target's own HLG frames; every pixel it does not draw keeps the target's
+    HDR codes (highlights past the tone mapping's knee included); an SDR target, or a plate, is refused."""
+    from relightnet.color import srgb_to_linear
+    from relightnet.io.hdr_video import HdrFormat, HdrVideoWriter, hdr_format, linear_to_signal, read_linear_video
+    from relightnet.io.hdr_video import ycbcr_codes
+
+    video, _, true = target
+    kw = dict(light=true, look=AvatarLook(body=anny_body), motion="walk", prt=PrtSettings(n_dirs=8), progress=False)
+    with pytest.raises(InputError, match="not an HDR video"):
+        avatar(video, tmp_path / "sdr.mkv", hdr=True, **kw)
+    hlg = tmp_path / "hlg.mkv"  # the target as HLG at 3x reference white: its bright parts past the knee
+    with HdrVideoWriter(hlg, HdrFormat("hlg"), fps=15) as w:
+        for f in read_video(video):
+            w.write(srgb_to_linear(torch.from_numpy(f).permute(2, 0, 1).float() / 255) * 3)
+    with pytest.raises(InputError, match="--plate"):
+        avatar(hlg, tmp_path / "p.mkv", hdr=True, placement=AvatarPlacement(plate=video), **kw)
+    assert not (tmp_path / "sdr.mkv").exists() and not (tmp_path / "p.mkv").exists()
+    out = avatar(hlg, tmp_path / "a.mkv", hdr=True, **kw).video
+    sdr = avatar(hlg, tmp_path / "s.mkv", **kw).video  # the same job tone-mapped, for where the avatar is
+    assert hdr_format(out) == HdrFormat("hlg") and hdr_format(sdr) is None
+    src, got = list(read_linear_video(hlg)), list(read_linear_video(out))
+    assert len(got) == N and max(float(a.amax()) for a in src) > 1.5
+
+    def codes(x):
+        return ycbcr_codes(linear_to_signal(x, "hlg"))
+
+    for a, b, s, bg in zip(src, got, read_video(sdr), read_video(hlg), strict=True):
+        drawn = torch.from_numpy((s != bg).any(-1))
+        assert drawn.any() and (codes(a) - codes(b))[:, ~drawn].abs().max() <= 1  # lossless ffv1: to rounding
+        # the avatar's pixels are the SDR job's (linear light of its sRGB bytes), to 10-bit rounding
+        want = srgb_to_linear(torch.from_numpy(s).permute(2, 0, 1).float() / 255)
+        assert (codes(want) - codes(b))[:, drawn].abs().max() <= 2
+    assert main(["-q", "avatar", "--target", str(video), "--light", "sunset", "--n-dirs", "8", "--hdr",
+                 "--out", str(tmp_path / "c.mkv")]) == 1
+    assert "not an HDR video" in capsys.readouterr().err and not (tmp_path / "c.mkv").exists()
