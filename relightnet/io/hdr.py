@@ -47,7 +47,8 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["HLG_PEAK", "PQ_PEAK", "REFERENCE_WHITE", "KNEE", "BT2020_TO_BT709", "hlg_oetf", "hlg_inverse_oetf",
            "hlg_ootf", "pq_eotf", "pq_inverse_eotf", "tone_map", "ycbcr_to_rgb", "hdr_transfer", "frame_to_linear",
-           "frame_to_rgb24", "sdr_from_linear", "hdr_metadata", "content_peak", "note_hdr", "tag_sdr", "sdr_frame"]
+           "frame_to_rgb24", "sdr_from_linear", "hdr_metadata", "content_peak", "note_hdr", "tag_sdr", "sdr_frame",
+           "BAND_ROWS", "row_bands"]
 
 HLG_PEAK = 1000.0  #: cd/m², the nominal peak of the HLG reference display (BT.2100)
 PQ_PEAK = 1000.0  #: cd/m², the peak a PQ clip is taken to be mastered at (brighter content clips)
@@ -156,6 +157,18 @@ def ycbcr_to_rgb(yuv: torch.Tensor, bits: int, matrix: tuple[float, float], full
     return _affine(m, yuv.to(torch.float32), offset)
 
 
+#: Rows of a frame its colour conversions take at a time (:func:`row_bands`): their temporaries (int64
+#: lookup indices, float planes) are a band's, not a 12.5 MP frame's.
+BAND_ROWS = 128
+
+
+def row_bands(h: int, rows: int | None = None) -> list[slice]:
+    """The slices of ``h`` rows, ``rows`` at a time (default :data:`BAND_ROWS`), that per-pixel
+    conversions of a frame take."""
+    rows = BAND_ROWS if rows is None else rows
+    return [slice(r, min(r + rows, h)) for r in range(0, h, rows)]
+
+
 def _affine(m: np.ndarray, x: torch.Tensor, offset: np.ndarray | None = None) -> torch.Tensor:
     """``m @ x + offset`` on (3, ...) float32 ``x``: m (3, 3), offset (3,) or None; one matrix product."""
     flat = x.reshape(3, -1)
@@ -205,18 +218,19 @@ def frame_to_linear(frame) -> tuple[torch.Tensor, str] | None:
     if transfer is None:
         return None
     bits, h, w = frame.format.components[0].bits, frame.height, frame.width
-    codes = np.empty((3, h, w), np.float32)  # Y', Cb, Cr planes, chroma upsampled, codes << (16 - bits)
-    for i, plane in enumerate(frame.reformat(format="yuv444p16le").planes):
-        codes[i] = np.frombuffer(plane, np.uint16).reshape(h, plane.line_size // 2)[:, :w]
+    yuv = frame.reformat(format="yuv444p16le")  # Y', Cb, Cr planes, chroma upsampled, codes << (16 - bits)
+    planes = [np.frombuffer(p, np.uint16).reshape(h, p.line_size // 2)[:, :w] for p in yuv.planes]
     matrix, full = _MATRIX.get(int(frame.colorspace or 0), _MATRIX[9]), int(frame.color_range or 0) == 2
-    rgb = ycbcr_to_rgb(torch.from_numpy(codes), bits, matrix, full_range=full, shift=16 - bits)
-    del codes
-    light = _lookup(_table(transfer), rgb)  # PQ: display light / reference white; HLG: scene light
-    if transfer == "hlg":  # the OOTF (hlg_ootf), in place: light * peak * Ys^(gamma - 1) / reference white
-        ys = light[0] * _LUMA_2020[0] + light[1] * _LUMA_2020[1] + light[2] * _LUMA_2020[2]
-        light.mul_(ys.clamp_min_(0).pow_(0.2).mul_(HLG_PEAK / REFERENCE_WHITE))
-    if int(frame.color_primaries or 0) == _BT2020:
-        light = _affine(BT2020_TO_BT709, light)
+    bt2020, table = int(frame.color_primaries or 0) == _BT2020, _table(transfer)
+    light = torch.empty(3, h, w)
+    for rows in row_bands(h):  # each pixel on its own: a band's temporaries, not a frame's
+        codes = torch.from_numpy(np.stack([p[rows] for p in planes]).astype(np.float32))
+        band = _lookup(table, ycbcr_to_rgb(codes, bits, matrix, full_range=full, shift=16 - bits))
+        if transfer == "hlg":  # the OOTF (hlg_ootf), in place: light * peak * Ys^(gamma - 1) / reference white
+            ys = band[0] * _LUMA_2020[0] + band[1] * _LUMA_2020[1] + band[2] * _LUMA_2020[2]
+            band.mul_(ys.clamp_min_(0).pow_(0.2).mul_(HLG_PEAK / REFERENCE_WHITE))
+        light[:, rows] = _affine(BT2020_TO_BT709, band) if bt2020 else band
+    del planes, yuv
     return light, transfer
 
 
@@ -236,8 +250,12 @@ def sdr_from_linear(light: torch.Tensor, peak: float) -> torch.Tensor:
     """HDR linear light (:func:`frame_to_linear`; (3, ...) float32, overwritten) → (3, ...) uint8 sRGB, as
     the reader shows it: clipped to BT.709's gamut, tone-mapped (:func:`tone_map`) to the content's
     ``peak`` in cd/m² (at least :data:`REFERENCE_WHITE`), sRGB-encoded and rounded."""
-    out = tone_map(light.clamp_(min=0), max(peak, REFERENCE_WHITE) / REFERENCE_WHITE)
-    return _lookup(_table("srgb8"), out)
+    flat, k, table = light.reshape(3, -1), max(peak, REFERENCE_WHITE) / REFERENCE_WHITE, _table("srgb8")
+    out = torch.empty(flat.shape, dtype=torch.uint8)
+    step = BAND_ROWS * 1024  # pixels at a time: each on its own, a band's temporaries
+    for i in range(0, flat.shape[1], step):
+        out[:, i:i + step] = _lookup(table, tone_map(flat[:, i:i + step].clamp_(min=0), k))
+    return out.reshape(light.shape)
 
 
 def hdr_metadata(frame) -> tuple[int, int, float]:

@@ -42,6 +42,7 @@ from .hdr import (
     REFERENCE_WHITE,
     _affine,
     frame_to_linear,
+    row_bands,
     hdr_metadata,
     hlg_oetf,
     pq_inverse_eotf,
@@ -180,9 +181,17 @@ def hdr_from_sdr(edited: torch.Tensor, sdr: torch.Tensor, hdr: torch.Tensor) -> 
     check_shape(hdr, [3, "H", "W"], name="hdr frame")
     check_shape(edited, list(hdr.shape), name="edited frame")
     check_shape(sdr, list(hdr.shape), name="sdr frame")
-    e, s = (srgb_to_linear(x.float() / 255 if x.dtype == torch.uint8 else x.float()) for x in (edited, sdr))
-    gain = (e + _EPS).div_(s + _EPS).clamp_(0, HDR_GAIN_MAX)
-    return (hdr - s).mul_(gain).add_(e)
+    out = torch.empty_like(hdr, dtype=torch.float32)
+    for rows in row_bands(hdr.shape[1]):  # each pixel on its own: a band's temporaries, not a frame's
+        e, s = (_linear(x[:, rows]) for x in (edited, sdr))
+        gain = (e + _EPS).div_(s + _EPS).clamp_(0, HDR_GAIN_MAX)
+        out[:, rows] = (hdr[:, rows] - s).mul_(gain).add_(e)
+    return out
+
+
+def _linear(srgb: torch.Tensor) -> torch.Tensor:
+    """sRGB (uint8 codes or float in [0, 1]) → float32 linear light."""
+    return srgb_to_linear(srgb.float() / 255 if srgb.dtype == torch.uint8 else srgb.float())
 
 
 def hdr_behind(composite: torch.Tensor, sdr: torch.Tensor, hdr: torch.Tensor, drawn: torch.Tensor) -> torch.Tensor:
@@ -205,8 +214,11 @@ def hdr_behind(composite: torch.Tensor, sdr: torch.Tensor, hdr: torch.Tensor, dr
     check_shape(composite, list(hdr.shape), name="composite frame")
     check_shape(sdr, list(hdr.shape), name="sdr frame")
     check_shape(drawn, list(hdr.shape[1:]), name="drawn")
-    e, s = (srgb_to_linear(x.float() / 255 if x.dtype == torch.uint8 else x.float()) for x in (composite, sdr))
-    return (hdr - s).mul_(1 - drawn.float()).add_(e)
+    out = torch.empty_like(hdr, dtype=torch.float32)
+    for rows in row_bands(hdr.shape[1]):
+        e, s = (_linear(x[:, rows]) for x in (composite, sdr))
+        out[:, rows] = (hdr[:, rows] - s).mul_(1 - drawn[rows].float()).add_(e)
+    return out
 
 
 class HdrVideoWriter(VideoWriter):
@@ -224,9 +236,9 @@ class HdrVideoWriter(VideoWriter):
         x = torch.as_tensor(frame, dtype=torch.float32)
         if x.ndim == 3 and x.shape[0] == 3 and x.shape[-1] != 3:
             x = x.permute(1, 2, 0)
-        if not bool(torch.isfinite(x).all()):
+        if not all(bool(torch.isfinite(x[rows]).all()) for rows in row_bands(x.shape[0])):
             raise InputError(f"{self.path}: frame {self.n_frames} has non-finite values")
-        return np.ascontiguousarray(x.numpy())
+        return x.numpy()  # (H, W, 3), maybe a view of a (3, H, W) tensor: no copy of the frame
 
     def _codec(self) -> tuple[str, str, dict]:
         codec, pix_fmt = _CODES[self.path.suffix.lower()]
@@ -250,8 +262,10 @@ class HdrVideoWriter(VideoWriter):
     def _frame(self, frame: np.ndarray):
         import av
 
-        codes = ycbcr_codes(linear_to_signal(torch.from_numpy(frame).permute(2, 0, 1), self.fmt.transfer))
         h, w = frame.shape[:2]
+        light, codes = torch.from_numpy(frame).permute(2, 0, 1), torch.empty(3, h, w, dtype=torch.int32)
+        for rows in row_bands(h):  # each pixel on its own: a band's temporaries, not a frame's
+            codes[:, rows] = ycbcr_codes(linear_to_signal(light[:, rows], self.fmt.transfer))
         pix_fmt = self._codec()[1]
         vf = av.VideoFrame(w, h, pix_fmt)
         if pix_fmt.startswith("yuv420"):  # even sides (padded by write): chroma averaged over 2 x 2

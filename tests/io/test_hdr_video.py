@@ -166,3 +166,34 @@ def test_non_finite_frames_are_refused_and_leave_no_file(tmp_path):
     with pytest.raises(InputError, match="non-finite"), HdrVideoWriter(path, HdrFormat("hlg")) as w:
         w.write(light)
     assert not path.exists() and not list(tmp_path.iterdir())
+
+
+def test_conversions_in_row_bands_are_the_whole_frames(tmp_path, monkeypatch):
+    """The readers, the writer and the carry convert a frame band by band (hdr.BAND_ROWS rows, bounding
+    their temporaries): each pixel on its own, so bands of 4 rows give what one band of the frame gives
+    (to float32 rounding: a 3 x 3 matrix product may sum in another order for another band's width, which
+    can move a rounded 8- or 10-bit code by one)."""
+    from relightnet.io import hdr
+
+    light, got = _light(h=37), {}
+    sdr = (torch.rand(3, 37, 48, generator=torch.Generator().manual_seed(3)) * 255).round().to(torch.uint8)
+    drawn = torch.rand(37, 48, generator=torch.Generator().manual_seed(4)) > 0.5
+    for rows in (4, 10**6):
+        monkeypatch.setattr(hdr, "BAND_ROWS", rows)
+        path = tmp_path / f"b{rows}.mkv"
+        with HdrVideoWriter(path, HdrFormat("pq"), fps=10) as w:
+            w.write(light)
+            w.write(light.permute(1, 2, 0) * 0.5)
+        got[rows] = (list(read_linear_video(path)), list(read_video(path)), hdr_from_sdr(sdr, sdr, light),
+                     hdr_behind(sdr.flip(1), sdr, light, drawn))
+    small, whole = got[4], got[10**6]
+    for a, b in zip(small[0], whole[0], strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-6, atol=1e-7)
+    for a, b in zip(small[1], whole[1], strict=True):
+        assert np.abs(a.astype(int) - b).max() <= 1
+    torch.testing.assert_close(small[2], whole[2], rtol=1e-6, atol=1e-7)  # vector or scalar pow: one ulp
+    torch.testing.assert_close(small[3], whole[3], rtol=1e-6, atol=1e-7)
+    with av.open(str(tmp_path / "b4.mkv")) as a, av.open(str(tmp_path / f"b{10**6}.mkv")) as b:
+        for fa, fb in zip(a.decode(video=0), b.decode(video=0), strict=True):  # the same 10-bit codes, to one
+            for pa, pb in zip(fa.planes, fb.planes, strict=True):
+                assert np.abs(np.frombuffer(pa, np.uint16).astype(int) - np.frombuffer(pb, np.uint16)).max() <= 1
