@@ -294,8 +294,8 @@ def note_hdr(frame, name) -> None:
     transfer = hdr_transfer(frame)
     if transfer is not None:
         logger.warning("%s: an HDR video (%s, %s primaries): its frames are tone-mapped to SDR sRGB "
-                       "(reference white %g cd/m² as SDR white, peak %g cd/m²; relight-video --hdr keeps "
-                       "it HDR)", name, transfer.upper(),
+                       "(reference white %g cd/m² as SDR white, peak %g cd/m²; relight-video and "
+                       "avatar --hdr write it HDR)", name, transfer.upper(),
                        "BT.2020" if int(frame.color_primaries or 0) == _BT2020 else "BT.709",
                        REFERENCE_WHITE, content_peak(frame))
 
