@@ -37,9 +37,9 @@ from common import table  # noqa: E402
 
 from relightnet.app import RelightSession, example_person, load_photo  # noqa: E402
 from relightnet.io import read_image, write_image  # noqa: E402
+from relightnet.light import load_light  # noqa: E402
 from relightnet.pipeline.backends import make_predictor  # noqa: E402
 from relightnet.pipeline.relight_image import relight_image  # noqa: E402
-from relightnet.sh import load_light  # noqa: E402
 
 
 def _median_ms(fn, repeat):

@@ -63,15 +63,14 @@ def _print(title: str, timers: Timers, total: float, order: list[str]) -> None:
 
 def photo_stages(photo: Path, d: Path) -> None:
     """relight-image's stages (the code of ``relightnet._cli.relight.run``), the process warm."""
+    import relightnet.io.image as image_io
     import relightnet.pipeline.relight_bands as rb
     from relightnet._cli.inputs import read_photo
     from relightnet.io import write_image
+    from relightnet.light import preset_light
     from relightnet.pipeline.backends import make_predictor
     from relightnet.pipeline.relight_image import relight_image
     from relightnet.segment import sources
-    from relightnet.sh import preset_light
-
-    import relightnet.io.image as image_io
 
     timers = Timers()
     t0 = time.perf_counter()
@@ -98,14 +97,15 @@ def photo_stages(photo: Path, d: Path) -> None:
 
 def video_stages(clip: Path, d: Path, label: str) -> None:
     """relight-video's stages (``relightnet.pipeline.relight_video.relight_video``), the process warm."""
-    import relightnet.io as io_pkg
     import importlib
+
+    import relightnet.io as io_pkg
 
     rv = importlib.import_module("relightnet.pipeline.relight_video")  # the module (its function has its name)
     from relightnet.io import VideoWriter
+    from relightnet.light import preset_light
     from relightnet.pipeline.backends import make_predictor
     from relightnet.segment import sources
-    from relightnet.sh import preset_light
 
     timers = Timers()
     model = make_predictor("torch", None, "cpu")

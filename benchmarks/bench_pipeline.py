@@ -49,9 +49,9 @@ def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> flo
     Every run writes a fresh output, so the avatar never reuses earlier light estimates.
     """
     from relightnet.body import AnnyBody
+    from relightnet.light import preset_light
     from relightnet.pipeline import AvatarLook, avatar, make_predictor, relight_video
     from relightnet.prt import PrtSettings
-    from relightnet.sh import preset_light
 
     pred = make_predictor(backend)
     body = AnnyBody() if job == "avatar" else None

@@ -41,11 +41,11 @@ from common import table  # noqa: E402
 from people import BACKGROUNDS, background  # noqa: E402
 
 from relightnet.color import linear_to_srgb, srgb_to_linear  # noqa: E402
+from relightnet.light import load_light  # noqa: E402
 from relightnet.model import load_model  # noqa: E402
 from relightnet.pipeline import relight_image  # noqa: E402
 from relightnet.raster import erode  # noqa: E402
 from relightnet.segment import band_radius, border_band, segment_person, soft_matte  # noqa: E402
-from relightnet.sh import load_light  # noqa: E402
 
 SIZE = (1024, 768)
 LIGHTS = ("key:az=-70,el=10,power=3 + ambient:0.15", "key:az=70,el=10,power=3 + ambient:0.15")

@@ -112,7 +112,7 @@ def _real_rows(predict, real: Path, at: int, gain, work: Path) -> list:
 def _turning_rows(predict, n: int, work: Path) -> list:
     from relightnet.capture.truth import turning_person
     from relightnet.fit import FitBody
-    from relightnet.sh import ambient_light, directional_light
+    from relightnet.light import ambient_light, directional_light
 
     body, rng = FitBody().body, np.random.default_rng(7)
     per = {"raw": [], "window": [], "shot": []}
@@ -166,8 +166,8 @@ def _relit_rows(predict, real: Path, n_gen: int, work: Path) -> list:
     import time
 
     from relightnet.capture.truth import light_pair, turning_person
+    from relightnet.light.presets import preset_light
     from relightnet.pipeline.relight_video import relight_video
-    from relightnet.sh.presets import preset_light
 
     rows = []
     video, masks = real / "turning.mp4", real / "turning_masks.mkv"

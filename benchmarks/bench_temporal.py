@@ -43,7 +43,8 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.sh import preset_light, preset_names, rotate_sh_up  # noqa: E402
+from relightnet.light import preset_light, preset_names
+from relightnet.sh import rotate_sh_up  # noqa: E402
 from relightnet.temporal import (  # noqa: E402
     EMAFilter,
     FIRFilter,

@@ -19,12 +19,12 @@ DEFAULT_MOTION = "walk"
 
 def run(args: argparse.Namespace) -> int:
     from ..io import video_info
+    from ..light import load_light
     from ..pipeline.avatar import avatar
     from ..pipeline.backends import make_predictor
     from ..pipeline.scene import load_camera
     from ..pipeline.settings import AvatarLook, AvatarPlacement, VideoLightSettings
     from ..prt import PrtSettings
-    from ..sh import load_light
     from ..sh.io import check_light_physics
 
     out = out_file(args.out, suffixes=(".mp4", ".mkv"),
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     light = check_light_physics(load_light(args.light), args.light) if args.light else None
     plate_light = None
     if args.light_from in ("plate", "both"):  # the plate given, else the target's first frame
-        from ..sh.plate import load_plate
+        from ..light.plate import load_plate
 
         plate_light = load_plate(args.plate or args.target, hfov_deg=args.fov)
         if args.light_from == "plate":

@@ -49,7 +49,8 @@ def _smooth(args, sh):
 def run_smooth(args: argparse.Namespace) -> int:
     from ..checks import ShapeError
     from ..io.atomic import atomic_write
-    from ..sh.io import load_light, load_light_sequence, save_light, save_light_sequence
+    from ..light import load_light
+    from ..sh.io import load_light_sequence, save_light, save_light_sequence
     from ..temporal import jitter, light_error, parse_eps
     from ..temporal.plot import light_curves_png
 

@@ -10,7 +10,7 @@ import torch
 
 from ..body import AnnyBody, region_labels
 from ..checks import InputError
-from ..sh import preset_envmap
+from ..light import preset_envmap
 from .textures import UVAtlas, region_field, texel_regions, uv_atlas
 
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets", "assets_for"]

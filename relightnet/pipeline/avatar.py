@@ -158,7 +158,7 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
                   progress: bool) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
     ``lights_file`` when its fingerprint matches), smoothed over time; with ``lights.plate_light``, each
-    smoothed light combined with it (:func:`relightnet.sh.combine_person_plate`)."""
+    smoothed light combined with it (:func:`relightnet.light.combine_person_plate`)."""
     mask_source, smoothing, plate_light = lights.mask_source, lights.smoothing, lights.plate_light
     if model is None:
         raise InputError("model: give a model (or predictor) to estimate the light, or a light")
@@ -173,7 +173,7 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
     smoothed, outliers, switches, method = smooth_video_lights(est.raw, smoothing, est.evidence, est.prior,
                                                                predict.solve_reg, fps, colour=est.colour)
     if plate_light is not None:
-        from ..sh.plate import combine_person_plate
+        from ..light.plate import combine_person_plate
 
         smoothed = combine_person_plate(smoothed, plate_light.light.to(smoothed), plate_light.view)
         method = f"{method}+plate"
@@ -290,7 +290,7 @@ def avatar(
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
         lights: a :class:`~relightnet.pipeline.VideoLightSettings`: the smoothing (one of
             :data:`relightnet.names.VIDEO_SMOOTHING`), the mask source, the model's name in the resume
-            fingerprint and a plate light combined with the estimates (``sh.combine_person_plate``).
+            fingerprint and a plate light combined with the estimates (``light.combine_person_plate``).
         prt: the PRT options (:class:`~relightnet.prt.PrtSettings`; by default 64 directions).
         placement: an :class:`~relightnet.pipeline.AvatarPlacement`: a clean plate to composite over, the
             avatar's camera, or taking the person's place (:func:`.clean_plate.stand_in`).

@@ -127,7 +127,7 @@ def _agreement(img, mask, ref, ref_mask) -> tuple[float, float]:
 def _relit(fb, clip, avatar, raw_tex, seen) -> dict:
     """The re-render's figures (module docstring): ``psnr``, ``ssim`` and their ``_bare`` and ``_raw``."""
     from ..capture import CapturedBody, silhouette_iou
-    from ..sh import load_light
+    from ..light import load_light
 
     light = load_light(NEW_LIGHT)
     params = _new_params(fb.body, clip.params["phenotype"])

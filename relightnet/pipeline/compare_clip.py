@@ -77,7 +77,7 @@ def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> tor
         (K, 3) float32, K = (lmax+1)².
     """
     from ..data.lights import light_level
-    from ..sh import preset_light
+    from ..light import preset_light
 
     sh = preset_light(name, lmax)
     return (sh * (level / light_level(sh))).float()

@@ -12,9 +12,9 @@ from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb
 from relightnet.fit import FIT_BONES, FitBody, FitResult, default_intrinsics
 from relightnet.fit.preview import fit_camera, fit_meshes
+from relightnet.light import ambient_light, directional_light
 from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.render.frame import TexturedAlbedo, render_mesh
-from relightnet.sh import ambient_light, directional_light
 
 SIZE = (384, 288)
 TEX = 256

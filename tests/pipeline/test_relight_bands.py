@@ -99,8 +99,8 @@ def test_bands_relight_as_the_whole_photo(predict, photo, detail, keep_exposure,
 
 
 def test_a_gray_photo_gives_a_gray_person_under_a_coloured_light(predict, photo):
+    from relightnet.light import preset_light
     from relightnet.pipeline.relight_bands import is_gray
-    from relightnet.sh import preset_light
 
     img, mask = photo
     gray = img.mean(0, keepdim=True).expand(3, -1, -1).contiguous()

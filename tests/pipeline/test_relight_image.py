@@ -5,10 +5,10 @@ import torch
 from relightnet.cli import main
 from relightnet.data import SynthConfig, generate_sample
 from relightnet.io import read_image, write_image
+from relightnet.light import load_light, preset_light
 from relightnet.model import load_model
 from relightnet.pipeline import relight_image
 from relightnet.segment.matte import band_radius, border_band
-from relightnet.sh import load_light, preset_light
 
 pytestmark = pytest.mark.slow  # the CNN on real photos, relighting, the CLI; 8-17 s each on a loaded machine
 

@@ -3,8 +3,9 @@
 import pytest
 import torch
 
+from relightnet.light import directional_light
 from relightnet.model.network import NetConfig, RelightNet, normalize_input
-from relightnet.sh import directional_light, irradiance
+from relightnet.sh import irradiance
 from relightnet.sh.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 
 

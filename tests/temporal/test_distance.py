@@ -6,7 +6,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import fibonacci_sphere, irradiance, preset_light
+from relightnet.light import preset_light
+from relightnet.sh import fibonacci_sphere, irradiance
 from relightnet.temporal import light_distance, light_norm, light_weights, outlier_threshold, parse_eps, robust_scale
 
 

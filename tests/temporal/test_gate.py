@@ -4,7 +4,7 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.sh import preset_light
+from relightnet.light import preset_light
 from relightnet.temporal import (
     EMAFilter,
     OneEuroFilter,

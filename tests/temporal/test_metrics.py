@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import preset_light
+from relightnet.light import preset_light
 from relightnet.temporal import jitter, light_distance, light_error, light_norm, outlier_scores, step_lag
 
 

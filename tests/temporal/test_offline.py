@@ -6,7 +6,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import preset_light, rotate_sh_up
+from relightnet.light import preset_light
+from relightnet.sh import rotate_sh_up
 from relightnet.temporal import (
     detect_switches,
     light_distance,

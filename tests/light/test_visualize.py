@@ -5,7 +5,7 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.io import read_image
-from relightnet.sh import (
+from relightnet.light import (
     ambient_light,
     directional_light,
     light_preview,

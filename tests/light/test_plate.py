@@ -11,14 +11,11 @@ import torch.nn.functional as F
 from relightnet.checks import InputError
 from relightnet.data.backgrounds import envmap_background
 from relightnet.io import write_image
-from relightnet.sh import (
+from relightnet.light import (
     SEEN_FADE_DEG,
     PlateView,
     ambient_light,
     combine_person_plate,
-    dominant_direction,
-    fibonacci_sphere,
-    latlong_directions,
     light_from_words,
     load_plate_light,
     plate_envmap,
@@ -26,6 +23,11 @@ from relightnet.sh import (
     plate_seen,
     plate_view,
     preset_envmap,
+)
+from relightnet.sh import (
+    dominant_direction,
+    fibonacci_sphere,
+    latlong_directions,
     project,
     radiance,
     sh_basis,
