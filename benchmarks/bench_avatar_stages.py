@@ -45,7 +45,7 @@ def make_target(path: Path, h: int, w: int, frames: int) -> Path:
     from relightnet.io import VideoWriter
     from relightnet.io.envmap import read_envmap
     from relightnet.light import preset_light
-    from relightnet.pipeline import avatar_albedo
+    from relightnet.pipeline.scene import avatar_albedo
     from relightnet.prt import PrtSettings
     from relightnet.raster import default_camera
     from relightnet.render import render_body_frames
@@ -99,7 +99,7 @@ def child_stages(args) -> dict:
     from relightnet.body import AnnyBody, make_motion
     from relightnet.io import VideoWriter, read_video
     from relightnet.light import preset_light
-    from relightnet.pipeline import avatar_albedo
+    from relightnet.pipeline.scene import avatar_albedo
     from relightnet.prt import vertex_transport
     from relightnet.prt.visibility import make_engine
     from relightnet.raster import Fragments, default_camera, rasterize

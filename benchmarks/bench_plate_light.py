@@ -39,7 +39,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.color import linear_to_srgb, srgb_to_linear  # noqa: E402
-from relightnet.light import combine_person_plate, plate_light, plate_view
+from relightnet.light import combine_person_plate, plate_light
+from relightnet.light.plate import plate_view
 from relightnet.sh import scale_invariant_light_error  # noqa: E402
 
 CONFIG = """seed: 25
@@ -100,7 +101,8 @@ def _wide_plates(turns: int = 12, hfov: float = 60.0) -> list[list]:
 
     from relightnet.data.backgrounds import envmap_background
     from relightnet.light import preset_envmap, preset_names
-    from relightnet.sh import project_envmap, rotate_sh, rotation_about_up
+    from relightnet.sh import project_envmap, rotate_sh
+    from relightnet.sh.rotation import rotation_about_up
 
     res = 128
     f = 0.5 * res / math.tan(math.radians(hfov) / 2)

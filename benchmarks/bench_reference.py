@@ -48,15 +48,9 @@ import mitsuba_scene as ms  # noqa: E402
 from common import table  # noqa: E402
 
 from relightnet.light import preset_light
-from relightnet.prt import (  # noqa: E402
-    PrtSettings,
-    make_engine,
-    mesh_scale,
-    refined_transport,
-    transport_directions,
-    vertex_rays,
-    vertex_transport,
-)
+from relightnet.prt import PrtSettings, make_engine, refined_transport, transport_directions, vertex_transport
+from relightnet.prt.mesh_checks import mesh_scale
+from relightnet.prt.visibility import vertex_rays
 from relightnet.raster import default_camera, interpolate, look_at, perspective_camera  # noqa: E402
 from relightnet.render.frame import render_mesh  # noqa: E402
 from relightnet.sh import directions_to_latlong, irradiance, light_to_world, sh_basis, sh_to_envmap, world_to_light

@@ -34,7 +34,7 @@ def test_bad_options_are_refused_before_work(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def photo_capture(tmp_path_factory, anny_body):
     """A generated person photographed from the front, captured (a photo: the front only, no offsets)."""
-    from relightnet.capture import light_pair, turning_person
+    from relightnet.capture.truth import light_pair, turning_person
 
     d = tmp_path_factory.mktemp("photo")
     clip = turning_person(d, anny_body, light_pair()[0], n_frames=2, size=(320, 256), seed=11, turns=0.0,

@@ -75,7 +75,8 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
 
 
 def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
-    from relightnet.light import combine_person_plate, load_plate, load_plate_light
+    from relightnet.light import combine_person_plate, load_plate
+    from relightnet.light.plate import load_plate_light
 
     g = np.random.default_rng(0)
     plate = np.concatenate([np.full((30, 80, 3), 220), np.full((30, 80, 3), 40)]).astype(np.uint8)

@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         if args.motion or args.body != "anny":
             raise InputError("--motion-from: the motion comes from the source video; it drives Anny "
                              "(drop --motion and --body)")
-        from ..fit import motion_for_avatar
+        from ..fit.job import motion_for_avatar
 
         motion = motion_for_avatar(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
     if args.light and args.light_from != "person":

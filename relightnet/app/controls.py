@@ -76,7 +76,8 @@ def light_of(source: str, words: str, preset: str | None, hdri_path: str | None,
         InputError: a missing file for the source, or a bad light (the message names it).
     """
     from ..checks import InputError
-    from ..light import load_light, load_plate_light
+    from ..light import load_light
+    from ..light.plate import load_plate_light
 
     if source == "direction":
         return load_light(words)
@@ -101,7 +102,8 @@ def sphere_preview(light, size: int = 160, az: float | None = None, el: float | 
     import numpy as np
 
     from ..color import linear_to_srgb
-    from ..light import auto_exposure, render_sphere
+    from ..light import render_sphere
+    from ..light.visualize import auto_exposure
 
     img = render_sphere(light.float(), size)
     img = linear_to_srgb((img * auto_exposure(img)).clamp(0, 1))

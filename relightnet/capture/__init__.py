@@ -7,25 +7,11 @@ never seen are filled (:mod:`.fill`), and the result is one versioned file of ar
 (:mod:`.avatar_file`) that :class:`CapturedBody` poses and renders.
 """
 
-from .avatar_file import AVATAR_SUFFIX, CapturedAvatar, load_avatar, save_avatar
+from .avatar_file import CapturedAvatar, load_avatar, save_avatar
 from .body import CapturedBody
 from .fuse import CaptureResult, capture_person
-from .metrics import (
-    HIDDEN_PARTS,
-    albedo_error,
-    light_invariance,
-    person_psnr,
-    person_ssim,
-    seen_share,
-    silhouette_iou,
-    surface_texels,
-)
-from .offsets import OffsetFit, apply_offsets, solve_offsets
 from .texture import TextureOptions
-from .truth import TruthClip, light_pair, person_texture, truth_phenotype, turning_params, turning_person
 
-__all__ = ["AVATAR_SUFFIX", "CapturedAvatar", "load_avatar", "save_avatar", "CapturedBody", "CaptureResult",
-           "capture_person", "OffsetFit", "apply_offsets", "solve_offsets", "TextureOptions"]
-__all__ += ["HIDDEN_PARTS", "albedo_error", "light_invariance", "person_psnr", "person_ssim", "seen_share",
-            "silhouette_iou", "surface_texels"]
-__all__ += ["TruthClip", "light_pair", "person_texture", "truth_phenotype", "turning_params", "turning_person"]
+__all__ = [
+    "CapturedAvatar", "load_avatar", "save_avatar", "CapturedBody", "capture_person", "CaptureResult", "TextureOptions",
+]

@@ -82,7 +82,7 @@ def capture_person(result, fb, frames: Iterable[torch.Tensor], masks: Iterable[t
         frames: T (3, H, W) sRGB frames in [0, 1], in order (an iterator: streamed).
         masks: T (H, W) bool person masks (None or empty: the frame adds nothing).
         lights: (T, K, 3) each frame's light, camera-relative, on the light estimate's scale.
-        offsets: (V,) offsets along the normal (:func:`~relightnet.capture.solve_offsets`), or None.
+        offsets: (V,) offsets along the normal (:func:`~relightnet.capture.offsets.solve_offsets`), or None.
         options: :class:`~relightnet.capture.texture.TextureOptions`.
         raw: also fuse the raw colours (:attr:`CaptureResult.raw_texture`).
         atlas: the body's :func:`~relightnet.data.textures.uv_atlas` at ``options.size`` (made when None).

@@ -74,7 +74,7 @@ def person_texture(body, seed: int, size: int = 512) -> torch.Tensor:
     Returns:
         (S, S, 3) float32 linear albedo in [ALBEDO_MIN, ALBEDO_MAX], row 0 = v = 1.
     """
-    from ..body import region_labels
+    from ..body.albedo import region_labels
     from ..data.textures import paint_albedo, region_field, sample_outfit, texel_regions, uv_atlas
 
     atlas = uv_atlas(body, size)

@@ -5,6 +5,8 @@ of this package that need it (``connect``, :mod:`.ray_synth`, :mod:`.ray_jobs`);
 runner works locally without it.
 """
 
-from .cluster import RayOptions, connect, default_workers, import_ray, one_line
+from .cluster import RayOptions, connect, default_workers
 
-__all__ = ["RayOptions", "connect", "default_workers", "import_ray", "one_line"]
+__all__ = [
+    "RayOptions", "connect", "default_workers",
+]

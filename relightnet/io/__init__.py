@@ -11,14 +11,10 @@ from ..lazy import lazy_package
 
 #: Where each public name lives (loaded on first access, :func:`relightnet.lazy.lazy_package`).
 _WHERE = {
-    "atomic_write": "atomic", "PHOTO_SUFFIXES": "probe", "IMAGE_OUT_SUFFIXES": "probe",
-    "ENVMAP_SUFFIXES": "envmap", "read_envmap": "envmap", "write_envmap": "envmap",
-    "to_uint8": "image", "read_image": "image",
-    "read_image_alpha": "image", "read_alpha": "image", "read_mask": "image", "write_image": "image",
-    "VideoInfo": "video", "VideoWriter": "video", "count_frames": "video", "frame_times": "video",
-    "frames_with_masks": "video_masks",
-    "read_masks": "video_masks", "read_video": "video", "video_info": "video",
-    "write_side_by_side": "side_by_side",
+    "atomic_write": "atomic", "read_image": "image", "write_image": "image", "read_image_alpha": "image",
+    "read_mask": "image", "to_uint8": "image", "read_envmap": "envmap", "write_envmap": "envmap", "read_video": "video",
+    "VideoWriter": "video", "video_info": "video", "VideoInfo": "video", "count_frames": "video",
+    "PHOTO_SUFFIXES": "probe", "write_side_by_side": "side_by_side",
 }
 
 __all__ = lazy_package(__name__, _WHERE)

@@ -6,45 +6,13 @@ light files are :mod:`relightnet.sh`, the floor below.
 """
 
 from .load import load_light
-from .plate import (
-    DEFAULT_HFOV,
-    SEEN_FADE_DEG,
-    Plate,
-    PlateView,
-    combine_person_plate,
-    load_plate,
-    load_plate_light,
-    plate_envmap,
-    plate_light,
-    plate_seen,
-    plate_view,
-)
-from .presets import (
-    ambient_light,
-    directional_light,
-    preset_envmap,
-    preset_light,
-    preset_names,
-    preset_path,
-    side_light,
-)
-from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
-from .words import (
-    camera_direction,
-    disc_band_factors,
-    disc_light,
-    is_light_words,
-    light_from_words,
-    parse_light_words,
-    words_envmap,
-)
+from .plate import Plate, combine_person_plate, load_plate, plate_envmap, plate_light, plate_seen
+from .presets import ambient_light, directional_light, preset_envmap, preset_light, preset_names, side_light
+from .visualize import light_preview, render_presets, render_sphere
+from .words import light_from_words, words_envmap
 
 __all__ = [
-    "load_light",
-    "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path", "side_light",
-    "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
-    "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
-    "parse_light_words", "words_envmap",
-    "DEFAULT_HFOV", "SEEN_FADE_DEG", "Plate", "PlateView", "combine_person_plate", "load_plate", "load_plate_light",
-    "plate_envmap", "plate_light", "plate_seen", "plate_view",
+    "load_light", "preset_light", "preset_names", "preset_envmap", "ambient_light", "directional_light", "side_light",
+    "light_from_words", "words_envmap", "Plate", "load_plate", "plate_light", "plate_envmap", "combine_person_plate",
+    "plate_seen", "render_sphere", "light_preview", "render_presets",
 ]

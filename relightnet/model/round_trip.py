@@ -2,7 +2,7 @@
 
 A user relights a photo with the network's own maps (``relight-image``: the photo's albedo,
 photo ÷ predicted shading, times the new shading, the exposure kept) and may estimate the light
-of the result again (``evaluate photos``' round trip, :func:`relightnet.pipeline.check_photo`).
+of the result again (``evaluate photos``' round trip, :func:`relightnet.pipeline.photo_checks.check_photo`).
 Training on the generated people alone never shows the network such a relit photo. The terms here
 build it inside a training step, from the network input and its prediction:
 

@@ -34,10 +34,12 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, frame_times, read_video, video_info
+from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, read_video, video_info
+from ..io.video import frame_times
 from ..names import VIDEO_SMOOTHING
 from ..prt import PrtSettings
-from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
+from ..raster import Camera, default_camera
+from ..raster.antialias import antialias_pixels, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
@@ -141,7 +143,7 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
 
 def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
-    uint8 elsewhere (:func:`relightnet.render.composite_covered`). Only the covered pixels are
+    uint8 elsewhere (:func:`relightnet.render.shading.composite_covered`). Only the covered pixels are
     converted (a render of a window of the frame lands at the window's place); the same bytes as
     compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
     from ..color import linear_to_srgb
@@ -184,7 +186,7 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
     (H, W, 3) uint8 (:func:`_composite_covered`); with ``antialias``, the silhouette's pixels then
     get what analytic edge antialiasing of the whole composited frame gives there
-    (:func:`relightnet.raster.antialias_pixels`: the colours of the pixels along the silhouette
+    (:func:`relightnet.raster.antialias.antialias_pixels`: the colours of the pixels along the silhouette
     only, no float copy of the frame; a frame at the pixel limit is 150 MB in float). The render may
     be of a window of the frame (``render_body_frames(box=True)``, holding every pixel next to a
     covered one): its images, mask and silhouette are the window's, and only the composite is the

@@ -45,11 +45,12 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
 
     Returns:
         Paths by name, ``capture_seen_share``, ``capture_albedo_error`` (relative RMSE over the texels seen,
-        :func:`relightnet.capture.albedo_error`) and ``capture_psnr_db``: the captured avatar in the target
+        :func:`relightnet.capture.metrics.albedo_error`) and ``capture_psnr_db``: the captured avatar in the target
         against the truth there (whole frames, 8-bit).
     """
-    from ..capture import albedo_error, light_pair, turning_person
+    from ..capture.metrics import albedo_error
     from ..capture.texture import TextureOptions
+    from ..capture.truth import light_pair, turning_person
     from ..fit import FitOptions
     from ..io import write_side_by_side
     from ..prt import PrtSettings

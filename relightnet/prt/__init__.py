@@ -5,29 +5,14 @@ returns (V, K) transport vectors ``T_k = ∫ V · max(n·ω, 0) · Y_k(ω) dω``
 ω in the light frame), so that shading is ``T @ L`` for an SH light L (K, 3).
 """
 
-from .interreflection import BounceOperator, bounce_operator, check_albedo, interreflect
-from .mesh_checks import MeshWarning, check_mesh, check_normals, mesh_scale, nonmanifold_edge_count
-from .refine import SHADOW_EDGE, refined_transport
+from .interreflection import interreflect
+from .mesh_checks import check_mesh
+from .refine import refined_transport
 from .settings import PrtSettings
 from .transport import transport_directions, vertex_transport
-from .visibility import (
-    ENGINES,
-    EmbreeEngine,
-    MitsubaEngine,
-    Open3DEngine,
-    RayEngine,
-    RayHits,
-    VertexRays,
-    available_engines,
-    make_engine,
-    vertex_rays,
-    vertex_visibility,
-)
+from .visibility import RayEngine, available_engines, make_engine, vertex_visibility
 
 __all__ = [
-    "PrtSettings", "vertex_transport", "transport_directions", "refined_transport", "SHADOW_EDGE",
-    "vertex_visibility", "vertex_rays", "VertexRays", "make_engine", "available_engines", "ENGINES",
-    "RayEngine", "RayHits", "EmbreeEngine", "MitsubaEngine", "Open3DEngine",
-    "BounceOperator", "bounce_operator", "interreflect", "check_albedo",
-    "MeshWarning", "check_mesh", "check_normals", "mesh_scale", "nonmanifold_edge_count",
+    "PrtSettings", "vertex_transport", "refined_transport", "transport_directions", "vertex_visibility", "make_engine",
+    "available_engines", "RayEngine", "interreflect", "check_mesh",
 ]

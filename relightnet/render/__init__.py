@@ -10,10 +10,8 @@ from ..lazy import lazy_package
 #: public name → the module of this package that defines it
 _EXPORTS = {
     "RenderOutput": "frame", "TexturedAlbedo": "frame", "light_in_world": "frame", "render_mesh": "frame",
-    "BodyFrame": "jobs", "LoadedMesh": "jobs", "fit_camera": "jobs", "load_mesh": "jobs",
-    "render_body_frames": "jobs", "render_mesh_file": "jobs",
-    "Shade": "shading", "composite": "shading", "composite_covered": "shading", "shade": "shading",
-    "shading": "shading",
+    "render_body_frames": "jobs", "render_mesh_file": "jobs", "BodyFrame": "jobs", "shade": "shading",
+    "Shade": "shading", "composite": "shading",
 }
 
 __all__ = lazy_package(__name__, _EXPORTS)

@@ -14,30 +14,14 @@ Example:
     >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)  # doctest: +SKIP
 """
 
-from .jobs import MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
-from .matte import BAND_FRACTION, MIN_BAND, SoftMatte, band_radius, border_band, soft_matte
-from .models import INPUT_SIZE, LANDMARK_NAMES, POSE_FILE, SELFIE_FILE, PersonModels, PoseOutput
-from .person import (
-    CROP_SCALE,
-    PersonMask,
-    candidate_crops,
-    crop_around,
-    find_person,
-    mask_box,
-    refine_person,
-    segment_crop,
-    segment_person,
-)
-from .sources import MASK_SOURCES, check_mask_source, person_mask, video_masks
-from .steady import STEADY_MARGIN
+from .jobs import segment_files
+from .matte import soft_matte
+from .models import LANDMARK_NAMES, PersonModels
+from .person import PersonMask, segment_person
+from .sources import person_mask, video_masks
 from .video import PersonTracker, track_person
 
 __all__ = [
-    "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
-    "BAND_FRACTION", "MIN_BAND", "SoftMatte", "band_radius", "border_band", "soft_matte",
-    "INPUT_SIZE", "LANDMARK_NAMES", "POSE_FILE", "SELFIE_FILE", "PersonModels", "PoseOutput",
-    "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
-    "segment_crop", "segment_person",
-    "MASK_SOURCES", "check_mask_source", "person_mask", "video_masks",
-    "STEADY_MARGIN", "PersonTracker", "track_person",
+    "segment_person", "PersonMask", "PersonModels", "soft_matte", "segment_files", "person_mask", "video_masks",
+    "track_person", "PersonTracker", "LANDMARK_NAMES",
 ]

@@ -5,9 +5,10 @@ import math
 import pytest
 import torch
 
-from relightnet.blender import CYCLES_TO_RELIGHTNET, export_scene, render_blend, world_light
+from relightnet.blender import export_scene, render_blend, world_light
+from relightnet.blender.cycles import CYCLES_TO_RELIGHTNET
 from relightnet.blender.reference import masked_rel_rmse
-from relightnet.body import vertex_normals
+from relightnet.body.base import vertex_normals
 from relightnet.checks import InputError
 from relightnet.io import read_envmap, read_image
 from relightnet.light import ambient_light, directional_light

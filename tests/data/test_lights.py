@@ -19,7 +19,8 @@ from relightnet.data.lights import (
     white_balance,
 )
 from relightnet.light import directional_light, preset_light
-from relightnet.sh import fibonacci_sphere, irradiance, radiance, rotate_sh_up, rotation_about_up
+from relightnet.sh import fibonacci_sphere, irradiance, radiance, rotate_sh_up
+from relightnet.sh.rotation import rotation_about_up
 
 
 def _normals(n=2048):

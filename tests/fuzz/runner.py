@@ -57,7 +57,8 @@ def _onnx(path):
 
 def readers(tmp: Path) -> dict:
     """name → (suffix, seeds {suffix: bytes}, structured case generator, read function, payload kind)."""
-    from relightnet.body import load_motion, load_smpl_file
+    from relightnet.body import load_motion
+    from relightnet.body.smpl_model import load_smpl_file
     from relightnet.data import load_config
     from relightnet.data.shards import read_shard
     from relightnet.io import read_envmap, read_image_alpha, read_mask

@@ -12,8 +12,8 @@ from relightnet.light import (
     preset_names,
     render_presets,
     render_sphere,
-    sphere_normals,
 )
+from relightnet.light.visualize import sphere_normals
 
 S = 64
 

@@ -248,7 +248,7 @@ def test_smpl_motion_longer_or_shorter_than_the_video(target, tmp_path, extra):
 
 
 def test_antialias_changes_only_the_silhouette(target, anny_body, tmp_path):
-    from relightnet.raster import silhouette_pixels
+    from relightnet.raster.antialias import silhouette_pixels
 
     video, _, true = target
     kw = dict(light=true[0], motion="idle", prt=PrtSettings(n_dirs=8), progress=False)

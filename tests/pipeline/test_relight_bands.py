@@ -6,7 +6,8 @@ import torch
 
 from relightnet.color import linear_to_srgb, luminance, srgb_to_linear
 from relightnet.io import to_uint8
-from relightnet.model import NetConfig, RelightNet, match_exposure, photo_albedo, shading_map
+from relightnet.model import NetConfig, RelightNet, photo_albedo, shading_map
+from relightnet.model.exposure import match_exposure
 from relightnet.model.photo_albedo import ALBEDO_FLOOR
 from relightnet.pipeline import TorchPredictor, relight_over_photo
 from relightnet.raster import to_channels_last

@@ -117,7 +117,7 @@ def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
 def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys):
     import av
 
-    from relightnet.io import read_alpha
+    from relightnet.io.image import read_alpha
 
     img, mask = photo
     rgba = np.concatenate([img.permute(1, 2, 0).numpy(), (mask.numpy()[..., None] * 255).astype(np.uint8)], -1)
