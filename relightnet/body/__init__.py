@@ -3,6 +3,14 @@
 Every model is called as ``model(params) -> BodyOutput`` (verts, faces, uv, uv_faces,
 normals, joints) in relightnet's world frame: y up, the person facing +z, feet of the
 rest pose on y = 0 by default.
+
+The public names are what a user of a body needs: the models (:class:`BodyModel`, :class:`AnnyBody`,
+:class:`SMPLBody`, :class:`BodyOutput`) and their phenotypes and pose presets, motions (:func:`make_motion`,
+the SMPL-style and Anny motion files: :func:`load_motion`, :func:`save_motion`, :func:`load_anny_motion`,
+:func:`save_anny_motion`), the default albedo and the garment geometry (:class:`RingShape`,
+:func:`shell_surface`, :func:`ring_surface`). The rotation helpers, the region and part labels, the
+subdivision and the shoes stay in their modules (:mod:`.base`, :mod:`.albedo`, :mod:`.subdivide`,
+:mod:`.shoes`, ...).
 """
 
 from .albedo import default_albedo

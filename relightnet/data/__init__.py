@@ -1,7 +1,12 @@
 """Synthetic data with exact ground truth: configuration, sample generator, shards, Dataset, augmentation.
 
-The shipped CC0 environment maps live in ``envmaps/``.
-"""
+The public names are what makes and reads a dataset: the configuration (:class:`SynthConfig`,
+:func:`load_config`), the generator (:func:`generate_sample` → :class:`Sample`, :func:`generate_samples`,
+:func:`generate_sequence`, :func:`run_synth`), the shards (:func:`write_shard`, :func:`read_shard`,
+:func:`load_manifest`, :func:`verify_dataset`), :class:`SynthDataset`, :class:`Augment` and
+:func:`preview`. The scene's parts (lights, garments, framing, render) stay in their modules.
+
+The shipped CC0 environment maps live in ``envmaps/``."""
 
 from .augment import Augment
 from .config import SynthConfig, load_config

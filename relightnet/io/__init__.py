@@ -3,9 +3,12 @@
 Every writer goes through :func:`atomic_write`, so an interrupted run never
 leaves a truncated file behind.
 
+The public names are the readers and writers of each kind of file (images and masks, environment
+maps, videos and their :class:`VideoInfo`, a side-by-side video) and the photo suffixes; the
+limits, probes, mask videos and the restricted unpickler stay in their modules.
+
 The names below are loaded from their modules on first use, so that the torch-free parts
-(:mod:`.probe`, :mod:`.limits`) can refuse an oversized file before torch is imported.
-"""
+(:mod:`.probe`, :mod:`.limits`) can refuse an oversized file before torch is imported."""
 
 from ..lazy import lazy_package
 

@@ -1,6 +1,15 @@
 """The 2D path's CNN: network, its maps in the CNN layout, the photo albedo, losses, checkpoints, training
 loop, inference on real images.
 
+The public names are what a user of the network needs: the network and its configuration and
+prediction (:class:`RelightNet`, :class:`NetConfig`, :class:`Prediction`, :func:`normalize_input`), the
+checkpoints (:func:`load_model`, the shipped one; :func:`load_checkpoint`, :func:`save_checkpoint`), inference
+on a photo (:func:`predict_image`, :func:`estimate_light`), the maps' helpers in the CNN layout
+(:func:`relight`, :func:`shading_map`, :func:`shade_map`, :func:`pad_to_multiple`), the photo albedo, the
+pose-model encoder (:func:`pose_encoder`, :data:`POSE_TAPS`) and the training loss
+(:func:`relight_losses`, :class:`LossWeights`). Training, evaluation, ONNX export and serving, the crops
+and the exposure helpers stay in their modules (:mod:`.training`, :mod:`.onnx_export`, :mod:`.inference`, ...).
+
 Example:
     A small network (the shipped one is :func:`load_model`) on one normalised 32 × 32 input:
 

@@ -3,9 +3,16 @@ compare the 2D and 3D paths against ground truth, check the 2D path on real phot
 dressed avatar, its default albedo's smooth garment edges, and the clean plate that lets the avatar
 take the target person's place (with the check that the target's camera is fixed).
 
+The public names are those jobs (:func:`relight_image`, :func:`relight_video`, :func:`relight_over_photo`
+→ :class:`RelitPhoto`, :func:`avatar` → :class:`AvatarResult`, :func:`compare`, :func:`compare_clip`,
+:func:`photo_checks`, :func:`clean_plate`, :func:`run_demo`, :func:`walking_target`), their settings
+(:class:`AvatarLook`, :class:`AvatarPlacement`, :class:`VideoLightSettings`, :class:`PredictorSettings`),
+the predictors that run the CNN (:func:`make_predictor`, :class:`TorchPredictor`, :class:`OnnxPredictor`)
+and the light estimate of a video; the jobs' parts (the scene, the outfits, the camera-motion check,
+the clean plate's stand-in) stay in their modules.
+
 The names are loaded on first use (PEP 562): a job imports only the modules it runs, so
-``relight-image`` does not pay for the avatar's renderer and ray tracer at start-up.
-"""
+``relight-image`` does not pay for the avatar's renderer and ray tracer at start-up."""
 
 from __future__ import annotations
 

@@ -1,7 +1,13 @@
 """Pure-torch rasterization: cameras, ``rasterize`` → ``Fragments``, ``interpolate``, ``texture``.
 
-A :class:`Window` of the frame (e.g. a mesh's :func:`screen_box`) is rasterized on its own, the
-same fragments as the whole frame's at its pixels, every buffer its size.
+The public names are what a renderer needs: the cameras (:class:`Camera`, :func:`default_camera`,
+:func:`look_at`, :func:`perspective_camera`, :func:`orthographic_camera`), the primitives with complete
+contracts (:func:`rasterize` → :class:`Fragments`, :func:`interpolate`, :func:`texture`,
+:func:`antialias`), a :class:`Window` of the frame (e.g. a mesh's :func:`screen_box`, rasterized on its
+own: the same fragments as the whole frame's at its pixels, every buffer its size), the layout
+conversions and the mask morphology (:func:`erode`, :func:`dilate`). The per-pixel forms and the
+projection helpers other floors use stay in their modules (:mod:`.camera`, :mod:`.interpolate`,
+:mod:`.texture`, :mod:`.antialias`, :mod:`.morphology`).
 
 Conventions (OpenGL; details in :mod:`relightnet.raster.camera`): the camera looks
 along −z with +y up, pixel (0, 0) is the top-left pixel and pixel centres sit at

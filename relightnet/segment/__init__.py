@@ -8,6 +8,12 @@ mask is held steady over time along the landmarks' motion (:mod:`.steady`).
 :mod:`.sources` holds the rule by which every command picks a person mask; :mod:`.jobs` the
 ``segment`` job (masks and landmarks of photos and videos, written out).
 
+The public names are those entry points: a photo's mask and landmarks (:func:`segment_person` →
+:class:`PersonMask`, with :class:`PersonModels` loaded once), a video's (:func:`track_person`,
+:class:`PersonTracker`), the mask a command uses (:func:`person_mask`, :func:`video_masks`), the
+``segment`` job (:func:`segment_files`), the soft matte of the border band (:func:`soft_matte`) and
+the landmark names. The crops, the matte's parts and the models' files stay in their modules.
+
 Example:
     >>> from relightnet.segment import segment_person  # doctest: +SKIP
     >>> res = segment_person(image)  # image (3, H, W) sRGB in [0, 1]  # doctest: +SKIP

@@ -4,6 +4,13 @@ one-euro, FIR, outlier gate), shot pooling of the light solve, switches seen in 
 colour, the irradiance light distance, and quality metrics. :mod:`relightnet.temporal.registry`
 implements the methods of the one torch-free table, :data:`relightnet.names.SMOOTHING_METHODS`
 (what ``--smoothing`` accepts).
+
+The public names are what smooths a video's lights: by method name (:func:`smooth_video_lights`,
+:func:`smooth_sequence`, :func:`make_smoother`), offline (:func:`smooth_lights` → :class:`SmoothResult`,
+:func:`smoothing_matrix`, :func:`detect_switches`), causal (:class:`EMAFilter`, :class:`OneEuroFilter`,
+:class:`FIRFilter`, :class:`OutlierGate`, :func:`run_causal`), pooled (:func:`pool_shot_lights`,
+:class:`PooledSolve`), the switches in the frames' colour, and the metrics. The per-step functions,
+the smoothers' matrices and the robust statistics stay in their modules.
 """
 
 from .causal import EMAFilter, FIRFilter, OneEuroFilter, run_causal
