@@ -91,8 +91,9 @@ def photo_stages(photo: Path, d: Path) -> None:
     total = time.perf_counter() - t0
     h, w = image.shape[1:]
     _print(f"relight-image stages, {photo.name} ({w}×{h}), warm process", timers, total,
-           ["start-up: load the CNN", "decode", "segmentation", "framing + CNN", "relight: all bands (incl. photo albedo)",
-            "  of which: photo albedo", "soft edges: matte", "soft edges: composite", "encode PNG"])
+           ["start-up: load the CNN", "decode", "segmentation", "framing + CNN",
+            "relight: all bands (incl. photo albedo)", "  of which: photo albedo", "soft edges: matte",
+            "soft edges: composite", "encode PNG"])
 
 
 def video_stages(clip: Path, d: Path, label: str) -> None:
@@ -122,5 +123,5 @@ def video_stages(clip: Path, d: Path, label: str) -> None:
         total = time.perf_counter() - t0
     timers.s["segmentation (tracked)"] = timers.s.pop("tracked") - timers.s["decode"]  # it pulls the frames
     _print(f"relight-video stages, {clip.name} {label}, {n} frames ({n / total:.2f} frames/s), warm process",
-           timers, total, ["decode", "segmentation (tracked)", "framing + CNN", "relight + composite (incl. soft edges)",
-                           "encode"])
+           timers, total, ["decode", "segmentation (tracked)", "framing + CNN",
+                           "relight + composite (incl. soft edges)", "encode"])

@@ -24,7 +24,8 @@ def test_bad_options_are_refused_before_work(tmp_path, capsys):
     img = tmp_path / "p.png"
     write_image(img, torch.zeros((16, 16, 3)), srgb=False)
     for extra, what in ((["--out", str(tmp_path / "me.npz")], ".avatar.npz"),
-                        (["--out", str(tmp_path / "me.avatar.npz"), "--reproject", str(tmp_path / "r.mp4")], "--reproject"),
+                        (["--out", str(tmp_path / "me.avatar.npz"), "--reproject", str(tmp_path / "r.mp4")],
+                         "--reproject"),
                         (["--out", str(tmp_path / "me.avatar.npz"), "--texture-size", "10"], "texture size")):
         assert main(["capture", str(img), *extra]) == 1
         assert what in capsys.readouterr().err

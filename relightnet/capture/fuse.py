@@ -12,7 +12,6 @@ import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
@@ -102,7 +101,7 @@ def capture_person(result, fb, frames: Iterable[torch.Tensor], masks: Iterable[t
     camera = fit_camera(result)
     t0, used, t = time.perf_counter(), 0, -1
     with torch.no_grad():
-        for t, ((v, n, faces), img, mask) in enumerate(zip(_posed(result, fb, offsets), frames, masks)):
+        for t, ((v, n, faces), img, mask) in enumerate(zip(_posed(result, fb, offsets), frames, masks, strict=False)):
             if mask is None or bool(result.interpolated[t]) or not bool(mask.any()):
                 continue
             s = frame_samples(table, v, n, faces, lights[t], camera, srgb_to_linear(img.clamp(0, 1)), mask.bool(),

@@ -27,7 +27,7 @@ def _frames_psnr(a: Path, b: Path) -> float:
     from ..io import read_video
 
     sq = n = 0.0
-    for x, y in zip(read_video(a), read_video(b)):
+    for x, y in zip(read_video(a), read_video(b), strict=False):
         d = x.astype(np.float64) - y.astype(np.float64)
         sq, n = sq + float(np.square(d).sum()), n + d.size
     return 10 * math.log10(255.0 ** 2 / max(sq / max(n, 1), 1e-12))

@@ -73,7 +73,7 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
     from ..temporal import frame_colour, smooth_video_lights
 
     raw, evs, priors, have, colours = [], [], [], [], []
-    for img, mask in zip(frames, masks):
+    for img, mask in zip(frames, masks, strict=False):
         colours.append(frame_colour(img))
         if mask is None:
             raw.append(None)

@@ -190,7 +190,8 @@ def test_a_switch_seen_in_the_frames_colour_splits_the_shot():
     assert not plain.switches.any()
     assert seen.switches.nonzero().flatten().tolist() == [30]
     err = lambda x, y: float(light_distance(x, y) / light_norm(y))  # noqa: E731
-    assert err(seen.smoothed[0], a) < err(plain.smoothed[0], a) and err(seen.smoothed[-1], b) < err(plain.smoothed[-1], b)
+    assert err(seen.smoothed[0], a) < err(plain.smoothed[0], a)
+    assert err(seen.smoothed[-1], b) < err(plain.smoothed[-1], b)
 
 
 def test_pooled_sums_are_the_weights_times_the_frames_without_the_weights():
