@@ -35,11 +35,12 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
-from relightnet.app import RelightSession, example_person, load_photo  # noqa: E402
+from relightnet.app import RelightSession, load_photo
+from relightnet.app.examples import example_person  # noqa: E402
 from relightnet.io import read_image, write_image  # noqa: E402
+from relightnet.light import load_light  # noqa: E402
 from relightnet.pipeline.backends import make_predictor  # noqa: E402
 from relightnet.pipeline.relight_image import relight_image  # noqa: E402
-from relightnet.sh import load_light  # noqa: E402
 
 
 def _median_ms(fn, repeat):

@@ -44,11 +44,11 @@ def make_target(path: Path, h: int, w: int, frames: int) -> Path:
     from relightnet.color import linear_to_srgb
     from relightnet.io import VideoWriter
     from relightnet.io.envmap import read_envmap
-    from relightnet.pipeline import avatar_albedo
+    from relightnet.light import preset_light
+    from relightnet.pipeline.scene import avatar_albedo
     from relightnet.prt import PrtSettings
     from relightnet.raster import default_camera
     from relightnet.render import render_body_frames
-    from relightnet.sh import preset_light
 
     env = read_envmap(ROOT / "relightnet" / "data" / "envmaps" / "courtyard.exr")
     env = env / env.flatten().quantile(0.95)
@@ -76,9 +76,9 @@ def _cpu_s() -> float:
 def child_e2e(args) -> dict:
     """One run of the job; wall and CPU seconds (loading the model and the body excluded)."""
     from relightnet.body import AnnyBody
+    from relightnet.light import preset_light
     from relightnet.pipeline import AvatarLook, avatar, make_predictor
     from relightnet.prt import PrtSettings
-    from relightnet.sh import preset_light
 
     body = AnnyBody()
     model = make_predictor("torch") if args.mode == "estimate" else None
@@ -98,12 +98,12 @@ def child_stages(args) -> dict:
 
     from relightnet.body import AnnyBody, make_motion
     from relightnet.io import VideoWriter, read_video
-    from relightnet.pipeline import avatar_albedo
+    from relightnet.light import preset_light
+    from relightnet.pipeline.scene import avatar_albedo
     from relightnet.prt import vertex_transport
     from relightnet.prt.visibility import make_engine
     from relightnet.raster import Fragments, default_camera, rasterize
     from relightnet.render import render_mesh
-    from relightnet.sh import preset_light
 
     n = args.stage_frames
     video = read_video(args.target)

@@ -77,7 +77,7 @@ def main() -> None:
                  "Cycles env / ours time"], rows))
     if args.png:
         from relightnet.io import write_image
-        from relightnet.sh.visualize import auto_exposure
+        from relightnet.light.visualize import auto_exposure
 
         b = bounces[-1]
         imgs = [r.ours[b], r.cycles_sh[b][..., :3], r.cycles_env[b][..., :3]]

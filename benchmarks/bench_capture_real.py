@@ -50,7 +50,8 @@ def main() -> None:
         iou_cap, iou_bare = [], []
         res = rep.fit.result
         for t, (hand, cap, src, out) in enumerate(zip(read_video(args.masks), read_video(Path(d) / "m.mkv"),
-                                                      read_video(args.video), read_video(Path(d) / "r.mkv"))):
+                                                      read_video(args.video), read_video(Path(d) / "r.mkv"),
+                                                      strict=False)):
             h, c = hand[..., 0] > 127, cap[..., 0] > 127
             b = fit_silhouettes(res, fb, start=t, stop=t + 1)[0].numpy() > 0.5
             iou_cap.append((h & c).sum() / max((h | c).sum(), 1))

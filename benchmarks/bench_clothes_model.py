@@ -24,8 +24,12 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
-from relightnet.data import GARMENT_TYPES, GENERATOR_VERSION, SynthConfig, generate_samples  # noqa: E402
-from relightnet.data.generate import prepare_assets  # noqa: E402
+from relightnet.data import SynthConfig, generate_samples
+from relightnet.data.garments import GARMENT_TYPES
+from relightnet.data.generate import (
+    GENERATOR_VERSION,  # noqa: E402
+    prepare_assets,  # noqa: E402
+)
 from relightnet.model.checkpoint import load_model  # noqa: E402
 from relightnet.model.maps import shading_map  # noqa: E402
 from relightnet.model.training import batch_to_input  # noqa: E402

@@ -32,7 +32,9 @@ def _steps(T: int) -> None:
     import torch
 
     from relightnet.body import save_anny_motion
-    from relightnet.fit import FIT_BONES, FitBody, default_intrinsics, place_in_world, smooth_motion
+    from relightnet.fit import FitBody, default_intrinsics, smooth_motion
+    from relightnet.fit.body_model import FIT_BONES
+    from relightnet.fit.smooth import place_in_world
     from relightnet.fit.solve import FitResult
 
     fb = FitBody()
@@ -54,7 +56,7 @@ def _steps(T: int) -> None:
 def _noise_mask() -> str:
     import numpy as np
 
-    from relightnet.fit import MAX_FRAME_BYTES, PackedMasks
+    from relightnet.fit.masks import MAX_FRAME_BYTES, PackedMasks
 
     H, W = 3120, 4000
     rng = np.random.default_rng(0)

@@ -63,15 +63,14 @@ def _print(title: str, timers: Timers, total: float, order: list[str]) -> None:
 
 def photo_stages(photo: Path, d: Path) -> None:
     """relight-image's stages (the code of ``relightnet._cli.relight.run``), the process warm."""
+    import relightnet.io.image as image_io
     import relightnet.pipeline.relight_bands as rb
     from relightnet._cli.inputs import read_photo
     from relightnet.io import write_image
+    from relightnet.light import preset_light
     from relightnet.pipeline.backends import make_predictor
     from relightnet.pipeline.relight_image import relight_image
     from relightnet.segment import sources
-    from relightnet.sh import preset_light
-
-    import relightnet.io.image as image_io
 
     timers = Timers()
     t0 = time.perf_counter()
@@ -92,20 +91,22 @@ def photo_stages(photo: Path, d: Path) -> None:
     total = time.perf_counter() - t0
     h, w = image.shape[1:]
     _print(f"relight-image stages, {photo.name} ({w}×{h}), warm process", timers, total,
-           ["start-up: load the CNN", "decode", "segmentation", "framing + CNN", "relight: all bands (incl. photo albedo)",
-            "  of which: photo albedo", "soft edges: matte", "soft edges: composite", "encode PNG"])
+           ["start-up: load the CNN", "decode", "segmentation", "framing + CNN",
+            "relight: all bands (incl. photo albedo)", "  of which: photo albedo", "soft edges: matte",
+            "soft edges: composite", "encode PNG"])
 
 
 def video_stages(clip: Path, d: Path, label: str) -> None:
     """relight-video's stages (``relightnet.pipeline.relight_video.relight_video``), the process warm."""
-    import relightnet.io as io_pkg
     import importlib
+
+    import relightnet.io as io_pkg
 
     rv = importlib.import_module("relightnet.pipeline.relight_video")  # the module (its function has its name)
     from relightnet.io import VideoWriter
+    from relightnet.light import preset_light
     from relightnet.pipeline.backends import make_predictor
     from relightnet.segment import sources
-    from relightnet.sh import preset_light
 
     timers = Timers()
     model = make_predictor("torch", None, "cpu")
@@ -122,5 +123,5 @@ def video_stages(clip: Path, d: Path, label: str) -> None:
         total = time.perf_counter() - t0
     timers.s["segmentation (tracked)"] = timers.s.pop("tracked") - timers.s["decode"]  # it pulls the frames
     _print(f"relight-video stages, {clip.name} {label}, {n} frames ({n / total:.2f} frames/s), warm process",
-           timers, total, ["decode", "segmentation (tracked)", "framing + CNN", "relight + composite (incl. soft edges)",
-                           "encode"])
+           timers, total, ["decode", "segmentation (tracked)", "framing + CNN",
+                           "relight + composite (incl. soft edges)", "encode"])

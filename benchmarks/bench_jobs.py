@@ -156,7 +156,6 @@ def main() -> None:
     ap.add_argument("--stages-only", action="store_true", help="skip the end-to-end runs")
     args = ap.parse_args()
     import torch
-
     from bench_job_stages import photo_stages, video_stages
 
     print(f"CPU: {_cpu()}; torch {torch.__version__}, {torch.get_num_threads()} threads")

@@ -49,9 +49,9 @@ def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> flo
     Every run writes a fresh output, so the avatar never reuses earlier light estimates.
     """
     from relightnet.body import AnnyBody
+    from relightnet.light import preset_light
     from relightnet.pipeline import AvatarLook, avatar, make_predictor, relight_video
     from relightnet.prt import PrtSettings
-    from relightnet.sh import preset_light
 
     pred = make_predictor(backend)
     body = AnnyBody() if job == "avatar" else None
@@ -72,9 +72,11 @@ def run_job(job: str, backend: str, video, masks, out: Path, n_dirs: int) -> flo
 def stages(video, masks, n_dirs: int) -> list[list]:
     """Median ms per frame of each stage of the avatar job."""
     from relightnet.body import AnnyBody, make_motion
-    from relightnet.io import VideoWriter, read_masks, read_video
-    from relightnet.pipeline import avatar_albedo, make_predictor
+    from relightnet.io import VideoWriter, read_video
+    from relightnet.io.video_masks import read_masks
+    from relightnet.pipeline import make_predictor
     from relightnet.pipeline.avatar import _composite_covered
+    from relightnet.pipeline.scene import avatar_albedo
     from relightnet.prt import PrtSettings, vertex_transport
     from relightnet.raster import default_camera, rasterize
     from relightnet.render import render_mesh

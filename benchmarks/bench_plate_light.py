@@ -10,10 +10,10 @@ of ``relightnet evaluate light`` (the scale-invariant irradiance error over the 
 the camera-facing hemisphere, :func:`relightnet.sh.scale_invariant_light_error`):
 
 - ``constant``: the truth's own l = 0 band (a direction-less light of the true colour);
-- ``plate``: :func:`relightnet.sh.plate_light` of the background, through an 8-bit sRGB round
+- ``plate``: :func:`relightnet.light.plate_light` of the background, through an 8-bit sRGB round
   trip (as a photo), with the sample's camera intrinsics (``plate@60``: a centred 60° pinhole);
 - ``person``: the shipped CNN on the composite (person over the background, its mask);
-- ``both``: :func:`relightnet.sh.combine_person_plate` of the two (the plate where its frame shows the
+- ``both``: :func:`relightnet.light.combine_person_plate` of the two (the plate where its frame shows the
   light, the person elsewhere).
 
 The families are the env maps (``night`` and ``sunrise`` are held out from the CNN's training).
@@ -39,7 +39,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import table  # noqa: E402
 
 from relightnet.color import linear_to_srgb, srgb_to_linear  # noqa: E402
-from relightnet.sh import combine_person_plate, plate_light, plate_view, scale_invariant_light_error  # noqa: E402
+from relightnet.light import combine_person_plate, plate_light
+from relightnet.light.plate import plate_view
+from relightnet.sh import scale_invariant_light_error  # noqa: E402
 
 CONFIG = """seed: 25
 res: 128
@@ -98,7 +100,9 @@ def _wide_plates(turns: int = 12, hfov: float = 60.0) -> list[list]:
     import math
 
     from relightnet.data.backgrounds import envmap_background
-    from relightnet.sh import preset_envmap, preset_names, project_envmap, rotate_sh, rotation_about_up
+    from relightnet.light import preset_envmap, preset_names
+    from relightnet.sh import project_envmap, rotate_sh
+    from relightnet.sh.rotation import rotation_about_up
 
     res = 128
     f = 0.5 * res / math.tan(math.radians(hfov) / 2)

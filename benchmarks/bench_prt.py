@@ -26,8 +26,9 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.prt import EmbreeEngine, PrtSettings, available_engines, vertex_rays, vertex_transport  # noqa: E402
+from relightnet.prt import PrtSettings, available_engines, vertex_transport
 from relightnet.prt.transport import transport_directions  # noqa: E402
+from relightnet.prt.visibility import EmbreeEngine, vertex_rays  # noqa: E402
 from relightnet.sh import light_to_world  # noqa: E402
 
 _LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"

@@ -47,26 +47,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mitsuba_scene as ms  # noqa: E402
 from common import table  # noqa: E402
 
-from relightnet.prt import (  # noqa: E402
-    PrtSettings,
-    make_engine,
-    mesh_scale,
-    refined_transport,
-    transport_directions,
-    vertex_rays,
-    vertex_transport,
-)
+from relightnet.light import preset_light
+from relightnet.prt import PrtSettings, make_engine, refined_transport, transport_directions, vertex_transport
+from relightnet.prt.mesh_checks import mesh_scale
+from relightnet.prt.visibility import vertex_rays
 from relightnet.raster import default_camera, interpolate, look_at, perspective_camera  # noqa: E402
 from relightnet.render.frame import render_mesh  # noqa: E402
-from relightnet.sh import (  # noqa: E402
-    directions_to_latlong,
-    irradiance,
-    light_to_world,
-    preset_light,
-    sh_basis,
-    sh_to_envmap,
-    world_to_light,
-)
+from relightnet.sh import directions_to_latlong, irradiance, light_to_world, sh_basis, sh_to_envmap, world_to_light
 
 ENV_H = 256  # rows of the Mitsuba env-map bitmap (width 2H)
 

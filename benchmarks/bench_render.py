@@ -21,11 +21,11 @@ sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
 from relightnet.body import AnnyBody, default_albedo, make_motion  # noqa: E402
+from relightnet.light import preset_light  # noqa: E402
 from relightnet.prt import PrtSettings, vertex_transport  # noqa: E402
 from relightnet.raster import default_camera  # noqa: E402
 from relightnet.render.frame import TexturedAlbedo, render_mesh  # noqa: E402
 from relightnet.render.shading import composite, shade  # noqa: E402
-from relightnet.sh import preset_light  # noqa: E402
 
 
 def copy_gbps() -> float:

@@ -11,7 +11,7 @@ background with the same coverage, is the true relit photo.
 
 ``relight-image``'s relight (:func:`relightnet.pipeline.relight_image`) is run with the true mask
 (coverage > 1/2) and with the package's own segmentation, pasted with the mask (hard) or with the
-soft matte (soft). Reported, over the border band (:func:`relightnet.segment.border_band` of the
+soft matte (soft). Reported, over the border band (:func:`relightnet.segment.matte.border_band` of the
 true mask at the photo's band radius):
 
 - alpha MAE: the mask's and the matte's (:func:`relightnet.segment.soft_matte`) error against the coverage;
@@ -41,11 +41,12 @@ from common import table  # noqa: E402
 from people import BACKGROUNDS, background  # noqa: E402
 
 from relightnet.color import linear_to_srgb, srgb_to_linear  # noqa: E402
+from relightnet.light import load_light  # noqa: E402
 from relightnet.model import load_model  # noqa: E402
 from relightnet.pipeline import relight_image  # noqa: E402
 from relightnet.raster import erode  # noqa: E402
-from relightnet.segment import band_radius, border_band, segment_person, soft_matte  # noqa: E402
-from relightnet.sh import load_light  # noqa: E402
+from relightnet.segment import segment_person, soft_matte
+from relightnet.segment.matte import band_radius, border_band  # noqa: E402
 
 SIZE = (1024, 768)
 LIGHTS = ("key:az=-70,el=10,power=3 + ambient:0.15", "key:az=70,el=10,power=3 + ambient:0.15")

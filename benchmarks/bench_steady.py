@@ -15,7 +15,7 @@ also found in the frames' colour). Rows:
   in linear RGB, by ``--gain``): the switch frames found and the lag (frames until the estimate covers 90%
   of its own step);
 - ``--turning`` generated people turning a full circle in place under a constant light
-  (:func:`relightnet.capture.turning_person`, 90 frames, exact masks): drift p90, the error against the
+  (:func:`relightnet.capture.truth.turning_person`, 90 frames, exact masks): drift p90, the error against the
   true light (scale-invariant irradiance, median) and the correlation between the estimate's dominant
   direction and the person's facing (|Pearson| of the horizontal components, mean of the two; a constant
   estimate: 0).
@@ -51,7 +51,9 @@ from relightnet.pipeline.backends import make_predictor  # noqa: E402
 from relightnet.pipeline.light_eval import clip_metrics  # noqa: E402
 from relightnet.pipeline.video_lights import estimate_video_evidence  # noqa: E402
 from relightnet.sh.metrics import dominant_direction  # noqa: E402
-from relightnet.temporal import light_distance, light_drift, light_norm, pool_shot_lights, pool_window  # noqa: E402
+from relightnet.temporal import light_distance, light_drift, pool_shot_lights
+from relightnet.temporal.distance import light_norm
+from relightnet.temporal.pooling import pool_window  # noqa: E402
 from relightnet.temporal.registry import smooth_video_lights  # noqa: E402
 
 
@@ -112,7 +114,7 @@ def _real_rows(predict, real: Path, at: int, gain, work: Path) -> list:
 def _turning_rows(predict, n: int, work: Path) -> list:
     from relightnet.capture.truth import turning_person
     from relightnet.fit import FitBody
-    from relightnet.sh import ambient_light, directional_light
+    from relightnet.light import ambient_light, directional_light
 
     body, rng = FitBody().body, np.random.default_rng(7)
     per = {"raw": [], "window": [], "shot": []}
@@ -166,8 +168,8 @@ def _relit_rows(predict, real: Path, n_gen: int, work: Path) -> list:
     import time
 
     from relightnet.capture.truth import light_pair, turning_person
+    from relightnet.light.presets import preset_light
     from relightnet.pipeline.relight_video import relight_video
-    from relightnet.sh.presets import preset_light
 
     rows = []
     video, masks = real / "turning.mp4", real / "turning_masks.mkv"

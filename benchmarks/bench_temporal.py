@@ -43,23 +43,23 @@ import torch
 sys.path.insert(0, os.path.dirname(__file__))
 from common import median_ms, table  # noqa: E402
 
-from relightnet.sh import preset_light, preset_names, rotate_sh_up  # noqa: E402
-from relightnet.temporal import (  # noqa: E402
+from relightnet.light import preset_light, preset_names
+from relightnet.sh import rotate_sh_up  # noqa: E402
+from relightnet.temporal import (
     EMAFilter,
     FIRFilter,
     OneEuroFilter,
     OutlierGate,
-    ema_matrix,
-    ema_sequence,
     jitter,
     light_error,
-    light_norm,
-    outlier_scores,
     run_causal,
-    savgol_matrix,
     smooth_lights,
     step_lag,
 )
+from relightnet.temporal.causal import ema_matrix, ema_sequence
+from relightnet.temporal.distance import light_norm
+from relightnet.temporal.metrics import outlier_scores
+from relightnet.temporal.smoothers import savgol_matrix
 
 T = 300
 

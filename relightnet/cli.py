@@ -34,8 +34,8 @@ logger = logging.getLogger("relightnet")
 
 #: Subcommand modules under relightnet._cli, in --help order.
 COMMAND_MODULES = [
-    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "capture", "relight", "avatar",
-    "compare", "blender", "demo", "batch", "app",
+    "light", "render", "synth", "model", "checkpoint", "smooth", "onnx", "segment", "fit", "capture", "relight",
+    "avatar", "compare", "blender", "demo", "batch", "app",
 ]
 
 

@@ -92,7 +92,7 @@ def smoothing_help(allowed: tuple[str, ...], default: str) -> str:
     return "light smoothing over time; " + "; ".join(parts) + f" (default: {default})"
 
 
-#: The terms of a light written in words (:mod:`relightnet.sh.words`): disc lights under a name
+#: The terms of a light written in words (:mod:`relightnet.light.words`): disc lights under a name
 #: that says their role (all behave alike) and a constant ``ambient``.
 LIGHT_WORD_KINDS = ("key", "fill", "rim", "light", "ambient")
 #: Where the avatar's light comes from: the background plate, the person in the target, or both.

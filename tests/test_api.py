@@ -6,6 +6,7 @@ import ast
 import importlib
 import importlib.util
 import inspect
+import pkgutil
 import re
 from pathlib import Path
 
@@ -85,3 +86,58 @@ def test_no_private_or_unlisted_name_is_imported_across_subpackages():
             if name.startswith("_") or (listed is not None and name not in listed):
                 found.add((str(f.relative_to(ROOT.parent)), module, name))
     assert not found, sorted(found)  # a name another subpackage uses is public
+
+
+#: The most public names the package may have in all (docs/design.md, "Layout").
+MAX_PUBLIC_NAMES = 350
+
+
+def _public_name_count() -> dict[str, int]:
+    return {m.name: len(getattr(importlib.import_module(m.name), "__all__", []))
+            for m in pkgutil.iter_modules([str(ROOT)], "relightnet.")}
+
+
+def test_the_public_surface_stays_small():
+    """The public names are the sum, over the modules ``relightnet.X`` (subpackages and top-level modules
+    such as ``checks`` or ``names``, each found by ``pkgutil.iter_modules``), of ``len(relightnet.X.__all__)``:
+    what a user of each floor needs. A helper used only by other floors of the package is imported from
+    its defining module (``from ..sh.basis import sh_degrees``, listed in that module's ``__all__``) and
+    does not count."""
+    counts = _public_name_count()
+    assert sum(counts.values()) <= MAX_PUBLIC_NAMES, sorted(counts.items(), key=lambda kv: -kv[1])
+
+
+#: A dotted reference ``relightnet.X.Y...`` in prose: a module path or a module's attribute.
+REFERENCE = re.compile(r"\brelightnet\.[a-z_]+(?:\.[A-Za-z_][A-Za-z0-9_]*)+")
+
+
+def _resolves(ref: str) -> bool:
+    """True when ``ref`` is a module, or a module's attribute (after the longest importable prefix)."""
+    parts = ref.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for name in parts[i:]:
+            if not hasattr(obj, name):
+                return False
+            obj = getattr(obj, name)
+        return True
+    return False
+
+
+def test_the_reference_resolver():
+    assert _resolves("relightnet.sh.basis.sh_count") and _resolves("relightnet.sh.basis")
+    assert _resolves("relightnet.model.photo_albedo.ALBEDO_FLOOR")
+    assert not _resolves("relightnet.sh.no_such_name") and not _resolves("relightnet.sh.basis.sh_count.x")
+
+
+def test_every_reference_in_the_docs_and_docstrings_resolves():
+    docs = [ROOT.parent / "README.md", *sorted((ROOT.parent / "docs").glob("*.md")), ROOT / "weights" / "MODEL_CARD.md"]
+    bad = set()
+    for f in [*docs, *sorted(ROOT.rglob("*.py"))]:
+        for ref in REFERENCE.findall(f.read_text(encoding="utf-8")):
+            if not _resolves(ref):
+                bad.add((str(f.relative_to(ROOT.parent)), ref))
+    assert not bad, sorted(bad)

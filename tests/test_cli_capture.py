@@ -24,7 +24,8 @@ def test_bad_options_are_refused_before_work(tmp_path, capsys):
     img = tmp_path / "p.png"
     write_image(img, torch.zeros((16, 16, 3)), srgb=False)
     for extra, what in ((["--out", str(tmp_path / "me.npz")], ".avatar.npz"),
-                        (["--out", str(tmp_path / "me.avatar.npz"), "--reproject", str(tmp_path / "r.mp4")], "--reproject"),
+                        (["--out", str(tmp_path / "me.avatar.npz"), "--reproject", str(tmp_path / "r.mp4")],
+                         "--reproject"),
                         (["--out", str(tmp_path / "me.avatar.npz"), "--texture-size", "10"], "texture size")):
         assert main(["capture", str(img), *extra]) == 1
         assert what in capsys.readouterr().err
@@ -34,7 +35,7 @@ def test_bad_options_are_refused_before_work(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def photo_capture(tmp_path_factory, anny_body):
     """A generated person photographed from the front, captured (a photo: the front only, no offsets)."""
-    from relightnet.capture import light_pair, turning_person
+    from relightnet.capture.truth import light_pair, turning_person
 
     d = tmp_path_factory.mktemp("photo")
     clip = turning_person(d, anny_body, light_pair()[0], n_frames=2, size=(320, 256), seed=11, turns=0.0,

@@ -10,7 +10,8 @@ import torch
 
 from relightnet.cli import main
 from relightnet.io import read_image
-from relightnet.sh import load_light, preset_light, save_light
+from relightnet.light import load_light, preset_light
+from relightnet.sh import save_light
 
 
 def test_show_preset_writes_png(tmp_path):

@@ -7,7 +7,7 @@ import torch
 
 from relightnet.cli import main
 from relightnet.io import write_image
-from relightnet.sh import load_light
+from relightnet.light import load_light
 
 pytestmark = pytest.mark.slow  # train and evaluate through the CLI
 
@@ -75,7 +75,8 @@ def test_bad_inputs(tmp_path, tiny_dataset, capsys):
 
 
 def test_estimate_light_of_a_plate_and_of_both(tmp_path, capsys):
-    from relightnet.sh import combine_person_plate, load_plate, load_plate_light
+    from relightnet.light import combine_person_plate, load_plate
+    from relightnet.light.plate import load_plate_light
 
     g = np.random.default_rng(0)
     plate = np.concatenate([np.full((30, 80, 3), 220), np.full((30, 80, 3), 40)]).astype(np.uint8)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from relightnet.cli import main
+from relightnet.light import load_light
 from relightnet.model.onnx_serving import OnnxRelighter
-from relightnet.sh import load_light
 
 pytestmark = pytest.mark.slow  # export (dynamo) and onnx-run through the CLI
 

@@ -8,7 +8,8 @@ import torch
 
 from relightnet.cli import main
 from relightnet.io import read_image
-from relightnet.sh import load_light, preset_light, rotate_sh_up, save_light
+from relightnet.light import load_light, preset_light
+from relightnet.sh import rotate_sh_up, save_light
 from relightnet.temporal import light_error
 
 

@@ -11,7 +11,7 @@ from relightnet import names
 def test_every_listed_name_is_implemented():
     from relightnet.body.anny_model import POSE_PRESETS, pose_preset
     from relightnet.body.motion import make_motion
-    from relightnet.sh import load_light
+    from relightnet.light import load_light
     from relightnet.temporal import make_smoother, smooth_sequence, smoothing_matrix
 
     assert tuple(POSE_PRESETS) == names.POSE_PRESETS  # the rotations exist for exactly the listed poses
@@ -30,8 +30,8 @@ def test_every_listed_name_is_implemented():
 
 
 def test_lists_agree_with_the_library():
+    from relightnet.light.presets import preset_names
     from relightnet.segment.sources import MASK_SOURCES, check_mask_source
-    from relightnet.sh.presets import preset_names
 
     assert MASK_SOURCES == names.MASK_SOURCES
     assert preset_names() == names.light_presets() == sorted(p.stem for p in names.envmap_dir().glob("*.exr"))

@@ -14,7 +14,7 @@ import pytest
 
 from relightnet.cli import build_parser, main
 from relightnet.io import read_image
-from relightnet.sh import load_light
+from relightnet.light import load_light
 
 REPO = Path(__file__).resolve().parents[1]
 DOCS = ["README.md", "train/README.md", "export/README.md", "docs/design.md", *sorted(

@@ -23,6 +23,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("io",),
     ("raster",),
     ("sh",),
+    ("light",),
     ("body",),
     ("segment",),
     ("distributed",),

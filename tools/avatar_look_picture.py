@@ -69,11 +69,11 @@ def _closeups(body, light) -> list[np.ndarray]:
 
 def _replaced(body, tmp: Path) -> list[np.ndarray]:
     from relightnet.io import read_image, read_video
+    from relightnet.light import preset_light
     from relightnet.pipeline import AvatarLook, AvatarPlacement
     from relightnet.pipeline.avatar import avatar
     from relightnet.pipeline.walk_target import walking_target
     from relightnet.prt import PrtSettings
-    from relightnet.sh import preset_light
 
     wt = walking_target(tmp, size=(320, 320), n_frames=16, suffix=".mp4", body=body)
     avatar(wt.video, tmp / "av.mp4", light=preset_light("studio"), look=AvatarLook(body=body, outfit="casual"),
@@ -118,7 +118,7 @@ def _hems(body, light) -> np.ndarray:
 def main() -> None:
     from relightnet.body import AnnyBody
     from relightnet.io import write_image
-    from relightnet.sh import preset_light
+    from relightnet.light import preset_light
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="docs/avatar_look.png")

@@ -19,11 +19,11 @@ from pathlib import Path
 import torch
 import torch.nn.functional as F
 
+from relightnet.light import load_light
 from relightnet.pipeline.backends import make_predictor
 from relightnet.pipeline.photo_checks import list_photos, load_photo
 from relightnet.pipeline.relight_image import relight_image
 from relightnet.segment import segment_person
-from relightnet.sh import load_light
 
 LIGHT = "key:az=-70,el=10,power=3 + ambient:0.15"
 ROW, CLOSE = 512, 160

@@ -19,12 +19,12 @@ DEFAULT_MOTION = "walk"
 
 def run(args: argparse.Namespace) -> int:
     from ..io import video_info
+    from ..light import load_light
     from ..pipeline.avatar import avatar
     from ..pipeline.backends import make_predictor
     from ..pipeline.scene import load_camera
     from ..pipeline.settings import AvatarLook, AvatarPlacement, VideoLightSettings
     from ..prt import PrtSettings
-    from ..sh import load_light
     from ..sh.io import check_light_physics
 
     out = out_file(args.out, suffixes=(".mp4", ".mkv"),
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         if args.motion or args.body != "anny":
             raise InputError("--motion-from: the motion comes from the source video; it drives Anny "
                              "(drop --motion and --body)")
-        from ..fit import motion_for_avatar
+        from ..fit.job import motion_for_avatar
 
         motion = motion_for_avatar(in_path(args.motion_from, "--motion-from", "a video or photo of a person"))
     if args.light and args.light_from != "person":
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     light = check_light_physics(load_light(args.light), args.light) if args.light else None
     plate_light = None
     if args.light_from in ("plate", "both"):  # the plate given, else the target's first frame
-        from ..sh.plate import load_plate
+        from ..light.plate import load_plate
 
         plate_light = load_plate(args.plate or args.target, hfov_deg=args.fov)
         if args.light_from == "plate":

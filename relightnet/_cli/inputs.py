@@ -10,7 +10,7 @@ __all__ = ["load_single_light", "read_photo"]
 def load_single_light(arg: str, lmax: int | None = None):
     """``load_light`` for options that take one light (K, 3), checked against physics
     (:func:`~relightnet.sh.io.check_light_physics`): a sequence is an error naming the option."""
-    from ..sh import load_light
+    from ..light import load_light
     from ..sh.io import check_light_physics
 
     light = load_light(arg, lmax=lmax)

@@ -15,8 +15,8 @@ logger = logging.getLogger("relightnet.light")
 def _envmap_of(light: str):
     """The original environment map behind a light argument, if it has one."""
     from ..io.envmap import ENVMAP_SUFFIXES, read_envmap
-    from ..sh.presets import preset_envmap, preset_names
-    from ..sh.words import is_light_words, words_envmap
+    from ..light.presets import preset_envmap, preset_names
+    from ..light.words import is_light_words, words_envmap
 
     if is_light_words(light) and not Path(light).exists():
         return words_envmap(light)
@@ -30,8 +30,8 @@ def _envmap_of(light: str):
 
 def run_show(args: argparse.Namespace) -> int:
     from ..io.image import write_image
-    from ..sh.io import load_light
-    from ..sh.visualize import light_preview
+    from ..light import load_light
+    from ..light.visualize import light_preview
 
     out = out_file(args.out, suffixes=(".png",))
     sh = load_light(args.light, lmax=args.lmax)
@@ -44,7 +44,8 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_convert(args: argparse.Namespace) -> int:
-    from ..sh.io import LIGHT_SUFFIXES, load_light, save_light
+    from ..light import load_light
+    from ..sh.io import LIGHT_SUFFIXES, save_light
 
     out = out_file(args.output, "OUT", LIGHT_SUFFIXES, inputs=(args.input,))
     sh = load_light(args.input, lmax=args.lmax)

@@ -35,10 +35,10 @@ def run_train(args: argparse.Namespace) -> int:
 
 def run_estimate_light(args: argparse.Namespace) -> int:
     from ..checks import InputError
+    from ..light.plate import combine_person_plate, load_plate
     from ..pipeline.backends import make_predictor
     from ..sh import save_light
     from ..sh.io import LIGHT_SUFFIXES
-    from ..sh.plate import combine_person_plate, load_plate
 
     if args.image is None and args.plate is None:
         raise InputError("give a photo of a person (IMAGE), a background plate (--plate), or both")

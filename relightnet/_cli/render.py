@@ -19,7 +19,7 @@ _VIDEO = (".mp4", ".mkv")
 
 def _exposed(img, alpha, exposure):
     """Apply a fixed or automatic exposure (chosen on covered pixels)."""
-    from ..sh.visualize import auto_exposure
+    from ..light.visualize import auto_exposure
 
     scale = auto_exposure(img, alpha > 0) if exposure == "auto" else exposure
     return img * scale, scale
@@ -110,9 +110,9 @@ def _body_outputs(args) -> tuple[Path, Path | None, Path | None]:
 
 def run_render_body(args: argparse.Namespace) -> int:
     from ..io import VideoWriter, write_image
+    from ..light import load_light
     from ..prt import PrtSettings
     from ..render.jobs import render_body_frames
-    from ..sh import load_light
     from ..sh.io import check_light_physics
 
     out, mask_out, maps = _body_outputs(args)

@@ -18,7 +18,7 @@ def _smooth(args, sh):
     """(smoothed, outliers (T,) bool, switches (T,) bool) for the chosen method (the registry's
     :func:`relightnet.temporal.smooth_sequence`; the command's defaults for each method's options)."""
     from ..checks import InputError
-    from ..temporal import parse_eps
+    from ..temporal.distance import parse_eps
     from ..temporal.registry import smooth_sequence
 
     eps = parse_eps(args.outlier_eps)
@@ -49,8 +49,10 @@ def _smooth(args, sh):
 def run_smooth(args: argparse.Namespace) -> int:
     from ..checks import ShapeError
     from ..io.atomic import atomic_write
-    from ..sh.io import load_light, load_light_sequence, save_light, save_light_sequence
-    from ..temporal import jitter, light_error, parse_eps
+    from ..light import load_light
+    from ..sh.io import load_light_sequence, save_light, save_light_sequence
+    from ..temporal import jitter, light_error
+    from ..temporal.distance import parse_eps
     from ..temporal.plot import light_curves_png
 
     check_method_options(args, args.smoothing)

@@ -34,7 +34,7 @@ node sees. The shards are byte-identical to a local run. A shard that fails is r
 
 
 def _splits():
-    from ..data import SPLITS
+    from ..data.config import SPLITS
 
     return SPLITS
 
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if not args.out:
         raise InputError("--out: a dataset folder is required (or use --verify DIR / --preview DIR)")
-    from ..data import SPLITS
+    from ..data.config import SPLITS
     from ..data.synth import run_synth
     from ..distributed.cluster import default_workers
 

@@ -62,7 +62,7 @@ def hex_to_rgb(color: str) -> tuple[float, float, float]:
 
 
 def words_of(az: float, el: float, size: float, power: float, color: str, ambient: float) -> str:
-    """The sliders as a light in words (:mod:`relightnet.sh.words`), which the CLI takes too."""
+    """The sliders as a light in words (:mod:`relightnet.light.words`), which the CLI takes too."""
     r, g, b = hex_to_rgb(color)
     text = f"key:az={az:g},el={el:g},size={size:g},color={r:g}/{g:g}/{b:g},power={power:g}"
     return text + (f" + ambient:{ambient:g}" if ambient > 0 else "")
@@ -76,7 +76,8 @@ def light_of(source: str, words: str, preset: str | None, hdri_path: str | None,
         InputError: a missing file for the source, or a bad light (the message names it).
     """
     from ..checks import InputError
-    from ..sh import load_light, load_plate_light
+    from ..light import load_light
+    from ..light.plate import load_plate_light
 
     if source == "direction":
         return load_light(words)
@@ -101,7 +102,8 @@ def sphere_preview(light, size: int = 160, az: float | None = None, el: float | 
     import numpy as np
 
     from ..color import linear_to_srgb
-    from ..sh import auto_exposure, render_sphere
+    from ..light import render_sphere
+    from ..light.visualize import auto_exposure
 
     img = render_sphere(light.float(), size)
     img = linear_to_srgb((img * auto_exposure(img)).clamp(0, 1))

@@ -130,8 +130,8 @@ class _Handlers:
 
     def run_video(self, video, words, preset, progress=None):
         from ..errors import RelightError
+        from ..light import load_light
         from ..pipeline.relight_video import relight_video
-        from ..sh import load_light
 
         if not video:
             self._fail(RelightError("video: upload a video"))

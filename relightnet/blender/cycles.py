@@ -281,7 +281,7 @@ def render_blend(
         :class:`CyclesFrame` per frame.
     """
     from ..io import write_image
-    from ..sh.visualize import auto_exposure
+    from ..light.visualize import auto_exposure
 
     out = None if out_dir is None else Path(out_dir)
     if out is not None and out.exists() and not out.is_dir():

@@ -341,7 +341,7 @@ def export_body_scene(
         light: any light :func:`relightnet.blender.world_light` takes (camera-relative by default).
         albedo: TexturedAlbedo / (V, 3) / None (Anny's default outfit, grey 0.6 otherwise).
         camera: one camera, None (:func:`relightnet.raster.default_camera` of ``size``) or
-            ``"fit"`` (:func:`relightnet.render.fit_camera` framing every frame of the motion).
+            ``"fit"`` (:func:`relightnet.render.jobs.fit_camera` framing every frame of the motion).
         world: the :func:`world_light` options (:class:`~relightnet.blender.WorldLightSettings`).
         fps, cycles: :func:`export_scene` options.
 
@@ -350,7 +350,7 @@ def export_body_scene(
     """
     from ..body import AnnyBody, default_albedo
     from ..raster import default_camera
-    from ..render import fit_camera
+    from ..render.jobs import fit_camera
     from .world import world_light
 
     with torch.no_grad():

@@ -30,8 +30,9 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, check_sh_count, check_shape
+from ..light import load_light
 from ..raster import Camera
-from ..sh import directions_to_latlong, load_light, project_envmap, radiance, world_to_light
+from ..sh import directions_to_latlong, project_envmap, radiance, world_to_light
 from .frames import equirect_directions, latlong_to_equirect
 
 __all__ = ["WorldLight", "world_light", "sh_world_image", "envmap_world_image", "lift_sh"]
@@ -158,14 +159,14 @@ def _is_envmap(light) -> bool:
     p = Path(light)
     if p.suffix.lower() in _ENV_SUFFIXES:
         return True
-    from ..sh import preset_names
+    from ..light import preset_names
 
     return isinstance(light, str) and not p.suffix and len(p.parts) == 1 and light in preset_names()
 
 
 def _read_env(light) -> torch.Tensor:
     from ..io import read_envmap
-    from ..sh import preset_envmap
+    from ..light import preset_envmap
 
     p = Path(light)
     if p.suffix.lower() in _ENV_SUFFIXES:

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import torch
-
 from ..checks import InputError
 from .avatar_file import CapturedAvatar
 from .offsets import apply_offsets

@@ -12,7 +12,6 @@ import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import numpy as np
 import torch
 
 from ..checks import InputError, check_shape
@@ -82,7 +81,7 @@ def capture_person(result, fb, frames: Iterable[torch.Tensor], masks: Iterable[t
         frames: T (3, H, W) sRGB frames in [0, 1], in order (an iterator: streamed).
         masks: T (H, W) bool person masks (None or empty: the frame adds nothing).
         lights: (T, K, 3) each frame's light, camera-relative, on the light estimate's scale.
-        offsets: (V,) offsets along the normal (:func:`~relightnet.capture.solve_offsets`), or None.
+        offsets: (V,) offsets along the normal (:func:`~relightnet.capture.offsets.solve_offsets`), or None.
         options: :class:`~relightnet.capture.texture.TextureOptions`.
         raw: also fuse the raw colours (:attr:`CaptureResult.raw_texture`).
         atlas: the body's :func:`~relightnet.data.textures.uv_atlas` at ``options.size`` (made when None).
@@ -102,7 +101,7 @@ def capture_person(result, fb, frames: Iterable[torch.Tensor], masks: Iterable[t
     camera = fit_camera(result)
     t0, used, t = time.perf_counter(), 0, -1
     with torch.no_grad():
-        for t, ((v, n, faces), img, mask) in enumerate(zip(_posed(result, fb, offsets), frames, masks)):
+        for t, ((v, n, faces), img, mask) in enumerate(zip(_posed(result, fb, offsets), frames, masks, strict=False)):
             if mask is None or bool(result.interpolated[t]) or not bool(mask.any()):
                 continue
             s = frame_samples(table, v, n, faces, lights[t], camera, srgb_to_linear(img.clamp(0, 1)), mask.bool(),

@@ -130,7 +130,7 @@ def light_invariance(tex_a, tex_b, raw_a, raw_b, weight) -> float:
 def surface_texels(atlas) -> torch.Tensor:
     """(S, S) bool: the island texels of ``atlas`` (their ``texel_source`` is themselves) outside
     :data:`HIDDEN_PARTS` (the part of a texel's nearest vertex)."""
-    from ..body import ANNY_PARTS
+    from ..body.albedo import ANNY_PARTS
 
     S = atlas.size
     island = atlas.texel_source == np.arange(S * S)

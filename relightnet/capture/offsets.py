@@ -6,7 +6,7 @@ skinning, it poses with the body in every frame (the normal turns with the skinn
 :func:`solve_offsets` finds one offset field for a fitted clip from the person's silhouettes
 (Alldieck et al. 2018, "Video Based Reconstruction of 3D People Models"): the frames' poses are
 fixed, the offset body's projected vertices should cover the masks as the fit's silhouette term
-measures (:func:`relightnet.fit.silhouette_term`), the field is smooth over the mesh (a uniform
+measures (:func:`relightnet.fit.terms.silhouette_term`), the field is smooth over the mesh (a uniform
 Laplacian), pulled to 0, bounded to [:data:`OFFSET_FLOOR`, ``bound``], and held within
 :data:`SKIN_BOUND` of 0 on the face and the hands (skin carries no cloth).
 """
@@ -23,8 +23,12 @@ import torch
 
 from ..checks import check_shape
 from ..errors import InputError
-from ..fit import PackedMasks, fit_meshes, outline_matches, project_points, silhouette_targets, silhouette_term
-from ..raster import perspective_projection, rasterize
+from ..fit.camera import project_points
+from ..fit.masks import PackedMasks
+from ..fit.preview import fit_meshes
+from ..fit.terms import outline_matches, silhouette_targets, silhouette_term
+from ..raster import rasterize
+from ..raster.camera import perspective_projection
 
 __all__ = ["OFFSET_FLOOR", "OFFSET_UNIT", "SKIN_BOUND", "OffsetFit", "apply_offsets", "solve_offsets"]
 
@@ -105,7 +109,7 @@ def _pick_frames(packed: PackedMasks, result, n_frames: int) -> list[int]:
 
 def _skin(body) -> torch.Tensor:
     """(V,) bool: the face and the hands (Anny's head, eye, mouth and hand parts, less the scalp)."""
-    from ..body import ANNY_PARTS, REGIONS, anny_part_labels, region_labels
+    from ..body.albedo import ANNY_PARTS, REGIONS, anny_part_labels, region_labels
 
     parts = anny_part_labels(body)
     region = region_labels(body, parts=parts)
@@ -183,7 +187,7 @@ def _rim(verts: torch.Tensor, normals: torch.Tensor) -> torch.Tensor:
 
 
 def _matches(pixels: torch.Tensor, targets, rim: torch.Tensor) -> torch.Tensor:
-    """(B, M) :func:`relightnet.fit.outline_matches` among each frame's ``rim`` vertices, a frame at a time."""
+    """(B, M) :func:`relightnet.fit.terms.outline_matches` among each frame's ``rim`` vertices, a frame at a time."""
     out = []
     for b in range(pixels.shape[0]):
         one = dataclasses.replace(targets, outside=targets.outside[b:b + 1], outline=targets.outline[b:b + 1],
@@ -225,7 +229,7 @@ def solve_offsets(result, fb, masks, n_frames: int = 16, iters: int = 150, bound
     Args:
         result: a :class:`relightnet.fit.FitResult` of T frames of (H, W) (view space; the poses stay fixed).
         fb: the :class:`relightnet.fit.FitBody` it was fitted with.
-        masks: (T, H, W) person masks in [0, 1] (above 0.5 is the person), or :class:`relightnet.fit.PackedMasks`
+        masks: (T, H, W) person masks in [0, 1] (above 0.5 is the person), or :class:`relightnet.fit.masks.PackedMasks`
             of T frames. Frames with an empty mask or ``result.interpolated`` are skipped.
         n_frames: at most this many frames, evenly spread over the clip, are fitted together (one: a photo).
         iters: Adam steps.

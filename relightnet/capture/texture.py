@@ -38,7 +38,8 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError, check_shape, sh_order_from_count
-from ..raster import Camera, ndc_to_pixel, rasterize, screen_box
+from ..raster import Camera, rasterize, screen_box
+from ..raster.camera import ndc_to_pixel
 
 __all__ = ["TextureOptions", "TexelTable", "TexelSamples", "TextureFusion", "texel_table", "frame_samples",
            "weighted_median"]

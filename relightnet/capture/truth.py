@@ -74,7 +74,7 @@ def person_texture(body, seed: int, size: int = 512) -> torch.Tensor:
     Returns:
         (S, S, 3) float32 linear albedo in [ALBEDO_MIN, ALBEDO_MAX], row 0 = v = 1.
     """
-    from ..body import region_labels
+    from ..body.albedo import region_labels
     from ..data.textures import paint_albedo, region_field, sample_outfit, texel_regions, uv_atlas
 
     atlas = uv_atlas(body, size)
@@ -88,7 +88,7 @@ def person_texture(body, seed: int, size: int = 512) -> torch.Tensor:
 def light_pair() -> tuple[torch.Tensor, torch.Tensor]:
     """Two clearly different (9, 3) lights: a warm key from the camera's left and a cool key from its
     right, each over the same dim grey ambient."""
-    from ..sh import ambient_light, directional_light
+    from ..light import ambient_light, directional_light
 
     warm = torch.tensor([1.0, 0.8, 0.55])
     cool = torch.tensor([0.55, 0.75, 1.0])

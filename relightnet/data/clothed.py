@@ -15,7 +15,7 @@ generator's solid patterns continue around them.
 Every piece is two-sided (:data:`THICKNESS`): an inner copy faces the body, so looking into
 a sleeve, under a skirt or into a hood shows a surface facing the camera with its own PRT.
 
-Every piece's outer side is subdivided once (:func:`relightnet.body.subdivide_faces`): its vertices
+Every piece's outer side is subdivided once (:func:`relightnet.body.subdivide.subdivide_faces`): its vertices
 are twice as dense, so the per-vertex transport follows shadows between garment layers more
 closely; the PRT ray casts the new midpoint vertices only at shadow edges
 (:func:`relightnet.prt.refined_transport`, with ``ClothedMesh.midpoints``).
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..body import REGIONS
+from ..body.albedo import REGIONS
 from ..body.garments import GarmentPiece
 from ..body.subdivide import midpoint_values, subdivide_faces
 from .garments import GarmentTables, dress_frame

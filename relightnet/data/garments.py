@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..body import REGIONS, region_labels
+from ..body.albedo import REGIONS, region_labels
 from ..body.garments import GarmentPiece, RingShape, radial_directions, ring_surface, shell_surface
 from ..checks import InputError
 
@@ -143,8 +143,8 @@ class GarmentTables:
         rest: (V, 3) float32 zero-pose positions. arm: (V,) bool arm and hand vertices.
         head: (V,) bool head vertices (Anny's head part). torso_low: (V,) bool torso below the waist.
         leg_side: (V,) int64 0 left leg, 1 right leg, −1 neither. leg_t: (V,) float32 fraction hip → ankle.
-        labels: memo of :func:`relightnet.body.region_labels` per (sleeves, legs, hair).
-        parts: (V,) int64 the body's :func:`~relightnet.body.anny_part_labels` (region_labels reads them).
+        labels: memo of :func:`relightnet.body.albedo.region_labels` per (sleeves, legs, hair).
+        parts: (V,) int64 the body's :func:`~relightnet.body.albedo.anny_part_labels` (region_labels reads them).
     """
 
     rest: torch.Tensor
@@ -164,9 +164,10 @@ class GarmentTables:
 
 
 def garment_tables(body, parts: np.ndarray, labels: dict | None = None) -> GarmentTables:
-    """Build the :class:`GarmentTables` of an Anny body (``parts``: its :func:`~relightnet.body.anny_part_labels`;
-    ``labels``: a region-label memo to share, keyed (sleeves, legs, hair))."""
-    from ..body import ANNY_PARTS
+    """Build the :class:`GarmentTables` of an Anny body (``parts``: its
+    :func:`~relightnet.body.albedo.anny_part_labels`; ``labels``: a region-label memo to share, keyed (sleeves,
+    legs, hair))."""
+    from ..body.albedo import ANNY_PARTS
 
     with torch.no_grad():
         out = body()

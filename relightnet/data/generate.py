@@ -2,7 +2,7 @@
 
 ``generate_sample(cfg, split, index)`` makes one still, ``generate_sequence(...)`` one clip;
 both are pure functions of ``(cfg, split, index)`` (bit for bit, for a given torch thread
-count): every random axis draws from its own child of :func:`~relightnet.data.sample_seed`
+count): every random axis draws from its own child of :func:`~relightnet.data.config.sample_seed`
 (body, pose, view, albedo, light, background, prt, noise), so changing how one axis draws
 does not change the others. A clip uses child 100 of the sample's seed sequence, so clip
 ``i`` and still ``i`` are independent.

@@ -15,7 +15,7 @@ frame — x toward the camera, y image right, z up — and a JSON-serialisable p
   weight.
 
 Radiance functions are sampled on one shared Fibonacci direction set and projected with
-one matmul (:func:`relightnet.sh.project`); suns are vMF lobes (:func:`relightnet.sh.directional_light`).
+one matmul (:func:`relightnet.sh.project`); suns are vMF lobes (:func:`relightnet.light.directional_light`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ import math
 import numpy as np
 import torch
 
-from ..sh import ambient_light, directional_light, fibonacci_sphere, preset_light, project, sh_basis
+from ..light import ambient_light, directional_light, preset_light
+from ..sh import fibonacci_sphere, project, sh_basis
 
 __all__ = ["FAMILIES", "family_light", "perez_sky", "preetham_zenith", "xyY_to_rgb"]
 

@@ -39,15 +39,8 @@ import torch
 
 from ..checks import InputError
 from ..color import LUMA, luminance
-from ..sh import (
-    ambient_light,
-    directional_light,
-    fibonacci_sphere,
-    irradiance,
-    preset_light,
-    rotate_sh,
-    rotate_sh_up,
-)
+from ..light import ambient_light, directional_light, preset_light
+from ..sh import fibonacci_sphere, irradiance, rotate_sh, rotate_sh_up
 from .light_families import FAMILIES, family_light
 
 __all__ = [

@@ -6,7 +6,7 @@ mesh in the posed body's world frame (y up, before the sample's yaw) and
 :func:`person_transport` its PRT there; a sample then turns it into its camera's light frame
 (:func:`transport_to_camera`): with Q the world → camera rotation, the transport of a vertex
 is a function on the sphere, so ``T_cam = T_world Mᵀ`` with M the SH rotation matrix of Q
-(:func:`relightnet.sh.sh_rotation_matrix`). This equals the PRT computed in the camera frame
+(:func:`relightnet.sh.rotation.sh_rotation_matrix`). This equals the PRT computed in the camera frame
 with the direction set turned by Q — again a randomly rotated Fibonacci set — so the ground
 truth stays exact (image = albedo ⊙ (T · L) with the T stored).
 
@@ -26,8 +26,9 @@ import torch
 
 from ..checks import InputError
 from ..prt import PrtSettings, refined_transport, vertex_transport
-from ..raster import texture_pixels
-from ..sh import rotation_world_to_light, sh_rotation_matrix
+from ..raster.texture import texture_pixels
+from ..sh.frames import rotation_world_to_light
+from ..sh.rotation import sh_rotation_matrix
 from .clothed import ClothedMesh, clothed_mesh
 from .config import SPLITS, SynthConfig
 from .garments import garment_probs, sample_garments

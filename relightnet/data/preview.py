@@ -40,7 +40,7 @@ _FIELDS = ("image", "image_composite", "albedo", "transport", "transport_unocclu
 
 
 def _exposed(img: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    from ..sh import auto_exposure
+    from ..light.visualize import auto_exposure
 
     return linear_to_srgb((img * auto_exposure(img, mask > 0.5)).clamp(0, 1))
 

@@ -16,10 +16,13 @@ import torch
 from ..checks import InputError
 from ..color import luminance
 from ..io.image import to_uint8
-from ..raster import antialias, interpolate, rasterize, silhouette_pixels
+from ..raster import antialias, interpolate, rasterize
+from ..raster.antialias import silhouette_pixels
 from ..render.frame import TexturedAlbedo, render_mesh
 from ..render.shading import composite
-from ..sh import rotation_about_up, rotation_world_to_light, world_to_light
+from ..sh import world_to_light
+from ..sh.frames import rotation_world_to_light
+from ..sh.rotation import rotation_about_up
 from .backgrounds import envmap_background, procedural_background
 from .clothed import hidden_body_share
 from .config import SynthConfig, sample_seed

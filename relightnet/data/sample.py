@@ -8,9 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from ..body import AnnyBody, region_labels
+from ..body import AnnyBody
+from ..body.albedo import region_labels
 from ..checks import InputError
-from ..sh import preset_envmap
+from ..light import preset_envmap
 from .textures import UVAtlas, region_field, texel_regions, uv_atlas
 
 __all__ = ["GENERATOR_VERSION", "TEXTURE_SIZE", "Sample", "SynthAssets", "prepare_assets", "assets_for"]
@@ -60,7 +61,7 @@ class SynthAssets:
 
     def region_field(self, sleeves: str, legs: str, hair: str) -> np.ndarray:
         """(V, R) smoothed region field (:func:`~relightnet.data.textures.region_field`) of
-        :func:`relightnet.body.region_labels` for one clothing variant."""
+        :func:`relightnet.body.albedo.region_labels` for one clothing variant."""
         key = (sleeves, legs, hair)
         if key not in self.regions:
             ids = self.region_labels(sleeves, legs, hair).numpy()
@@ -76,7 +77,7 @@ class SynthAssets:
         return self.texels[key]
 
     def region_labels(self, sleeves: str, legs: str, hair: str) -> torch.Tensor:
-        """(V,) :func:`relightnet.body.region_labels` of one clothing variant (memo shared with the garments)."""
+        """(V,) :func:`relightnet.body.albedo.region_labels` of one clothing variant (memo shared with the garments)."""
         labels = self.tables.setdefault("labels", {})
         key = (sleeves, legs, hair)
         if key not in labels:

@@ -21,7 +21,7 @@ Garments (:func:`sample_outfit`): per region a base colour (neutrals, typical ga
 colours, or any hue) and a pattern — plain, stripes (any direction, 1–10 cm period),
 checks (two stripe sets), noise (heather / mottled / camouflage-like smooth 3D noise),
 blobs (polka dots or large print-like shapes) — times a fabric-like low-frequency
-variation and a fine grain. Skin: :func:`relightnet.body.skin_color` of a random tone with
+variation and a fine grain. Skin: :func:`relightnet.body.albedo.skin_color` of a random tone with
 a per-channel jitter and slight mottling; hair from a natural palette with streaky grain;
 eyes and mouth as in :func:`relightnet.body.default_albedo`. All values lie in
 [:data:`ALBEDO_MIN`, :data:`ALBEDO_MAX`].
@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..body import ANNY_PARTS, REGIONS, anny_part_labels, skin_color
+from ..body.albedo import ANNY_PARTS, REGIONS, anny_part_labels, skin_color
 from ..checks import InputError
 from ..color import srgb_to_linear_np
 from ..raster import rasterize
@@ -69,7 +69,7 @@ class UVAtlas:
         texel_bary: (S·S, 3) float32 barycentrics in that triangle.
         texel_pos: (S·S, 3) float32 zero-pose positions (metres).
         vertex_texel: (V,) int64 a texel inside the UV triangles of each vertex.
-        parts: (V,) int64 Anny part ids (:data:`relightnet.body.ANNY_PARTS`).
+        parts: (V,) int64 Anny part ids (:data:`relightnet.body.albedo.ANNY_PARTS`).
         texel_source: (S·S,) int64 the island texel whose triangle, barycentrics and position a texel
             copies (itself inside the islands).
     """
@@ -174,7 +174,7 @@ def sample_outfit(rng: np.random.Generator) -> dict:
 
     Returns:
         A JSON-serialisable dict: ``skin_tone``, ``skin`` (3,), ``hair`` (3,) or None (bald),
-        ``iris`` (3,), ``sleeves``, ``legs`` (for :func:`relightnet.body.region_labels`), and
+        ``iris`` (3,), ``sleeves``, ``legs`` (for :func:`relightnet.body.albedo.region_labels`), and
         per garment region (``top``, ``bottom``, ``shoes``) a dict with ``color``,
         ``color2``, ``pattern`` and the pattern's parameters. Every draw happens in a fixed
         order whatever the outcome, so one choice does not shift the others.
@@ -293,7 +293,7 @@ def paint_albedo(atlas: UVAtlas, regions, outfit: dict, texels=None) -> torch.Te
 
     Args:
         atlas: the body's :class:`UVAtlas`.
-        regions: (V,) region ids into :data:`relightnet.body.REGIONS`
+        regions: (V,) region ids into :data:`relightnet.body.albedo.REGIONS`
             (``region_labels(body, outfit["sleeves"], outfit["legs"], hair)``), or their
             (V, R) :func:`region_field` (smooth garment edges).
         outfit: from :func:`sample_outfit`.

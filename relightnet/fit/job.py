@@ -50,7 +50,7 @@ class FitOptions:
 @dataclass(frozen=True, eq=False)
 class FitOutput:
     """raw: the fit before smoothing; result: after; motion: the world-frame AnnyMotion; fps; masks: the
-    person masks the fit saw (:class:`~relightnet.fit.PackedMasks`, each window at its working resolution)."""
+    person masks the fit saw (:class:`~relightnet.fit.masks.PackedMasks`, each window at its working resolution)."""
 
     raw: FitResult
     result: FitResult
@@ -77,7 +77,7 @@ def fit_file(path: str | Path, options: FitOptions = FitOptions(), fb: FitBody |
 
     Raises:
         InputError: no person in the photo / in any frame of the video; a video of more than
-            :data:`~relightnet.fit.MAX_FIT_FRAMES` frames (counted from its packets, before any work).
+            :data:`~relightnet.fit.job.MAX_FIT_FRAMES` frames (counted from its packets, before any work).
             One line naming the file.
     """
     from ..io import count_frames

@@ -4,8 +4,8 @@ A fit keeps one mask per frame until its window is fitted. As float32 at the fra
 4 bytes a pixel (50 MB a frame at 12.5 MP), so a long video took gigabytes. :class:`PackedMasks`
 keeps only the rows and columns that hold mask pixels, one bit a pixel, deflated; given the fit's
 ``window``, it also resamples each complete window of frames to the working resolution the fit's
-silhouette term uses for that window (:func:`relightnet.fit.working_size`: the person about
-:data:`~relightnet.fit.SILHOUETTE_HEIGHT` pixels tall) as soon as the window is complete, with the
+silhouette term uses for that window (:func:`relightnet.fit.terms.working_size`: the person about
+:data:`~relightnet.fit.masks.SILHOUETTE_HEIGHT` pixels tall) as soon as the window is complete, with the
 same resampling the fit did later before. A frame then costs at most :data:`MAX_FRAME_BYTES` (the
 incompressible bits of the largest working box, ~28 KiB), whatever the frame's size; a person's
 mask about its outline at 240 px (~1 KB). :meth:`PackedMasks.working` gives a window's masks at its
@@ -64,11 +64,11 @@ class PackedMasks:
         size: (H, W) of the frames.
         window: the fit's window (frames fitted together, counted from the first): each complete
             window of appended masks is resampled to its working resolution
-            (:func:`relightnet.fit.working_size`), at most :data:`MAX_FRAME_BYTES` a frame; the frames of
+            (:func:`relightnet.fit.terms.working_size`), at most :data:`MAX_FRAME_BYTES` a frame; the frames of
             the window being appended (the video's last window, short) stay at (H, W) until it is complete
-            (at most ``window`` − 1 frames: ≤ 12.5 MB within :data:`~relightnet.fit.MAX_WINDOW_PIXELS`).
+            (at most ``window`` − 1 frames: ≤ 12.5 MB within :data:`~relightnet.fit.solve.MAX_WINDOW_PIXELS`).
             None: masks are kept at (H, W).
-        height: the working height of the person (:data:`~relightnet.fit.SILHOUETTE_HEIGHT`).
+        height: the working height of the person (:data:`~relightnet.fit.masks.SILHOUETTE_HEIGHT`).
 
     Append (H, W) masks (bool, or values in {0, 1}: above 0.5 is the person) with :meth:`append`
     or make one from (T, H, W) with :meth:`from_masks`; ``len()`` is T, ``packed[a:b]`` the frames
@@ -118,7 +118,7 @@ class PackedMasks:
         self._start = len(self._items)
 
     def grid(self, items=None) -> tuple[int, int]:
-        """(h, w): the working resolution of these frames fitted together (:func:`relightnet.fit.working_size`
+        """(h, w): the working resolution of these frames fitted together (:func:`relightnet.fit.terms.working_size`
         of the box around all their full-size boxes)."""
         ext = [it[3] for it in (self._items if items is None else items) if it is not None]
         rows = max(e[1] for e in ext) - min(e[0] for e in ext) if ext else 0
@@ -143,7 +143,7 @@ class PackedMasks:
     def working(self) -> tuple[torch.Tensor, tuple[float, float]]:
         """(T, h, w) bool masks at these frames' working resolution (:meth:`grid`) and the factors (x, y)
         image pixels → working pixels. Frames stored at that resolution are given bit for bit; others
-        are resampled (area average, then > 0.5), as :func:`relightnet.fit.silhouette_targets` does."""
+        are resampled (area average, then > 0.5), as :func:`relightnet.fit.terms.silhouette_targets` does."""
         grid = self.grid()
         out = np.zeros((len(self), *grid), np.bool_)
         for t, it in enumerate(self._items):

@@ -6,7 +6,7 @@ the video tracker of :mod:`relightnet.segment.video`), and :func:`fill_missing` 
 the landmarks of frames where no person was found (they are flagged, and their mask is empty).
 The masks are kept packed (:class:`~relightnet.fit.masks.PackedMasks`: the person's box, one bit a
 pixel, deflated), each window of frames resampled to the fit's working resolution as soon as it is
-segmented, so a video's evidence grows by at most :data:`~relightnet.fit.MAX_FRAME_BYTES` a
+segmented, so a video's evidence grows by at most :data:`~relightnet.fit.masks.MAX_FRAME_BYTES` a
 frame (~1 KB for a person's mask), not by a frame.
 """
 

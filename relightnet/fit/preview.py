@@ -10,7 +10,9 @@ from __future__ import annotations
 import torch
 
 from ..checks import check_shape
-from ..raster import Camera, interpolate_pixels, perspective_projection, rasterize
+from ..raster import Camera, rasterize
+from ..raster.camera import perspective_projection
+from ..raster.interpolate import interpolate_pixels
 from .body_model import FitBody
 from .solve import FitResult
 

@@ -10,7 +10,7 @@ quarter of the iterations, no silhouette), then every fitted bone. A video's fir
 also fits the shape (:data:`SHAPE_NAMES`, shared over the shot, pulled toward the defaults);
 later windows keep it, start from the previous window's last pose (a warm start) with its
 orientation turned, frame by frame, as the world landmarks' torso turns since that frame
-(:func:`relightnet.fit.relative_turn`: a person turning in place is followed, a left/right
+(:func:`relightnet.fit.init.relative_turn`: a person turning in place is followed, a left/right
 swap is not), and take ``warm_iters`` iterations (or fewer with ``tol``: an early stop);
 their acceleration term includes the two frames before them.
 Afterwards :func:`relightnet.fit.smooth_motion` smooths the whole track.
@@ -68,7 +68,8 @@ class FitResult:
     """A fitted track in the camera's view space.
 
     Attributes:
-        pose: (T, N, 3) rotation vectors of :data:`relightnet.fit.FIT_BONES` (root: orientation to the camera).
+        pose: (T, N, 3) rotation vectors of :data:`relightnet.fit.body_model.FIT_BONES` (root: orientation to
+            the camera).
         trans: (T, 3) translations (view space, metres).
         phenotype: (6,) in :data:`relightnet.body.PHENOTYPES` order.
         intrinsics: ``(fx, fy, cx, cy)``; size: (H, W).
@@ -199,7 +200,7 @@ def _frame_losses(problem: _Problem, win: _Window, ev: _WindowEvidence, rest, bo
 MAX_WINDOW_PIXELS = 100_000_000
 
 #: Frames of one video fit (5.5 minutes at 30 fps). What a fit holds per frame for the whole video is
-#: its packed mask at the working resolution (at most :data:`relightnet.fit.MAX_FRAME_BYTES`, 28.5 KiB,
+#: its packed mask at the working resolution (at most :data:`relightnet.fit.masks.MAX_FRAME_BYTES`, 28.5 KiB,
 #: for a mask that does not compress; ~1 KB for a person's), its landmarks and its fitted pose (~4 KB),
 #: and the motion made of it (~10 KB a frame, measured at 10,000 frames): at most ~0.45 GiB at this limit,
 #: on top of the ~1.4 GiB a 12.5 MP frame's segmentation and window take, so a fit within the limits
@@ -208,7 +209,7 @@ MAX_WINDOW_PIXELS = 100_000_000
 MAX_FIT_FRAMES = 10_000
 
 #: A shape fit steps the shape every this many iterations, on a first-order model of the rest
-#: body (:func:`relightnet.fit.rest_near`) re-linearised every :data:`RELINEARISE_EVERY`
+#: body (:func:`relightnet.fit.body_model.rest_near`) re-linearised every :data:`RELINEARISE_EVERY`
 #: iterations (each linearisation costs four rest bodies; the exact rest body ends the window).
 SHAPE_EVERY = 5
 RELINEARISE_EVERY = 20

@@ -3,7 +3,7 @@
 All are dimensionless: image distances are divided by the person's height in pixels
 (``scale``), metric ones by :data:`WORLD_UNIT`, so the weights of :class:`relightnet.fit.FitWeights`
 compare like with like. Landmark terms are weighted means over landmarks (BlazePose
-visibility, :func:`relightnet.fit.landmark_weights`).
+visibility, :func:`relightnet.fit.landmarks.landmark_weights`).
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def world_term(points: torch.Tensor, world_view: torch.Tensor, weights: torch.Te
 
     Args:
         points: (B, 33, 3) the body's landmark points in view space.
-        world_view: (B, 33, 3) BlazePose world points in view axes (:func:`relightnet.fit.world_to_view_axes`).
+        world_view: (B, 33, 3) BlazePose world points in view axes (:func:`relightnet.fit.observe.world_to_view_axes`).
         weights: (B, 33).
     """
     check_shape(points, ["B", 33, 3], name="points")
@@ -97,7 +97,7 @@ class SilhouetteTargets:
 
 #: The working box is at most this many times :data:`SILHOUETTE_HEIGHT` wide: masks wider than that
 #: (a person lying across the frame, noise) are resampled further, so that a frame's mask at the
-#: working resolution is bounded (:data:`relightnet.fit.MAX_FRAME_BYTES`). A standing or
+#: working resolution is bounded (:data:`relightnet.fit.masks.MAX_FRAME_BYTES`). A standing or
 #: walking person (box at most 4 × as wide as tall) is never affected.
 WORK_ASPECT = 4
 
@@ -146,7 +146,7 @@ def silhouette_targets(masks: torch.Tensor, n_outline: int = 256, size=None,
         n_outline: outline points per frame.
         size: (H, W) of the images the landmarks are in (default: the masks' size).
         height: working height of the person in pixels (:data:`SILHOUETTE_HEIGHT`); None: the masks are
-            at their working resolution already (:meth:`relightnet.fit.PackedMasks.working`).
+            at their working resolution already (:meth:`relightnet.fit.masks.PackedMasks.working`).
     """
     from scipy import ndimage
 

@@ -16,7 +16,8 @@ from pathlib import Path
 from ..errors import InputError
 from .limits import check_pixels
 
-__all__ = ["PHOTO_SUFFIXES", "IMAGE_OUT_SUFFIXES", "header_size", "check_image_file", "check_png_chunks", "MAX_PNG_METADATA"]
+__all__ = ["PHOTO_SUFFIXES", "IMAGE_OUT_SUFFIXES", "header_size", "check_image_file", "check_png_chunks",
+           "MAX_PNG_METADATA"]
 
 #: The file types read as a photo (lower case): what FFmpeg decodes as one still image. HEIC/HEIF
 #: are read where the FFmpeg build demuxes them; a file it cannot read is refused in one line.

@@ -1,6 +1,15 @@
 """The 2D path's CNN: network, its maps in the CNN layout, the photo albedo, losses, checkpoints, training
 loop, inference on real images.
 
+The public names are what a user of the network needs: the network and its configuration and
+prediction (:class:`RelightNet`, :class:`NetConfig`, :class:`Prediction`, :func:`normalize_input`), the
+checkpoints (:func:`load_model`, the shipped one; :func:`load_checkpoint`, :func:`save_checkpoint`), inference
+on a photo (:func:`predict_image`, :func:`estimate_light`), the maps' helpers in the CNN layout
+(:func:`relight`, :func:`shading_map`, :func:`shade_map`, :func:`pad_to_multiple`), the photo albedo, the
+pose-model encoder (:func:`pose_encoder`, :data:`POSE_TAPS`) and the training loss
+(:func:`relight_losses`, :class:`LossWeights`). Training, evaluation, ONNX export and serving, the crops
+and the exposure helpers stay in their modules (:mod:`.training`, :mod:`.onnx_export`, :mod:`.inference`, ...).
+
 Example:
     A small network (the shipped one is :func:`load_model`) on one normalised 32 × 32 input:
 
@@ -16,43 +25,16 @@ Example:
     (torch.Size([1, 3, 32, 32]), torch.Size([1, 9, 32, 32]), torch.Size([1, 9, 3]), torch.Size([1, 1, 32, 32]))
 """
 
-from .checkpoint import SHIPPED, load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
-from .exposure import exposure_level, exposure_scale, match_exposure, transport_level
-from .inference import (
-    CropBox,
-    CropMaps,
-    crop_to_box,
-    estimate_light,
-    estimate_light_evidence,
-    frame_person,
-    mask_crop_box,
-    paste_from_box,
-    paste_rows,
-    predict_crop,
-    predict_image,
-)
-from .losses import LossWeights, masked_l1, relight_losses, total_variation
+from .checkpoint import load_checkpoint, load_model, save_checkpoint, shipped_checkpoint
+from .inference import estimate_light, predict_image
+from .losses import LossWeights, relight_losses
 from .maps import pad_to_multiple, relight, shade_map, shading_map
-from .network import (
-    DEFAULT_INPUT_SIZE,
-    LIGHT_MODES,
-    TRANSPORT_HEADS,
-    NetConfig,
-    Prediction,
-    RelightNet,
-    cone_maps,
-    normalize_input,
-)
-from .onnx_torch import POSE_TAPS, GraphModule, Tap, find_stride_taps, load_onnx, pose_encoder
-from .photo_albedo import photo_albedo, photo_albedo_rows
+from .network import NetConfig, Prediction, RelightNet, normalize_input
+from .onnx_torch import POSE_TAPS, pose_encoder
+from .photo_albedo import photo_albedo
 
 __all__ = [
-    "SHIPPED", "load_checkpoint", "load_model", "save_checkpoint", "shipped_checkpoint",
-    "exposure_level", "exposure_scale", "match_exposure", "transport_level",
-    "CropBox", "CropMaps", "crop_to_box", "estimate_light", "estimate_light_evidence", "frame_person",
-    "mask_crop_box", "paste_from_box", "paste_rows", "predict_crop", "predict_image",
-    "LossWeights", "masked_l1", "relight_losses", "total_variation",
-    "DEFAULT_INPUT_SIZE", "LIGHT_MODES", "TRANSPORT_HEADS", "NetConfig", "Prediction", "RelightNet", "cone_maps",
-    "normalize_input", "pad_to_multiple", "photo_albedo", "photo_albedo_rows", "relight", "shade_map", "shading_map",
-    "POSE_TAPS", "GraphModule", "Tap", "find_stride_taps", "load_onnx", "pose_encoder",
+    "load_model", "load_checkpoint", "save_checkpoint", "shipped_checkpoint", "RelightNet", "NetConfig", "Prediction",
+    "normalize_input", "predict_image", "estimate_light", "relight", "shading_map", "shade_map", "pad_to_multiple",
+    "photo_albedo", "POSE_TAPS", "pose_encoder", "relight_losses", "LossWeights",
 ]

@@ -1,6 +1,6 @@
 """The CNN at a lower resolution: its input pooled, its maps brought back by a trainable fast guided filter.
 
-Shading is smooth except at occlusion edges, and :func:`~relightnet.model.network.photo_albedo` takes
+Shading is smooth except at occlusion edges, and :func:`~relightnet.model.photo_albedo.photo_albedo` takes
 the albedo's detail from the photo, so a network can predict its maps at half the resolution
 (``NetConfig.work_scale``). :func:`pool_input` halves the normalised (KE18) input;
 :func:`fast_guided_upsample` brings each low-resolution map back to full resolution along the

@@ -278,7 +278,7 @@ def quantize_int8(src, dst, mode: str = "static", calibration=None, reduce_range
     """A second model file in int8.
 
     Args:
-        src: the fp32 model from :func:`~relightnet.model.export_onnx`.
+        src: the fp32 model from :func:`~relightnet.model.onnx_export.export_onnx`.
         dst: output path (written atomically).
         mode: ``"static"`` (default): QDQ format, convolutions and matrix products in int8
             (per-channel 7-bit weights, uint8 activations with min–max ranges calibrated on

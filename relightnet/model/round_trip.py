@@ -2,7 +2,7 @@
 
 A user relights a photo with the network's own maps (``relight-image``: the photo's albedo,
 photo ÷ predicted shading, times the new shading, the exposure kept) and may estimate the light
-of the result again (``evaluate photos``' round trip, :func:`relightnet.pipeline.check_photo`).
+of the result again (``evaluate photos``' round trip, :func:`relightnet.pipeline.photo_checks.check_photo`).
 Training on the generated people alone never shows the network such a relit photo. The terms here
 build it inside a training step, from the network input and its prediction:
 
@@ -23,7 +23,8 @@ import torch
 
 from ..checks import InputError, check_shape
 from ..color import linear_to_srgb, srgb_to_linear
-from ..sh import scale_invariant_light_error, side_light
+from ..light import side_light
+from ..sh import scale_invariant_light_error
 from .exposure import match_exposure
 from .maps import relight
 from .network import Prediction, normalize_input
@@ -49,7 +50,7 @@ def novel_lights(light: torch.Tensor, kind: str, generator: torch.Generator | No
 
     Returns:
         (B, K, 3) float32: ``light`` rolled by one item (``batch``), or per item either that or
-        ``power · Y(d) + ambient`` (:func:`relightnet.sh.side_light`).
+        ``power · Y(d) + ambient`` (:func:`relightnet.light.side_light`).
     """
     dims = check_shape(light, ["B", "K", 3], name="light")
     if kind not in NOVEL_LIGHTS:

@@ -34,11 +34,13 @@ import numpy as np
 import torch
 
 from ..checks import InputError, ShapeError, check_finite, sh_order_from_count
-from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, frame_times, read_video, video_info
+from ..io import PHOTO_SUFFIXES, VideoWriter, count_frames, read_video, video_info
 from ..io.hdr_video import HdrClip, HdrVideoWriter
+from ..io.video import frame_times
 from ..names import VIDEO_SMOOTHING
 from ..prt import PrtSettings
-from ..raster import Camera, antialias_pixels, default_camera, silhouette_pixels
+from ..raster import Camera, default_camera
+from ..raster.antialias import antialias_pixels, silhouette_pixels
 from ..render.jobs import frame_slice, render_body_frames
 from ..temporal.registry import check_smoothing, smooth_video_lights
 from .backends import as_predictor
@@ -142,7 +144,7 @@ def _given_light(light: torch.Tensor, n: int) -> torch.Tensor:
 
 def _composite_covered(r, bg: np.ndarray) -> np.ndarray:
     """The 8-bit frame: the render's sRGB-encoded pixels where it covers (alpha 1), ``bg`` (H, W, 3)
-    uint8 elsewhere (:func:`relightnet.render.composite_covered`). Only the covered pixels are
+    uint8 elsewhere (:func:`relightnet.render.shading.composite_covered`). Only the covered pixels are
     converted (a render of a window of the frame lands at the window's place); the same bytes as
     compositing the whole float frame (fg·α + bg·(1−α)) and quantising it."""
     from ..color import linear_to_srgb
@@ -159,7 +161,7 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
                   progress: bool) -> _TargetLight:
     """Stages 1–2, estimate → smooth: the CNN's per-frame lights of the target (reused from
     ``lights_file`` when its fingerprint matches), smoothed over time; with ``lights.plate_light``, each
-    smoothed light combined with it (:func:`relightnet.sh.combine_person_plate`)."""
+    smoothed light combined with it (:func:`relightnet.light.combine_person_plate`)."""
     mask_source, smoothing, plate_light = lights.mask_source, lights.smoothing, lights.plate_light
     if model is None:
         raise InputError("model: give a model (or predictor) to estimate the light, or a light")
@@ -174,7 +176,7 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
     smoothed, outliers, switches, method = smooth_video_lights(est.raw, smoothing, est.evidence, est.prior,
                                                                predict.solve_reg, fps, colour=est.colour)
     if plate_light is not None:
-        from ..sh.plate import combine_person_plate
+        from ..light.plate import combine_person_plate
 
         smoothed = combine_person_plate(smoothed, plate_light.light.to(smoothed), plate_light.view)
         method = f"{method}+plate"
@@ -185,7 +187,7 @@ def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor
     """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
     ((H, W, 3) uint8 (:func:`_composite_covered`), (H, W) bool the pixels drawn); with ``antialias``, the silhouette's pixels then
     get what analytic edge antialiasing of the whole composited frame gives there
-    (:func:`relightnet.raster.antialias_pixels`: the colours of the pixels along the silhouette
+    (:func:`relightnet.raster.antialias.antialias_pixels`: the colours of the pixels along the silhouette
     only, no float copy of the frame; a frame at the pixel limit is 150 MB in float). The render may
     be of a window of the frame (``render_body_frames(box=True)``, holding every pixel next to a
     covered one): its images, mask and silhouette are the window's, and only the composite is the
@@ -307,7 +309,7 @@ def avatar(
         light: (K, 3) or (T, K, 3) camera-relative light; skips the estimation pass.
         lights: a :class:`~relightnet.pipeline.VideoLightSettings`: the smoothing (one of
             :data:`relightnet.names.VIDEO_SMOOTHING`), the mask source, the model's name in the resume
-            fingerprint and a plate light combined with the estimates (``sh.combine_person_plate``).
+            fingerprint and a plate light combined with the estimates (``light.combine_person_plate``).
         prt: the PRT options (:class:`~relightnet.prt.PrtSettings`; by default 64 directions).
         placement: an :class:`~relightnet.pipeline.AvatarPlacement`: a clean plate to composite over, the
             avatar's camera, or taking the person's place (:func:`.clean_plate.stand_in`).

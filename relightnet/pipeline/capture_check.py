@@ -58,7 +58,7 @@ def reproject(report, source, fb, out: Path | None = None, mask_out: Path | None
                                  prt=PrtSettings(n_dirs=64), visible_only=True, box=True)
     sq, n_px, ious, used = 0.0, 0, [], 0
     with _writers(out, mask_out, fps, photo) as write:
-        for fr, img, mask in zip(renders, frames, frame_masks(report.fit.masks, T)):
+        for fr, img, mask in zip(renders, frames, frame_masks(report.fit.masks, T), strict=False):
             src = (img.permute(1, 2, 0).clamp(0, 1) * 255).round().to(torch.uint8)
             r = fr.render
             pix = r.frags.region.to_frame(r.frags.pix)

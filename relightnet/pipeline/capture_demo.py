@@ -27,7 +27,7 @@ def _frames_psnr(a: Path, b: Path) -> float:
     from ..io import read_video
 
     sq = n = 0.0
-    for x, y in zip(read_video(a), read_video(b)):
+    for x, y in zip(read_video(a), read_video(b), strict=False):
         d = x.astype(np.float64) - y.astype(np.float64)
         sq, n = sq + float(np.square(d).sum()), n + d.size
     return 10 * math.log10(255.0 ** 2 / max(sq / max(n, 1), 1e-12))
@@ -45,11 +45,12 @@ def capture_demo(out_dir, target, target_masks, plate, true_light: torch.Tensor,
 
     Returns:
         Paths by name, ``capture_seen_share``, ``capture_albedo_error`` (relative RMSE over the texels seen,
-        :func:`relightnet.capture.albedo_error`) and ``capture_psnr_db``: the captured avatar in the target
+        :func:`relightnet.capture.metrics.albedo_error`) and ``capture_psnr_db``: the captured avatar in the target
         against the truth there (whole frames, 8-bit).
     """
-    from ..capture import albedo_error, light_pair, turning_person
+    from ..capture.metrics import albedo_error
     from ..capture.texture import TextureOptions
+    from ..capture.truth import light_pair, turning_person
     from ..fit import FitOptions
     from ..io import write_side_by_side
     from ..prt import PrtSettings

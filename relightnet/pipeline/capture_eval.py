@@ -7,10 +7,10 @@ their own) turning one full circle; it is filmed twice, under the two lights of
 (the fit, the CNN's light, the offsets, the de-lit texture). Against the truth:
 
 - ``albedo_rmse``: relative RMSE of the de-lit texture (light A) against the true texture over the
-  seen surface texels, after one global scale (:func:`~relightnet.capture.albedo_error`);
+  seen surface texels, after one global scale (:func:`~relightnet.capture.metrics.albedo_error`);
   ``albedo_rmse_raw``: the same of the raw (not de-lit) fused colours;
-- ``seen``: share of the surface the capture saw (:func:`~relightnet.capture.seen_share`);
-- ``invariance``: :func:`~relightnet.capture.light_invariance` of the two captures (A, B) over the
+- ``seen``: share of the surface the capture saw (:func:`~relightnet.capture.metrics.seen_share`);
+- ``invariance``: :func:`~relightnet.capture.metrics.light_invariance` of the two captures (A, B) over the
   texels both saw: 0 for an albedo the light does not change, 1 for one that de-lights nothing;
 - ``iou_bare`` / ``iou_offset``: silhouette IoU against the true masks of the fitted body without and
   with the captured offsets, each rendered in the fit's camera;
@@ -73,7 +73,8 @@ def _true_masks(path) -> torch.Tensor:
 
 def _fit_ious(fit, fb, offsets: torch.Tensor, truth: torch.Tensor) -> tuple[float, float]:
     """Silhouette IoU of the fitted body without / with ``offsets`` (V,) against ``truth`` (T, H, W)."""
-    from ..capture import apply_offsets, silhouette_iou
+    from ..capture.metrics import silhouette_iou
+    from ..capture.offsets import apply_offsets
     from ..fit.preview import chunk_frames, fit_camera, fit_meshes
     from ..raster import rasterize
 
@@ -90,7 +91,7 @@ def _fit_ious(fit, fb, offsets: torch.Tensor, truth: torch.Tensor) -> tuple[floa
 
 def _new_params(body, phenotype) -> dict:
     """The re-render's pose: the T-pose turned by :data:`NEW_ANGLES`, feet at the origin."""
-    from ..capture import turning_params
+    from ..capture.truth import turning_params
 
     p = turning_params(body, len(NEW_ANGLES), pose="tpose")
     angle = torch.tensor(NEW_ANGLES, dtype=p["pose"].dtype)
@@ -114,7 +115,7 @@ def _render(body_like, params, light, texture, size) -> tuple[torch.Tensor, torc
 
 def _agreement(img, mask, ref, ref_mask) -> tuple[float, float]:
     """PSNR and SSIM of a render against the truth's over the union of their masks (module docstring)."""
-    from ..capture import person_psnr, person_ssim
+    from ..capture.metrics import person_psnr, person_ssim
     from ..color import linear_to_srgb
 
     union = mask | ref_mask
@@ -126,8 +127,9 @@ def _agreement(img, mask, ref, ref_mask) -> tuple[float, float]:
 
 def _relit(fb, clip, avatar, raw_tex, seen) -> dict:
     """The re-render's figures (module docstring): ``psnr``, ``ssim`` and their ``_bare`` and ``_raw``."""
-    from ..capture import CapturedBody, silhouette_iou
-    from ..sh import load_light
+    from ..capture import CapturedBody
+    from ..capture.metrics import silhouette_iou
+    from ..light import load_light
 
     light = load_light(NEW_LIGHT)
     params = _new_params(fb.body, clip.params["phenotype"])
@@ -161,8 +163,9 @@ def evaluate_capture_clip(predictor, work, seed: int, frames: int = 48, res: int
     Returns:
         ``{metric: float}`` for :data:`CAPTURE_METRICS`, and ``seed``.
     """
-    from ..capture import albedo_error, light_invariance, light_pair, surface_texels, turning_person
+    from ..capture.metrics import albedo_error, light_invariance, surface_texels
     from ..capture.texture import TextureOptions
+    from ..capture.truth import light_pair, turning_person
     from ..data.textures import uv_atlas
     from ..fit import FitBody
     from .capture_job import CaptureOptions, capture_file

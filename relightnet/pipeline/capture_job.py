@@ -4,7 +4,7 @@
    frame, and the person masks the fit saw.
 2. **Light**: the CNN's light of every frame from the person (with those masks), smoothed over
    time as ``avatar`` smooths a target's (:func:`relightnet.temporal.smooth_video_lights`).
-3. **Geometry**: per-vertex offsets from the silhouettes (:func:`relightnet.capture.solve_offsets`);
+3. **Geometry**: per-vertex offsets from the silhouettes (:func:`relightnet.capture.offsets.solve_offsets`);
    a single photo keeps the bare body (one view says nothing about depth).
 4. **Texture**: every frame's visible texels de-lit by the shading of that geometry under the
    frame's light and fused (:func:`relightnet.capture.fuse.capture_person`); the unseen filled.
@@ -59,7 +59,7 @@ class CaptureReport:
 
 
 def frame_masks(masks, n: int):
-    """The (H, W) bool mask of each of ``n`` frames from :class:`~relightnet.fit.PackedMasks` (enlarged to the
+    """The (H, W) bool mask of each of ``n`` frames from :class:`~relightnet.fit.masks.PackedMasks` (enlarged to the
     frame's size one at a time; None where the person was not found)."""
     for t in range(n):
         m = masks[t:t + 1].unpack()[0]
@@ -73,7 +73,7 @@ def source_lights(predictor, frames, masks, smoothing: str, fps: float) -> torch
     from ..temporal import frame_colour, smooth_video_lights
 
     raw, evs, priors, have, colours = [], [], [], [], []
-    for img, mask in zip(frames, masks):
+    for img, mask in zip(frames, masks, strict=False):
         colours.append(frame_colour(img))
         if mask is None:
             raw.append(None)
@@ -121,7 +121,7 @@ def capture_file(source, out, predictor, options: CaptureOptions = CaptureOption
     lights = source_lights(predictor, media_frames(source)[0], frame_masks(fit.masks, T), options.smoothing, fit.fps)
     offsets = iou_body = iou_offset = None
     if options.offsets or (options.offsets is None and T >= 2):
-        from ..capture import solve_offsets
+        from ..capture.offsets import solve_offsets
 
         solved = solve_offsets(fit.result, fb, fit.masks)
         offsets, iou_body, iou_offset = solved.offsets, solved.iou_body, solved.iou_offset

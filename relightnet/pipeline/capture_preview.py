@@ -22,7 +22,7 @@ VIEW_ANGLES = (0.0, 90.0, 180.0, 270.0)
 
 def neutral_light() -> torch.Tensor:
     """(9, 3) a neutral light: ambient plus a soft white light from above the camera."""
-    from ..sh import ambient_light, directional_light
+    from ..light import ambient_light, directional_light
 
     return ambient_light(0.55) + directional_light(torch.tensor([0.0, 0.6, 1.0]), 1.2)
 

@@ -136,7 +136,7 @@ def _one_thread_geometry(cfg, split, index, T, assets):
 def _check_options(smoothing, n_dirs, clips, bounces, source) -> None:
     """Every option of :func:`compare` checked before any work (InputError naming it; the CNN's size:
     :class:`~relightnet.pipeline.PredictorSettings`)."""
-    from ..sh import preset_names
+    from ..light import preset_names
 
     check_smoothing(smoothing, VIDEO_SMOOTHING)
     for name, v, lo in (("n_dirs", n_dirs, 1), ("clips", clips, 1), ("bounces", bounces, 0)):

@@ -77,7 +77,7 @@ def source_light(name: str = "studio", lmax: int = 2, level: float = 1.0) -> tor
         (K, 3) float32, K = (lmax+1)².
     """
     from ..data.lights import light_level
-    from ..sh import preset_light
+    from ..light import preset_light
 
     sh = preset_light(name, lmax)
     return (sh * (level / light_level(sh))).float()
@@ -96,14 +96,14 @@ def _clip_inputs(clip: dict, source: str, lmax: int):
 
 
 def _relight_2d(crops: list, photos: torch.Tensor, light: torch.Tensor, cnn_albedo: bool) -> torch.Tensor:
-    """The 2D path under (T, K, 3) lights, each frame's prediction (:class:`~relightnet.model.CropMaps`)
+    """The 2D path under (T, K, 3) lights, each frame's prediction (:class:`~relightnet.model.inference.CropMaps`)
     relit with its light: (T, H, W, 3) linear, 0 off the person."""
     return torch.stack([relight_over_photo(c, p, L, detail=not cnn_albedo, keep_exposure=False, composite=False).image
                         for c, p, L in zip(crops, photos, light, strict=True)])
 
 
 def _cpu_float(crop):
-    """A frame's :class:`~relightnet.model.CropMaps` in float32 on the CPU (where the clip's arrays are)."""
+    """A frame's :class:`~relightnet.model.inference.CropMaps` in float32 on the CPU (where the clip's arrays are)."""
     def cpu(x):
         return None if x is None else x.float().cpu()
 

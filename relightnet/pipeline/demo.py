@@ -75,9 +75,9 @@ def run_demo(out_dir="out/demo", size: int = 256, frames: int = 48, n_dirs: int 
     from ..body import AnnyBody
     from ..data import SynthConfig, generate_sequence
     from ..io import atomic_write, write_side_by_side
+    from ..light import render_presets
     from ..model import load_model
     from ..prt import PrtSettings
-    from ..sh import render_presets
     from ..temporal import light_error
     from ..temporal.plot import light_curves_png
     from .avatar import avatar

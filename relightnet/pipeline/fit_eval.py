@@ -61,7 +61,8 @@ def _as_result(result, motion, fb):
 
 def _body_masks(geo, intr, size) -> torch.Tensor:
     """(T, H, W) the true body's silhouettes (the body's faces only, no garments), view-space verts."""
-    from ..raster import Camera, perspective_projection, rasterize
+    from ..raster import Camera, rasterize
+    from ..raster.camera import perspective_projection
 
     T = geo.verts.shape[0]
     P = perspective_projection(*intr, size)
@@ -79,9 +80,11 @@ def evaluate_fit_clip(cfg, index: int, fb, models, options=None) -> dict:
     Returns:
         ``{metric: float}`` for :data:`FIT_METRICS`, and ``motion``: the clip's motion name.
     """
-    from ..data import clip_geometry, generate_sequence
+    from ..data import generate_sequence
     from ..data.framing import camera_intrinsics
-    from ..fit import FitOptions, fit_observations, observe_frames, project_points, retarget_motion
+    from ..data.render_sample import clip_geometry
+    from ..fit import FitOptions, fit_observations, observe_frames, retarget_motion
+    from ..fit.camera import project_points
     from ..fit.metrics import acceleration_error, foot_skating, landmark_error, mask_iou, mpjpe, pa_mpjpe
     from ..fit.preview import fit_silhouettes
     from ..fit.smooth import place_in_world, smooth_motion

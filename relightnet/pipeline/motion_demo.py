@@ -40,10 +40,10 @@ def walking_source(path, size: int, n_frames: int, body, fps: float = 30.0, seed
     from ..color import linear_to_srgb
     from ..data.backgrounds import procedural_background
     from ..io import VideoWriter
+    from ..light import ambient_light, directional_light
     from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
-    from ..sh import ambient_light, directional_light
     from .outfits import dressed_body
 
     if n_frames < 2 or size < 16:

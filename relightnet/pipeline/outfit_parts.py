@@ -151,7 +151,7 @@ def hem_cut(faces: torch.Tensor, verts: torch.Tensor, uv: torch.Tensor, uv_faces
         shells: (first vertex, vertex count, reach) of each piece to cut (the field is read off its faces that
             lie in that range, e.g. a two-sided piece's inner side when its outer side is subdivided).
         midpoints: (M, 3) rows (vertex, endpoint a, endpoint b) of vertices added at edge midpoints (a
-            subdivided outer side, :class:`~relightnet.body.SubdividedFaces`): their field is the mean of
+            subdivided outer side, :class:`~relightnet.body.subdivide.SubdividedFaces`): their field is the mean of
             their endpoints'.
         level: the iso-value of the fields (:func:`~relightnet.body.garments.hem_field`): the hem lies
             ``level · reach`` border edge lengths inside the old border.

@@ -266,7 +266,7 @@ def outfit_field(body, look: dict, assets=None) -> np.ndarray:
     painted shoe edge shows above a shoe, blurred over 16 steps (about four vertex rings, as the default
     albedo, :mod:`.smooth_albedo`) and painted on a 1024² atlas, so painted edges (a dress's neckline,
     bare arms) are as smooth as the hems. ``assets``: the body's :class:`~relightnet.data.sample.SynthAssets`."""
-    from ..body import REGIONS
+    from ..body.albedo import REGIONS
     from ..data.sample import prepare_assets
     from ..data.textures import region_field
 

@@ -9,7 +9,7 @@ bounded image reader (:func:`relightnet.io.read_image`: the ``--max-pixels`` lim
 **Side contrast** (does a light from one side light that side?). The photo is relit
 (:func:`relightnet.pipeline.relight_image` with its defaults, as ``relightnet relight-image``
 does: the photo's own albedo, the exposure kept) under L_left = 3·Y(d_left) + 0.3 on the l = 0
-coefficient (white; :func:`relightnet.sh.side_light`), d_left = (0.5, −0.85, 0.2) normalised, and under
+coefficient (white; :func:`relightnet.light.side_light`), d_left = (0.5, −0.85, 0.2) normalised, and under
 L_right, the same with d_right = (0.5, +0.85, 0.2). In the camera-relative light frame
 (docs/design.md, "Frames"; :mod:`relightnet.sh.frames`) x points to the camera, y to the
 image's right and z up, so d_left (y < 0) comes from the image's left, a little in front and
@@ -51,7 +51,8 @@ import torch.nn.functional as F
 from ..checks import InputError, check_shape, sh_order_from_count
 from ..color import luminance, srgb_to_linear
 from ..io import PHOTO_SUFFIXES
-from ..sh import light_from_words, preset_light, resize_sh, scale_invariant_light_error, side_light
+from ..light import light_from_words, preset_light, side_light
+from ..sh import resize_sh, scale_invariant_light_error
 from .backends import as_predictor, make_predictor
 from .photo_colour import COLOUR_LIGHTS, colour_figures
 from .relight_image import relight_image
@@ -81,7 +82,7 @@ Estimator = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 def check_lights(lmax: int = 2) -> dict[str, torch.Tensor]:
     """The fixed lights of the checks, (K, 3) each: ``left`` and ``right`` (:data:`SIDE_LEFT`,
     :data:`SIDE_RIGHT`), ``above`` (:data:`FROM_ABOVE`), all three ``3·Y(d) + 0.3`` on l = 0,
-    and the presets :data:`ROUND_TRIP_PRESETS` (:func:`relightnet.sh.preset_light`)."""
+    and the presets :data:`ROUND_TRIP_PRESETS` (:func:`relightnet.light.preset_light`)."""
     lights = {"left": side_light(SIDE_LEFT, lmax=lmax), "right": side_light(SIDE_RIGHT, lmax=lmax),
               "above": side_light(FROM_ABOVE, lmax=lmax)}
     return lights | {name: preset_light(name, lmax) for name in ROUND_TRIP_PRESETS}

@@ -13,7 +13,7 @@ appear instead. Both figures compare the relit photo with the photo, on the pers
 - **fine-scale chroma energy ratio**: the chromaticity minus its Gaussian blur (σ = :data:`FINE_SIGMA`
   px), its mean square over the person, relit ÷ photo (1: no colour noise added).
 
-The lights are :data:`COLOUR_LIGHTS` (in words, :func:`relightnet.sh.light_from_words`): a white key
+The lights are :data:`COLOUR_LIGHTS` (in words, :func:`relightnet.light.light_from_words`): a white key
 light from the left and one from the right, with a little ambient.
 """
 

@@ -23,8 +23,9 @@ from pathlib import Path
 import torch
 
 from ..checks import InputError
-from ..io import VideoWriter, frame_times
+from ..io import VideoWriter
 from ..io.hdr_video import HdrClip, HdrVideoWriter
+from ..io.video import frame_times
 from ..names import STREAMING_SMOOTHING
 from ..segment.sources import video_masks
 from ..sh import rotate_sh_up

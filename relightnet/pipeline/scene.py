@@ -50,7 +50,8 @@ def open_motion(motion, body, fps: float = 30.0, seed: int = 0) -> Callable[[int
         ``frames(n_frames) -> (params, T)``: a preset is made ``n_frames`` long; a file or a
         mapping has its own T.
     """
-    from ..body import MOTION_KINDS, AnnyBody, is_anny_motion, load_anny_motion, load_motion, make_motion
+    from ..body import MOTION_KINDS, AnnyBody, load_anny_motion, load_motion, make_motion
+    from ..body.anny_motion import is_anny_motion
 
     is_anny = isinstance(body, AnnyBody)
     if isinstance(motion, Mapping):

@@ -89,8 +89,8 @@ class VideoLightSettings:
         alpha: the streaming ``ema``'s weight of the newest frame, in (0, 1].
         model_name: names the model in the resume fingerprint of the estimates (e.g. the
             checkpoint path).
-        plate_light: a :class:`relightnet.sh.Plate`, combined with each estimate
-            (:func:`relightnet.sh.combine_person_plate`), or None.
+        plate_light: a :class:`relightnet.light.Plate`, combined with each estimate
+            (:func:`relightnet.light.combine_person_plate`), or None.
 
     Example:
         >>> VideoLightSettings(smoothing="hermite").mask_source

@@ -42,7 +42,8 @@ def smooth_default_albedo(body, size: int = 1024, iters: int = 16):
     Returns:
         :class:`~relightnet.render.TexturedAlbedo` with an (S, S, 3) texture in Anny's UV layout.
     """
-    from ..body import ANNY_PARTS, REGIONS, default_albedo, region_labels
+    from ..body import default_albedo
+    from ..body.albedo import ANNY_PARTS, REGIONS, region_labels
     from ..data.textures import region_field, texel_regions, uv_atlas
     from ..render.frame import TexturedAlbedo
 

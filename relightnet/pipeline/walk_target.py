@@ -70,10 +70,10 @@ def walking_target(out_dir, size=(256, 256), n_frames: int = 48, fps: float = 30
     from ..body import AnnyBody, make_motion
     from ..color import linear_to_srgb
     from ..io import VideoWriter
+    from ..light import ambient_light, directional_light
     from ..prt import PrtSettings
     from ..raster import default_camera
     from ..render.jobs import render_body_frames
-    from ..sh import ambient_light, directional_light
     from .scene import avatar_albedo
 
     H, W = int(size[0]), int(size[1])
@@ -120,8 +120,8 @@ def replaced_person_demo(out_dir, size: int, n_frames: int, body, n_dirs: int = 
     plate's PSNR against the true background over the pixels the
     person covered and uncovered. Returns the paths and figures by name."""
     from ..io import read_image
+    from ..light import ambient_light, directional_light
     from ..prt import PrtSettings
-    from ..sh import ambient_light, directional_light
     from .avatar import avatar
     from .clean_plate import plate_psnr
     from .settings import AvatarLook, AvatarPlacement

@@ -3,31 +3,21 @@
 ``vertex_transport(verts, faces, normals, lmax=2, prt=PrtSettings(n_dirs=256, occlusion=True, bounces=0))``
 returns (V, K) transport vectors ``T_k = ∫ V · max(n·ω, 0) · Y_k(ω) dω`` (no 1/π,
 ω in the light frame), so that shading is ``T @ L`` for an SH light L (K, 3).
+
+The public names are that entry point and its settings (:class:`PrtSettings`), the refined transport
+of a dressed body, the directions and visibility it is built from, the ray engines
+(:func:`make_engine`, :func:`available_engines`, :class:`RayEngine`), :func:`interreflect` and the mesh
+check; the engines' classes, the bounce operator and the other mesh checks stay in their modules.
 """
 
-from .interreflection import BounceOperator, bounce_operator, check_albedo, interreflect
-from .mesh_checks import MeshWarning, check_mesh, check_normals, mesh_scale, nonmanifold_edge_count
-from .refine import SHADOW_EDGE, refined_transport
+from .interreflection import interreflect
+from .mesh_checks import check_mesh
+from .refine import refined_transport
 from .settings import PrtSettings
 from .transport import transport_directions, vertex_transport
-from .visibility import (
-    ENGINES,
-    EmbreeEngine,
-    MitsubaEngine,
-    Open3DEngine,
-    RayEngine,
-    RayHits,
-    VertexRays,
-    available_engines,
-    make_engine,
-    vertex_rays,
-    vertex_visibility,
-)
+from .visibility import RayEngine, available_engines, make_engine, vertex_visibility
 
 __all__ = [
-    "PrtSettings", "vertex_transport", "transport_directions", "refined_transport", "SHADOW_EDGE",
-    "vertex_visibility", "vertex_rays", "VertexRays", "make_engine", "available_engines", "ENGINES",
-    "RayEngine", "RayHits", "EmbreeEngine", "MitsubaEngine", "Open3DEngine",
-    "BounceOperator", "bounce_operator", "interreflect", "check_albedo",
-    "MeshWarning", "check_mesh", "check_normals", "mesh_scale", "nonmanifold_edge_count",
+    "PrtSettings", "vertex_transport", "refined_transport", "transport_directions", "vertex_visibility", "make_engine",
+    "available_engines", "RayEngine", "interreflect", "check_mesh",
 ]

@@ -58,7 +58,7 @@ def bounce_operator(
     """Gather the hits of the vertex rays into a :class:`BounceOperator`.
 
     Args:
-        rays: the vertex rays (:func:`relightnet.prt.vertex_rays`).
+        rays: the vertex rays (:func:`relightnet.prt.visibility.vertex_rays`).
         hits: their closest hits (``engine.intersect(rays.origins, rays.dirs)``).
         faces: (F, 3) int64. weights: (D,) quadrature weights of the direction set.
         verts: (V, 3) float32 positions (for the facing test).

@@ -1,6 +1,6 @@
 """Per-vertex transport of a once-subdivided mesh, ray casting the midpoints only at shadow edges.
 
-A mesh subdivided once (:func:`relightnet.body.subdivide_faces`) has a vertex at the midpoint
+A mesh subdivided once (:func:`relightnet.body.subdivide.subdivide_faces`) has a vertex at the midpoint
 m of every split edge a–b. Casting all of their rays would cost as much as the rest of
 the mesh again; instead :func:`refined_transport` casts the rays of the original vertices,
 then, per midpoint, compares the visibility of its two endpoints over the directions both
@@ -132,7 +132,7 @@ def refined_transport(verts, faces, normals, midpoints, lmax: int = 2, prt: PrtS
     Args:
         verts: (V, 3), faces: (F, 3), normals: (V, 3) as for :func:`~relightnet.prt.vertex_transport`.
         midpoints: (M, 3) int64 rows (midpoint vertex m, endpoint a, endpoint b): m lies on edge a–b
-            (:attr:`relightnet.body.SubdividedFaces.midpoints`); endpoints are not midpoints.
+            (:attr:`relightnet.body.subdivide.SubdividedFaces.midpoints`); endpoints are not midpoints.
         lmax, prt, albedo, manifold: as for ``vertex_transport``; ``prt`` (a
             :class:`~relightnet.prt.PrtSettings`) with ``occlusion`` (every vertex is ray cast here).
         vertices: (N,) indices of the only rows wanted (others 0); not with ``bounces``. The rows

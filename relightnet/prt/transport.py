@@ -15,7 +15,8 @@ import numpy as np
 import torch
 
 from ..checks import InputError
-from ..sh import fibonacci_sphere, light_to_world, random_fibonacci_sphere, sh_basis, sh_count
+from ..sh import fibonacci_sphere, light_to_world, sh_basis, sh_count
+from ..sh.directions import random_fibonacci_sphere
 from .interreflection import bounce_operator, check_albedo, interreflect
 from .mesh_checks import check_mesh, check_normals, mesh_scale
 from .settings import PrtSettings
@@ -54,7 +55,7 @@ def _vertex_subset(vertices, n: int, bounces: int) -> torch.Tensor | None:
 
 
 def cast_lit(eng, rays, with_hits: bool, out: np.ndarray | None = None):
-    """Cast ``rays`` (:class:`~relightnet.prt.VertexRays`) with ``eng``: (lit (N, D) float32, the ray's
+    """Cast ``rays`` (:class:`~relightnet.prt.visibility.VertexRays`) with ``eng``: (lit (N, D) float32, the ray's
     cosine where it escapes and 0 where it is blocked; the hits, when ``with_hits``, else None).
 
     ``out``: a C-contiguous (N, D) float32 array to write the rays' entries into (and return) instead

@@ -81,7 +81,7 @@ def box_filter(x: torch.Tensor, radius: int) -> torch.Tensor:
 
     Example:
         >>> import torch
-        >>> from relightnet.raster import box_filter
+        >>> from relightnet.raster.morphology import box_filter
         >>> x = torch.zeros(1, 1, 3, 3)
         >>> x[..., 1, 1] = 9.0
         >>> box_filter(x, 1)[0, 0].tolist()  # corners average 4 pixels, edges 6, the centre 9

@@ -18,8 +18,11 @@ from functools import cached_property
 import torch
 
 from ..checks import InputError, check_sh_count, check_shape
-from ..raster import Camera, Fragments, Window, interpolate, interpolate_pixels, rasterize, texture_pixels
-from ..sh import rotate_sh, rotation_world_to_light
+from ..raster import Camera, Fragments, Window, interpolate, rasterize
+from ..raster.interpolate import interpolate_pixels
+from ..raster.texture import texture_pixels
+from ..sh import rotate_sh
+from ..sh.frames import rotation_world_to_light
 from .shading import shading
 
 __all__ = ["TexturedAlbedo", "RenderOutput", "light_in_world", "render_mesh"]

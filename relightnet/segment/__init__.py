@@ -8,36 +8,26 @@ mask is held steady over time along the landmarks' motion (:mod:`.steady`).
 :mod:`.sources` holds the rule by which every command picks a person mask; :mod:`.jobs` the
 ``segment`` job (masks and landmarks of photos and videos, written out).
 
+The public names are those entry points: a photo's mask and landmarks (:func:`segment_person` →
+:class:`PersonMask`, with :class:`PersonModels` loaded once), a video's (:func:`track_person`,
+:class:`PersonTracker`), the mask a command uses (:func:`person_mask`, :func:`video_masks`), the
+``segment`` job (:func:`segment_files`), the soft matte of the border band (:func:`soft_matte`) and
+the landmark names. The crops, the matte's parts and the models' files stay in their modules.
+
 Example:
     >>> from relightnet.segment import segment_person  # doctest: +SKIP
     >>> res = segment_person(image)  # image (3, H, W) sRGB in [0, 1]  # doctest: +SKIP
     >>> res.mask.shape, res.landmarks.shape  # (H, W), (33, 5)  # doctest: +SKIP
 """
 
-from .jobs import MASK_VIDEO_SUFFIXES, save_landmarks, segment_files
-from .matte import BAND_FRACTION, MIN_BAND, SoftMatte, band_radius, border_band, soft_matte
-from .models import INPUT_SIZE, LANDMARK_NAMES, POSE_FILE, SELFIE_FILE, PersonModels, PoseOutput
-from .person import (
-    CROP_SCALE,
-    PersonMask,
-    candidate_crops,
-    crop_around,
-    find_person,
-    mask_box,
-    refine_person,
-    segment_crop,
-    segment_person,
-)
-from .sources import MASK_SOURCES, check_mask_source, person_mask, video_masks
-from .steady import STEADY_MARGIN
+from .jobs import segment_files
+from .matte import soft_matte
+from .models import LANDMARK_NAMES, PersonModels
+from .person import PersonMask, segment_person
+from .sources import person_mask, video_masks
 from .video import PersonTracker, track_person
 
 __all__ = [
-    "MASK_VIDEO_SUFFIXES", "save_landmarks", "segment_files",
-    "BAND_FRACTION", "MIN_BAND", "SoftMatte", "band_radius", "border_band", "soft_matte",
-    "INPUT_SIZE", "LANDMARK_NAMES", "POSE_FILE", "SELFIE_FILE", "PersonModels", "PoseOutput",
-    "CROP_SCALE", "PersonMask", "candidate_crops", "crop_around", "find_person", "mask_box", "refine_person",
-    "segment_crop", "segment_person",
-    "MASK_SOURCES", "check_mask_source", "person_mask", "video_masks",
-    "STEADY_MARGIN", "PersonTracker", "track_person",
+    "segment_person", "PersonMask", "PersonModels", "soft_matte", "segment_files", "person_mask", "video_masks",
+    "track_person", "PersonTracker", "LANDMARK_NAMES",
 ]

@@ -72,7 +72,7 @@ def video_masks(video, masks=None, source: str = "segment", allow_empty: bool = 
 
     Args:
         video: the video file.
-        masks: a folder of mask images or a mask video (:func:`relightnet.io.frames_with_masks`), or None.
+        masks: a folder of mask images or a mask video (:func:`relightnet.io.video_masks.frames_with_masks`), or None.
         source: without ``masks``: ``segment`` (the person segmentation, tracked from frame to
             frame) or ``head`` (masks are None: the CNN's mask head).
         allow_empty: pass frames without the person on with an empty mask instead of failing.
@@ -83,7 +83,8 @@ def video_masks(video, masks=None, source: str = "segment", allow_empty: bool = 
         The iterator raises :class:`InputError` naming the frame when a mask is empty (or no
         person is found) and ``allow_empty`` is False.
     """
-    from ..io import count_frames, frames_with_masks, read_video, video_info
+    from ..io import count_frames, read_video, video_info
+    from ..io.video_masks import frames_with_masks
 
     check_mask_source(source)
     if masks is not None:

@@ -1,86 +1,26 @@
-"""Spherical harmonics: basis, frames, direction sets, projection, irradiance, rotation, light I/O,
-the light solve.
+"""Spherical harmonics, the maths of a light: the basis, frames, direction sets, projection between
+environment maps and SH, irradiance and the cosine lobe, rotation, light metrics, the light solve, and
+the light files (:func:`load_light_file`, :func:`save_light`, light sequences).
 
 Conventions are those of docs/design.md ("Conventions"): real orthonormal SH without the
-Condon–Shortley phase, k = l(l+1)+m, directions in the light frame.
+Condon–Shortley phase, k = l(l+1)+m, directions in the light frame. A light as a user gives it (in
+words, a preset name, a plate) is :mod:`relightnet.light`, the floor above.
 """
 
-from .basis import SHBasis, sh_basis, sh_count, sh_degrees, sh_index
-from .directions import (
-    directions_to_latlong,
-    fibonacci_hemisphere,
-    fibonacci_sphere,
-    latlong_directions,
-    random_fibonacci_sphere,
-)
-from .frames import (
-    WORLD_TO_LIGHT,
-    camera_normals_to_light,
-    light_to_world,
-    rotation_world_to_light,
-    world_to_light,
-)
-from .io import LIGHT_SUFFIXES, load_light, load_light_sequence, resize_sh, save_light, save_light_sequence
-from .irradiance import Irradiance, cone_band_factors, cone_transport, cosine_lobe, cosine_lobe_per_coeff, irradiance
-from .light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve, stack_evidence
-from .metrics import (
-    chromaticity_error,
-    direction_error,
-    dominant_direction,
-    irradiance_samples,
-    scale_invariant_light_error,
-)
-from .plate import (
-    DEFAULT_HFOV,
-    SEEN_FADE_DEG,
-    Plate,
-    PlateView,
-    combine_person_plate,
-    load_plate,
-    load_plate_light,
-    plate_envmap,
-    plate_light,
-    plate_seen,
-    plate_view,
-)
-from .presets import (
-    ambient_light,
-    directional_light,
-    preset_envmap,
-    preset_light,
-    preset_names,
-    preset_path,
-    side_light,
-)
+from .basis import sh_basis, sh_count, sh_index
+from .directions import directions_to_latlong, fibonacci_sphere, latlong_directions
+from .frames import camera_normals_to_light, light_to_world, world_to_light
+from .io import load_light_file, load_light_sequence, resize_sh, save_light, save_light_sequence
+from .irradiance import cone_transport, cosine_lobe, irradiance
+from .light_solve import Evidence, light_evidence, pool_evidence, solve_light
+from .metrics import direction_error, dominant_direction, scale_invariant_light_error
 from .projection import project, project_envmap, radiance, sh_to_envmap
-from .rotation import RotateSH, rotate_sh, rotate_sh_up, rotation_about_up, sh_rotation_matrix
-from .visualize import auto_exposure, light_preview, render_presets, render_sphere, sphere_normals
-from .words import (
-    camera_direction,
-    disc_band_factors,
-    disc_light,
-    is_light_words,
-    light_from_words,
-    parse_light_words,
-    words_envmap,
-)
+from .rotation import rotate_sh, rotate_sh_up
 
 __all__ = [
-    "SHBasis", "sh_basis", "sh_count", "sh_degrees", "sh_index",
-    "directions_to_latlong", "fibonacci_hemisphere", "fibonacci_sphere", "latlong_directions",
-    "random_fibonacci_sphere",
-    "WORLD_TO_LIGHT", "camera_normals_to_light", "light_to_world", "rotation_world_to_light",
-    "world_to_light",
-    "Irradiance", "cone_band_factors", "cone_transport", "cosine_lobe", "cosine_lobe_per_coeff", "irradiance",
-    "Evidence", "light_evidence", "pool_evidence", "solve_light", "spd_solve", "stack_evidence",
-    "project", "project_envmap", "radiance", "sh_to_envmap",
-    "chromaticity_error", "direction_error", "dominant_direction", "irradiance_samples", "scale_invariant_light_error",
-    "RotateSH", "rotate_sh", "rotate_sh_up", "rotation_about_up", "sh_rotation_matrix",
-    "LIGHT_SUFFIXES", "load_light", "resize_sh", "save_light", "load_light_sequence", "save_light_sequence",
-    "ambient_light", "directional_light", "preset_envmap", "preset_light", "preset_names", "preset_path", "side_light",
-    "auto_exposure", "light_preview", "render_presets", "render_sphere", "sphere_normals",
-    "camera_direction", "disc_band_factors", "disc_light", "is_light_words", "light_from_words",
-    "parse_light_words", "words_envmap",
-    "DEFAULT_HFOV", "SEEN_FADE_DEG", "Plate", "PlateView", "combine_person_plate", "load_plate", "load_plate_light",
-    "plate_envmap", "plate_light", "plate_seen", "plate_view",
+    "sh_basis", "sh_count", "sh_index", "world_to_light", "light_to_world", "camera_normals_to_light",
+    "fibonacci_sphere", "latlong_directions", "directions_to_latlong", "irradiance", "cosine_lobe", "cone_transport",
+    "project", "project_envmap", "sh_to_envmap", "radiance", "rotate_sh", "rotate_sh_up", "solve_light",
+    "light_evidence", "pool_evidence", "Evidence", "scale_invariant_light_error", "direction_error",
+    "dominant_direction", "save_light", "load_light_file", "save_light_sequence", "load_light_sequence", "resize_sh",
 ]

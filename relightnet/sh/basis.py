@@ -62,7 +62,7 @@ def sh_degrees(lmax: int, device=None) -> torch.Tensor:
     """(K,) int64 tensor giving the band l of every flat index k.
 
     Example:
-        >>> from relightnet.sh import sh_degrees
+        >>> from relightnet.sh.basis import sh_degrees
         >>> sh_degrees(2).tolist()
         [0, 1, 1, 1, 2, 2, 2, 2, 2]
     """
@@ -145,7 +145,7 @@ class SHBasis(nn.Module):
 
     Example:
         >>> import torch
-        >>> from relightnet.sh import SHBasis
+        >>> from relightnet.sh.basis import SHBasis
         >>> SHBasis(lmax=3)(torch.tensor([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])).shape
         torch.Size([2, 16])
     """

@@ -9,13 +9,14 @@ Formats, chosen by the file extension:
   that takes a light): our ``.npz`` with ``sh`` (T, K, 3), the light of each frame, plus named
   side arrays about the same frames — ``raw`` (T, K, 3) estimates before smoothing, ``outliers``
   and ``switches`` (T,) bool, ``evidence_M`` (T, 3, K, K), ... — or single values
-  (``smoothing``). :func:`save_light_sequence` / :func:`load_light_sequence`; :func:`load_light`
+  (``smoothing``). :func:`save_light_sequence` / :func:`load_light_sequence`; :func:`load_light_file`
   reads such a file as its (T, K, 3) ``sh``.
 - ``.npy``: a Kanamori–Endo (2018) light, exactly (9, 3) with **BGR** columns;
   converted to/from RGB here. Only single order-2 lights fit this format.
 - ``.exr`` / ``.hdr`` (load only): a lat-long environment map, projected to SH.
-- a preset name (``studio``, ``sunset``, ...; see :func:`relightnet.sh.preset_names`).
-- a light in words (``key:az=-40,el=30 + ambient:0.2``; :mod:`relightnet.sh.words`).
+
+A preset name (``studio``, ``sunset``, ...) or a light in words (``key:az=-40,el=30 + ambient:0.2``)
+is not a file: :func:`relightnet.light.load_light` takes those, and files through :func:`load_light_file`.
 
 Every loaded light is validated (finite values, K = (lmax+1)²) and returned as a
 float32 RGB tensor; errors name the file. The commands also check a light the user gives against
@@ -36,9 +37,8 @@ import torch
 
 from ..checks import InputError, ShapeError, sh_order_from_count
 from .basis import sh_count
-from .presets import preset_light, preset_names
 
-__all__ = ["LIGHT_SUFFIXES", "MAX_IRRADIANCE", "save_light", "load_light", "check_light_physics", "resize_sh",
+__all__ = ["LIGHT_SUFFIXES", "MAX_IRRADIANCE", "save_light", "load_light_file", "check_light_physics", "resize_sh",
            "save_light_sequence", "load_light_sequence"]
 
 logger = logging.getLogger(__name__)
@@ -89,7 +89,7 @@ def check_light_physics(sh: torch.Tensor, name: str = "light") -> torch.Tensor:
                        "black", where, channel, 100 * share)
     return sh
 
-#: Suffixes :func:`save_light` writes; :func:`load_light` also reads ``.exr`` and ``.hdr``.
+#: Suffixes :func:`save_light` writes; :func:`load_light_file` also reads ``.exr`` and ``.hdr``.
 LIGHT_SUFFIXES = (".npz", ".json", ".npy")
 _ENVMAP_SUFFIXES = (".exr", ".hdr")
 _FRAME, _UNITS = "light", "linear radiance"
@@ -247,44 +247,33 @@ def _read_npy(path: Path) -> torch.Tensor:
     return _validate(np.ascontiguousarray(arr[:, ::-1]).astype(np.float64), str(path))
 
 
-def load_light(path_or_name, lmax: int | None = None) -> torch.Tensor:
-    """Load a light from a file, a preset name, or an array.
+def load_light_file(path, lmax: int | None = None) -> torch.Tensor:
+    """Load a light from a file or an array (a preset name or a light in words is
+    :func:`relightnet.light.load_light`).
 
     Args:
-        path_or_name: ``.npz`` / ``.json`` (ours), ``.npy`` (Kanamori–Endo,
-            BGR), ``.exr`` / ``.hdr`` environment map, a preset name, a light
-            in words (:mod:`relightnet.sh.words`), or an in-memory (K, 3) /
-            (T, K, 3) tensor or array (validated and copied).
-        lmax: SH order of the result. Environment maps, presets and lights in
-            words are projected at this order (default 2). Stored coefficients are
-            returned as stored when None, else truncated or zero-padded to it.
+        path: ``.npz`` / ``.json`` (ours), ``.npy`` (Kanamori–Endo, BGR), ``.exr`` / ``.hdr``
+            environment map, or an in-memory (K, 3) / (T, K, 3) tensor or array (validated and copied).
+        lmax: SH order of the result. Environment maps are projected at this order (default 2).
+            Stored coefficients are returned as stored when None, else truncated or zero-padded to it.
 
     Returns:
         (K, 3) or (T, K, 3) float32 linear RGB coefficients in the light frame.
 
     Raises:
-        InputError: missing/unreadable file, NaN/Inf values, unknown preset
-            (the message lists the presets); the message names the file.
+        InputError: missing/unreadable file, NaN/Inf values; the message names the file.
         ShapeError: wrong number of coefficients or columns.
     """
     if lmax is not None:
         sh_count(lmax)
-    if isinstance(path_or_name, (torch.Tensor, np.ndarray)):
-        sh = _validate(path_or_name, "light").clone()
+    if isinstance(path, (torch.Tensor, np.ndarray)):
+        sh = _validate(path, "light").clone()
         return sh if lmax is None else resize_sh(sh, lmax)
-    if not isinstance(path_or_name, (str, os.PathLike)):
-        raise InputError(f"light: expected a path, preset name or array, got {type(path_or_name).__name__}")
-    from .words import is_light_words, light_from_words
-
-    if is_light_words(path_or_name) and not Path(path_or_name).exists():
-        return light_from_words(path_or_name, 2 if lmax is None else lmax)
-    path = Path(path_or_name)
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"light: expected a path, preset name or array, got {type(path).__name__}")
+    path = Path(path)
     suffix = path.suffix.lower()
     known = LIGHT_SUFFIXES + _ENVMAP_SUFFIXES
-    # A bare word (no suffix, no folder) is a preset name; presets win over same-named files.
-    bare = isinstance(path_or_name, str) and not suffix and len(path.parts) == 1
-    if bare and (not path.exists() or path_or_name in preset_names()):
-        return preset_light(path_or_name, 2 if lmax is None else lmax)
     if not path.exists():
         raise InputError(f"{path}: no such light file")
     if path.is_dir():
@@ -326,7 +315,7 @@ def save_light_sequence(path: str | os.PathLike, sh, **side) -> Path:
             Tensors are copied to numpy. Not the names ``sh``, ``lmax``, ``frame``, ``units``.
 
     Returns:
-        The path written; :func:`load_light` reads it as the (T, K, 3) sequence.
+        The path written; :func:`load_light_file` reads it as the (T, K, 3) sequence.
 
     Raises:
         ShapeError: ``sh`` not (T, K, 3), or a side array without T rows.
@@ -365,7 +354,7 @@ def load_light_sequence(path: str | os.PathLike, names=None) -> tuple[torch.Tens
             the message names the file.
     """
     path = Path(path)
-    sh = load_light(path)
+    sh = load_light_file(path)
     if sh.dim() != 3:
         raise ShapeError(f"{path}: expected a light sequence (T, K, 3), got one light {tuple(sh.shape)}")
     if path.suffix.lower() != ".npz":

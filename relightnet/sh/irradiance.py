@@ -105,7 +105,8 @@ def cone_transport(axis: torch.Tensor, cos_aperture: torch.Tensor, lmax: int, ch
         A full hemisphere (c = 0) is the unoccluded transport Â_l Y_k(n); a narrower cone lets less light in:
 
         >>> import torch
-        >>> from relightnet.sh import cone_transport, cosine_lobe_per_coeff, sh_basis
+        >>> from relightnet.sh import cone_transport, sh_basis
+        >>> from relightnet.sh.irradiance import cosine_lobe_per_coeff
         >>> up = torch.tensor([[0.0, 0.0, 1.0]])
         >>> T = cone_transport(up, torch.tensor([0.0]), lmax=2)
         >>> T.shape, torch.allclose(T, cosine_lobe_per_coeff(2) * sh_basis(up, 2), atol=1e-6)
@@ -163,7 +164,7 @@ class Irradiance(nn.Module):
 
     Example:
         >>> import torch
-        >>> from relightnet.sh import Irradiance
+        >>> from relightnet.sh.irradiance import Irradiance
         >>> Irradiance(torch.zeros(9, 3))(torch.tensor([[1.0, 0.0, 0.0]])).shape
         torch.Size([1, 3])
     """

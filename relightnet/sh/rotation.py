@@ -34,7 +34,7 @@ def sh_rotation_matrix(R: torch.Tensor, lmax: int) -> torch.Tensor:
         The matrix is block diagonal by band and orthogonal:
 
         >>> import torch
-        >>> from relightnet.sh import rotation_about_up, sh_rotation_matrix
+        >>> from relightnet.sh.rotation import rotation_about_up, sh_rotation_matrix
         >>> M = sh_rotation_matrix(rotation_about_up(0.3), lmax=2)
         >>> M.shape, torch.allclose(M @ M.T, torch.eye(9), atol=1e-5), M[0, 1:].abs().max().item() == 0
         (torch.Size([9, 9]), True, True)
@@ -71,7 +71,8 @@ def rotate_sh(sh: torch.Tensor, R: torch.Tensor) -> torch.Tensor:
         A light along x (the camera) turned a quarter about the up axis lies along y (image right):
 
         >>> import math, torch
-        >>> from relightnet.sh import rotate_sh, rotation_about_up
+        >>> from relightnet.sh import rotate_sh
+        >>> from relightnet.sh.rotation import rotation_about_up
         >>> sh = torch.zeros(9, 3)
         >>> sh[3] = 1.0  # k = 3: Y ∝ x
         >>> out = rotate_sh(sh, rotation_about_up(math.pi / 2))
@@ -95,7 +96,7 @@ def rotation_about_up(angle: torch.Tensor | float, dtype=torch.float32, device=N
 
     Example:
         >>> import math, torch
-        >>> from relightnet.sh import rotation_about_up
+        >>> from relightnet.sh.rotation import rotation_about_up
         >>> (rotation_about_up(math.pi / 2).round() + 0.0).tolist()
         [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
         >>> rotation_about_up(torch.zeros(4)).shape

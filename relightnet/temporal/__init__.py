@@ -4,78 +4,28 @@ one-euro, FIR, outlier gate), shot pooling of the light solve, switches seen in 
 colour, the irradiance light distance, and quality metrics. :mod:`relightnet.temporal.registry`
 implements the methods of the one torch-free table, :data:`relightnet.names.SMOOTHING_METHODS`
 (what ``--smoothing`` accepts).
+
+The public names are what smooths a video's lights: by method name (:func:`smooth_video_lights`,
+:func:`smooth_sequence`, :func:`make_smoother`), offline (:func:`smooth_lights` → :class:`SmoothResult`,
+:func:`smoothing_matrix`, :func:`detect_switches`), causal (:class:`EMAFilter`, :class:`OneEuroFilter`,
+:class:`FIRFilter`, :class:`OutlierGate`, :func:`run_causal`), pooled (:func:`pool_shot_lights`,
+:class:`PooledSolve`), the switches in the frames' colour, and the metrics. The per-step functions,
+the smoothers' matrices and the robust statistics stay in their modules.
 """
 
-from .causal import (
-    EMAFilter,
-    FIRFilter,
-    OneEuroFilter,
-    ema_matrix,
-    ema_sequence,
-    ema_step,
-    fir_sequence,
-    fir_step,
-    fir_taps,
-    one_euro_step,
-    run_causal,
-)
-from .distance import (
-    light_distance,
-    light_norm,
-    light_weights,
-    local_outlier_threshold,
-    outlier_threshold,
-    parse_eps,
-    robust_scale,
-)
-from .gate import OutlierGate, gate_step
-from .metrics import jitter, light_drift, light_error, outlier_scores, step_lag
-from .offline import (
-    SmoothResult,
-    detect_switches,
-    frame_noise,
-    running_median,
-    smooth_hermite,
-    smooth_lights,
-    smooth_poly,
-    smooth_savgol,
-)
-from .pooling import (
-    CHANGE_EXPLAINED,
-    POOL_SECONDS,
-    SWITCH_NOISE,
-    PooledSolve,
-    changing_segments,
-    pool_shot_lights,
-    pool_window,
-    pooled_step,
-    pooled_sums,
-    pooling_weights,
-)
-from .registry import (
-    MIN_FIT_FRAMES,
-    VideoSmoothing,
-    check_smoothing,
-    make_smoother,
-    resolve_smoothing,
-    smooth_sequence,
-    smooth_video_lights,
-)
-from .smoothers import hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
-from .switches import COLOUR_STEP, colour_switches, frame_colour, merge_switches
+from .causal import EMAFilter, FIRFilter, OneEuroFilter, run_causal
+from .distance import light_distance
+from .gate import OutlierGate
+from .metrics import jitter, light_drift, light_error, step_lag
+from .offline import SmoothResult, detect_switches, smooth_lights
+from .pooling import PooledSolve, changing_segments, pool_shot_lights
+from .registry import VideoSmoothing, make_smoother, smooth_sequence, smooth_video_lights
+from .smoothers import smoothing_matrix
+from .switches import colour_switches, frame_colour
 
 __all__ = [
-    "EMAFilter", "FIRFilter", "OneEuroFilter", "OutlierGate", "ema_matrix", "ema_sequence", "ema_step", "fir_sequence",
-    "fir_step", "fir_taps", "gate_step", "one_euro_step", "run_causal",
-    "light_distance", "light_norm", "light_weights", "local_outlier_threshold", "outlier_threshold",
-    "parse_eps", "robust_scale",
-    "jitter", "light_drift", "light_error", "outlier_scores", "step_lag",
-    "SmoothResult", "detect_switches", "frame_noise", "hermite_basis", "hermite_matrix", "poly_matrix",
-    "running_median", "savgol_matrix", "smooth_hermite", "smooth_lights", "smooth_poly", "smooth_savgol",
-    "smoothing_matrix",
-    "MIN_FIT_FRAMES", "VideoSmoothing", "check_smoothing", "make_smoother", "resolve_smoothing", "smooth_sequence",
-    "smooth_video_lights",
-    "CHANGE_EXPLAINED", "POOL_SECONDS", "SWITCH_NOISE", "PooledSolve", "changing_segments", "pool_shot_lights",
-    "pool_window", "pooled_step", "pooled_sums", "pooling_weights",
-    "COLOUR_STEP", "colour_switches", "frame_colour", "merge_switches",
+    "smooth_lights", "SmoothResult", "smooth_sequence", "make_smoother", "smooth_video_lights", "VideoSmoothing",
+    "smoothing_matrix", "EMAFilter", "OneEuroFilter", "FIRFilter", "OutlierGate", "run_causal", "pool_shot_lights",
+    "PooledSolve", "changing_segments", "colour_switches", "frame_colour", "detect_switches", "light_error", "jitter",
+    "light_drift", "step_lag", "light_distance",
 ]

@@ -218,7 +218,7 @@ def ema_sequence(lights: torch.Tensor, alpha: float) -> torch.Tensor:
         A step from light 0 to light 1 is followed at the rate α:
 
         >>> import torch
-        >>> from relightnet.temporal import ema_sequence
+        >>> from relightnet.temporal.causal import ema_sequence
         >>> lights = torch.zeros(4, 9, 3)
         >>> lights[1:] = 1.0
         >>> ema_sequence(lights, alpha=0.5)[:, 0, 0].tolist()

@@ -118,7 +118,7 @@ def smooth_sequence(lights: torch.Tensor, method: str = "auto", evidence=None, p
         evidence, prior: the light solve's per-frame evidence (``M`` (T, 3, K, K), ``r`` (T, 3, K))
             and priors (T, K, 3), for ``pooled`` (:func:`~relightnet.temporal.pool_shot_lights`,
             ``reg`` the network's λ: one light per segment, a segment whose light changes pooled over
-            the window of :func:`~relightnet.temporal.pool_window` at ``fps``; ``window=`` frames: a
+            the window of :func:`~relightnet.temporal.pooling.pool_window` at ``fps``; ``window=`` frames: a
             sliding window everywhere).
         gate: for a causal method, the options of an :class:`~relightnet.temporal.gate.OutlierGate`
             put in front of it (``eps``, ``persist``, ...); its status gives the outliers and switches.

@@ -14,7 +14,7 @@ from relightnet.app.controls import (
     words_of,
 )
 from relightnet.checks import InputError
-from relightnet.sh import light_from_words, preset_light
+from relightnet.light import light_from_words, preset_light
 
 
 def test_sphere_points_and_directions_round_trip():

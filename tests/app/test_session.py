@@ -7,9 +7,9 @@ import torch
 from relightnet.app.session import RelightSession, load_photo
 from relightnet.checks import InputError
 from relightnet.io import write_image
+from relightnet.light import load_light
 from relightnet.pipeline.relight_image import relight_image
 from relightnet.segment.matte import band_radius, border_band
-from relightnet.sh import load_light
 
 LIGHTS = ["key:az=-40,el=30,size=20,color=1/0.9/0.8,power=3 + fill:az=60,el=10,power=0.5 + ambient:0.2",
           "studio", "key:az=170,el=-20,size=5"]

@@ -61,7 +61,7 @@ def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, mo
     from relightnet.app.session import load_photo
     from relightnet.cli import main
     from relightnet.io import read_image
-    from relightnet.sh import load_light
+    from relightnet.light import load_light
 
     url, workdir = running_app
     assert url.startswith("http://127.0.0.1:")

@@ -5,7 +5,7 @@ import math
 import pytest
 import torch
 
-from relightnet.blender import blender_camera
+from relightnet.blender.camera import blender_camera
 from relightnet.checks import InputError, ShapeError
 from relightnet.raster import default_camera, look_at, orthographic_camera, perspective_camera
 

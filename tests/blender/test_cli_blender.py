@@ -14,7 +14,7 @@ def test_export_then_render(tmp_path):
                  "--band-limit", "--negative", "lift", "--world-res", "16", "--res", "32", "--camera", "fit",
                  "--spp", "4", "--bounces", "1", "--out", str(blend)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["walk.blend"]
-    from relightnet.blender import open_blend
+    from relightnet.blender.cycles import open_blend
 
     scene = open_blend(blend)
     meta = json.loads(scene["relightnet"])

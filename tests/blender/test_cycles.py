@@ -5,15 +5,17 @@ import math
 import pytest
 import torch
 
-from relightnet.blender import CYCLES_TO_RELIGHTNET, export_scene, render_blend, world_light
+from relightnet.blender import export_scene, render_blend, world_light
+from relightnet.blender.cycles import CYCLES_TO_RELIGHTNET
 from relightnet.blender.reference import masked_rel_rmse
-from relightnet.body import vertex_normals
+from relightnet.body.base import vertex_normals
 from relightnet.checks import InputError
 from relightnet.io import read_envmap, read_image
+from relightnet.light import ambient_light, directional_light
 from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.raster import look_at, perspective_camera
 from relightnet.render import render_mesh
-from relightnet.sh import ambient_light, directional_light, rotate_sh, sh_to_envmap
+from relightnet.sh import rotate_sh, sh_to_envmap
 
 #: 64², 8 spp: Cycles' noise alone is ≈ 8 % relative RMSE (0.2 % at 256 spp, measured); the mean
 #: over the sphere is within 0.3 % of ours. A light turned 90° gives 37 %.

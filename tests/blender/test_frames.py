@@ -4,14 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.blender import (
-    BLENDER_FROM_WORLD,
-    blender_to_world,
-    equirect_directions,
-    latlong_to_equirect,
-    transform_to_blender,
-    world_to_blender,
-)
+from relightnet.blender import blender_to_world, world_to_blender
+from relightnet.blender.frames import BLENDER_FROM_WORLD, equirect_directions, latlong_to_equirect, transform_to_blender
 from relightnet.io import write_envmap
 from relightnet.sh import directions_to_latlong, latlong_directions
 

@@ -39,7 +39,7 @@ def _cube_file(path, render_levels=2, count=3, fit_type="FIXED_COUNT", adaptive=
 
 
 def test_modifiers_multiply_as_blender_builds_them(tmp_path):
-    from relightnet.blender import blend_face_count, check_blend_geometry
+    from relightnet.blender.geometry import blend_face_count, check_blend_geometry
 
     built = []
     f = _cube_file(tmp_path / "f.blend", evaluated=built)
@@ -53,8 +53,8 @@ def test_modifiers_multiply_as_blender_builds_them(tmp_path):
 
 
 def test_collection_instances_count(tmp_path):
-    from relightnet.blender import blend_face_count
     from relightnet.blender._bpy import reset
+    from relightnet.blender.geometry import blend_face_count
 
     bpy = reset()
     coll = bpy.data.collections.new("c")

@@ -6,14 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.blender import (
-    WorldLightSettings,
-    blender_camera,
-    export_body_scene,
-    export_scene,
-    world_light,
-    world_to_blender,
-)
+from relightnet.blender import WorldLightSettings, export_body_scene, export_scene, world_light, world_to_blender
+from relightnet.blender.camera import blender_camera
 from relightnet.blender.cycles import open_blend, read_image_pixels
 from relightnet.body import default_albedo, make_motion
 from relightnet.checks import InputError, ShapeError

@@ -5,19 +5,14 @@ import math
 import pytest
 import torch
 
-from relightnet.blender import envmap_world_image, latlong_to_equirect, lift_sh, sh_world_image, world_light
+from relightnet.blender import world_light
+from relightnet.blender.frames import latlong_to_equirect
+from relightnet.blender.world import envmap_world_image, lift_sh, sh_world_image
 from relightnet.checks import InputError, ShapeError
+from relightnet.light import ambient_light, directional_light, preset_envmap, preset_light
 from relightnet.raster import default_camera, look_at, perspective_camera
 from relightnet.render import light_in_world
-from relightnet.sh import (
-    ambient_light,
-    directional_light,
-    preset_envmap,
-    preset_light,
-    project_envmap,
-    save_light,
-    sh_to_envmap,
-)
+from relightnet.sh import project_envmap, save_light, sh_to_envmap
 
 
 def _unroll(img: torch.Tensor) -> torch.Tensor:

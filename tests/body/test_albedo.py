@@ -1,8 +1,8 @@
 import pytest
 import torch
 
-from relightnet.body import ANNY_PARTS, REGIONS, anny_part_labels, default_albedo, region_labels, skin_color
-from relightnet.body.albedo import vertex_to_texture
+from relightnet.body import default_albedo
+from relightnet.body.albedo import ANNY_PARTS, REGIONS, anny_part_labels, region_labels, skin_color, vertex_to_texture
 from relightnet.checks import InputError
 
 

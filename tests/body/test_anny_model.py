@@ -3,15 +3,9 @@ import math
 import pytest
 import torch
 
-from relightnet.body import (
-    ANNY_TO_WORLD,
-    PHENOTYPES,
-    POSE_PRESETS,
-    BodyOutput,
-    anny_to_world,
-    pose_preset,
-    vertex_normals,
-)
+from relightnet.body import PHENOTYPES, POSE_PRESETS, BodyOutput, pose_preset
+from relightnet.body.anny_model import ANNY_TO_WORLD, anny_to_world
+from relightnet.body.base import vertex_normals
 from relightnet.checks import InputError, ShapeError
 
 N_VERTS, N_FACES, N_BONES, N_UV = 13718, 27420, 104, 21334

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import AnnyMotion, is_anny_motion, load_anny_motion, save_anny_motion
+from relightnet.body import AnnyMotion, load_anny_motion, save_anny_motion
+from relightnet.body.anny_motion import is_anny_motion
 from relightnet.checks import InputError, ShapeError
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import REGIONS, region_labels
+from relightnet.body.albedo import REGIONS, region_labels
 from relightnet.body.garments import RingShape, hem_field, iso_clip, radial_directions, ring_surface, shell_surface
 from relightnet.checks import InputError
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import Z_UP_TO_Y_UP, Motion, SMPLBody, load_motion, reorient_motion, save_motion
+from relightnet.body import Motion, SMPLBody, load_motion, save_motion
+from relightnet.body.motion_io import Z_UP_TO_Y_UP, reorient_motion
 from relightnet.checks import InputError, ShapeError
 
 

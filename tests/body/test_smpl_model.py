@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import SMPL_JOINT_NAMES, SMPLBody, load_smpl_file, smpl_to_world, spherical_uv
+from relightnet.body import SMPLBody
+from relightnet.body.smpl_model import SMPL_JOINT_NAMES, load_smpl_file, smpl_to_world, spherical_uv
 from relightnet.checks import InputError, ShapeError
 
 

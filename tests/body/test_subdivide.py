@@ -4,7 +4,7 @@ import pytest
 import torch
 import trimesh
 
-from relightnet.body import midpoint_values, subdivide_faces
+from relightnet.body.subdivide import midpoint_values, subdivide_faces
 from relightnet.checks import InputError, ShapeError
 
 

@@ -75,7 +75,7 @@ def test_metrics_refuse_bad_shapes_and_weights():
 
 def _atlas():
     """A 4² atlas: texels 0–11 on islands, 12–15 padding copying texel 0; texel 5 on the tongue."""
-    from relightnet.body import ANNY_PARTS
+    from relightnet.body.albedo import ANNY_PARTS
 
     parts = np.zeros(16, dtype=np.int64)
     parts[5] = ANNY_PARTS.index("tongue")

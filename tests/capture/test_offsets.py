@@ -5,9 +5,12 @@ import math
 import pytest
 import torch
 
-from relightnet.capture import OffsetFit, apply_offsets, solve_offsets
+from relightnet.capture.offsets import OffsetFit, apply_offsets, solve_offsets
 from relightnet.errors import InputError
-from relightnet.fit import FIT_BONES, FitBody, FitResult, PackedMasks, default_intrinsics, fit_camera, fit_meshes
+from relightnet.fit import FitBody, FitResult, default_intrinsics
+from relightnet.fit.body_model import FIT_BONES
+from relightnet.fit.masks import PackedMasks
+from relightnet.fit.preview import fit_camera, fit_meshes
 from relightnet.raster import rasterize
 
 SIZE = (160, 160)  # the person ~140 px tall: 1 px ≈ 1.2 cm at the body
@@ -21,7 +24,7 @@ def fit_body(anny_body):
 @pytest.fixture(scope="module")
 def turning(fit_body):
     """A body in its rest pose turning a full circle in 4 frames, and its torso (V,) bool."""
-    from relightnet.body import REGIONS, region_labels
+    from relightnet.body.albedo import REGIONS, region_labels
 
     T = 4
     pose = torch.zeros(T, len(FIT_BONES), 3)

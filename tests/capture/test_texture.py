@@ -6,15 +6,17 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.capture import TextureOptions, capture_person, surface_texels
+from relightnet.capture import TextureOptions, capture_person
+from relightnet.capture.metrics import surface_texels
 from relightnet.capture.texture import TexelSamples, TextureFusion, weighted_median
 from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb
-from relightnet.fit import FIT_BONES, FitBody, FitResult, default_intrinsics
+from relightnet.fit import FitBody, FitResult, default_intrinsics
+from relightnet.fit.body_model import FIT_BONES
 from relightnet.fit.preview import fit_camera, fit_meshes
+from relightnet.light import ambient_light, directional_light
 from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.render.frame import TexturedAlbedo, render_mesh
-from relightnet.sh import ambient_light, directional_light
 
 SIZE = (384, 288)
 TEX = 256
@@ -23,7 +25,7 @@ TEX = 256
 @pytest.fixture(scope="module")
 def turning(anny_body):
     """A painted Anny turning a full circle in 8 frames, rendered in the fit's own camera, and the truth."""
-    from relightnet.body import region_labels
+    from relightnet.body.albedo import region_labels
     from relightnet.data.textures import paint_albedo, sample_outfit, uv_atlas
 
     fb = FitBody(anny_body)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import REGIONS
+from relightnet.body.albedo import REGIONS
 from relightnet.checks import InputError
 from relightnet.data.config import SynthConfig
 from relightnet.data.garments import (

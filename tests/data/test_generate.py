@@ -5,12 +5,13 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import REGIONS
+from relightnet.body.albedo import REGIONS
 from relightnet.checks import InputError
 from relightnet.data.config import SynthConfig
 from relightnet.data.generate import GENERATOR_VERSION, Sample, generate_sample, generate_sequence, prepare_assets
 from relightnet.data.lights import LUMA
-from relightnet.sh import cosine_lobe_per_coeff, sh_basis
+from relightnet.sh import sh_basis
+from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
 RES = 64
 CFG = SynthConfig(res=RES, n_dirs=24, partial_crop_prob=0.0)

@@ -18,15 +18,9 @@ from relightnet.data.lights import (
     synthetic_light,
     white_balance,
 )
-from relightnet.sh import (
-    directional_light,
-    fibonacci_sphere,
-    irradiance,
-    preset_light,
-    radiance,
-    rotate_sh_up,
-    rotation_about_up,
-)
+from relightnet.light import directional_light, preset_light
+from relightnet.sh import fibonacci_sphere, irradiance, radiance, rotate_sh_up
+from relightnet.sh.rotation import rotation_about_up
 
 
 def _normals(n=2048):

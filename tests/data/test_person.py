@@ -24,7 +24,8 @@ from relightnet.data.textures import paint_albedo, sample_outfit
 from relightnet.prt import PrtSettings, vertex_transport
 from relightnet.raster import Fragments, perspective_camera
 from relightnet.render import light_in_world
-from relightnet.sh import cosine_lobe_per_coeff, sh_basis
+from relightnet.sh import sh_basis
+from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tests/data/conftest.py
 

@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from relightnet.body import REGIONS
+from relightnet.body.albedo import REGIONS
 from relightnet.checks import InputError
 from relightnet.data.sample import Sample, SynthAssets, assets_for, prepare_assets
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import REGIONS, region_labels
+from relightnet.body.albedo import REGIONS, region_labels
 from relightnet.checks import InputError
 from relightnet.data.textures import (
     ALBEDO_MAX,

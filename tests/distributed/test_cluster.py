@@ -3,7 +3,8 @@ import sys
 import pytest
 
 from relightnet.checks import InputError
-from relightnet.distributed import connect, import_ray, one_line
+from relightnet.distributed import connect
+from relightnet.distributed.cluster import import_ray, one_line
 
 
 def test_without_ray_a_one_line_error_says_how_to_install(monkeypatch):

@@ -17,8 +17,10 @@ def known_clip(fb, T: int = 2, size=(192, 192), fov: float = 50.0, yaw: float = 
     """Evidence made from a known walking body: (Observations, intrinsics, truth points (T, 33, 3))."""
     from relightnet.body import make_motion
     from relightnet.body.base import compose_rotvecs
-    from relightnet.fit import Observations, default_intrinsics, project_points
-    from relightnet.raster import Camera, perspective_projection, rasterize
+    from relightnet.fit import Observations, default_intrinsics
+    from relightnet.fit.camera import project_points
+    from relightnet.raster import Camera, rasterize
+    from relightnet.raster.camera import perspective_projection
 
     intr = default_intrinsics(size, fov)
     m = make_motion("walk", T, fps=30, seed=seed)

@@ -1,6 +1,6 @@
 import torch
 
-from relightnet.fit import FIT_BONES
+from relightnet.fit.body_model import FIT_BONES
 
 
 def test_fast_points_equal_full_mesh(fit_body):
@@ -27,7 +27,7 @@ def test_fast_points_equal_full_mesh(fit_body):
 
 
 def test_fast_points_are_differentiable_in_shape(fit_body):
-    from relightnet.fit import phenotype_from_free
+    from relightnet.fit.body_model import phenotype_from_free
 
     base = fit_body.body.phenotype_tensor(None)[0]
     free = torch.zeros(3, requires_grad=True)
@@ -41,7 +41,7 @@ def test_fast_points_are_differentiable_in_shape(fit_body):
 def test_linearised_rest_is_first_order(fit_body):
     """rest_near's error vanishes to second order: halving the step quarters it (about), and it is
     a small part of the change it models."""
-    from relightnet.fit import phenotype_from_free, rest_near
+    from relightnet.fit.body_model import phenotype_from_free, rest_near
 
     base = fit_body.body.phenotype_tensor(None)[0]
     free0 = torch.tensor([0.2, -0.3, 0.1])

@@ -2,7 +2,8 @@ import math
 
 import torch
 
-from relightnet.fit import default_intrinsics, exif_intrinsics, project_points
+from relightnet.fit import default_intrinsics, exif_intrinsics
+from relightnet.fit.camera import project_points
 
 
 def test_default_fov_and_projection():

@@ -5,7 +5,7 @@ import math
 import torch
 
 from relightnet.body.base import matrix_to_rotvec, rotvec_to_matrix
-from relightnet.fit import MAX_TURN_DEG, relative_turn
+from relightnet.fit.init import MAX_TURN_DEG, relative_turn
 
 
 def _torso(T: int, yaws_deg) -> torch.Tensor:

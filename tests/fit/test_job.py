@@ -3,7 +3,9 @@
 import numpy as np
 import torch
 
-from relightnet.fit import FIT_BONES, FitResult, default_intrinsics, write_fit_masks, write_preview
+from relightnet.fit import FitResult, default_intrinsics
+from relightnet.fit.body_model import FIT_BONES
+from relightnet.fit.job import write_fit_masks, write_preview
 from relightnet.io import VideoWriter, read_video, video_info
 
 
@@ -29,7 +31,7 @@ def test_preview_and_masks_of_a_video(tmp_path, fit_body):
 
 def test_frames_are_rasterized_a_few_at_a_time(fit_body):
     """8 frames of a small video together, one frame at a time from 2 MP up; any chunking gives the same masks."""
-    from relightnet.fit import CHUNK_PIXELS, chunk_frames, fit_silhouettes
+    from relightnet.fit.preview import CHUNK_PIXELS, chunk_frames, fit_silhouettes
 
     assert chunk_frames((192, 192)) == 8 and chunk_frames((1080, 1920)) == 1 and chunk_frames((3120, 4000)) == 1
     assert chunk_frames((512, 512)) * 512 * 512 <= CHUNK_PIXELS
@@ -47,8 +49,7 @@ def test_frames_are_rasterized_a_few_at_a_time(fit_body):
 def test_overlay_blends_the_covered_pixels_as_the_whole_image_formula_did(fit_body):
     """The overlay is blended at the covered pixels only; every pixel equals the old whole-image formula's
     (frames × (1 − a) + colour × a, clamped, a = opacity × coverage), bit for bit, also for strided frames."""
-    from relightnet.fit import fit_silhouettes, overlay_frames
-    from relightnet.fit.preview import _frags
+    from relightnet.fit.preview import _frags, fit_silhouettes, overlay_frames
     from relightnet.raster import interpolate
 
     T, size = 2, (40, 32)

@@ -1,6 +1,6 @@
 import torch
 
-from relightnet.fit import LANDMARK_SOURCES, landmark_weights
+from relightnet.fit.landmarks import LANDMARK_SOURCES, landmark_weights
 from relightnet.segment import LANDMARK_NAMES
 
 

@@ -79,7 +79,7 @@ def test_masks_kept_at_the_working_resolution_are_what_the_fit_resampled_before(
     """Packed for the fit's window, each complete window is resampled when its last frame arrives, the last
     (short) one when the fit asks: every window's working masks, and the silhouette evidence made from them,
     equal the old path's on the full-size masks bit for bit."""
-    from relightnet.fit import silhouette_targets
+    from relightnet.fit.terms import silhouette_targets
 
     m = _blobs(10, (96, 72), seed=3)
     m[5] = False  # a frame where nobody was found
@@ -104,7 +104,7 @@ def test_a_noise_mask_at_the_pixel_limit_costs_at_most_the_working_box():
     """Masks that do not compress (random bits) in 4000 × 3120 frames (12.5 MP): 1.5 MB a frame at the frame's
     size, at most MAX_FRAME_BYTES (~28.5 KiB) at the working resolution; the band as wide as 4 persons are tall
     reaches the largest working box (240 × 960 bits), so the bound is the worst case, not a loose one."""
-    from relightnet.fit import MAX_FRAME_BYTES
+    from relightnet.fit.masks import MAX_FRAME_BYTES
 
     H, W = 3120, 4000
     rng = np.random.default_rng(0)

@@ -5,7 +5,9 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.fit import Observations, fill_missing, observe_frames, silhouette_targets, world_to_view_axes
+from relightnet.fit import Observations, observe_frames
+from relightnet.fit.observe import fill_missing, world_to_view_axes
+from relightnet.fit.terms import silhouette_targets
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fuzz"))
 from resource_fit import person_clip  # noqa: E402  (the fit's resource cases render the same person)

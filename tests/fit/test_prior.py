@@ -1,7 +1,8 @@
 import torch
 
 from relightnet.body import POSE_PRESETS
-from relightnet.fit import FIT_BONES, JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
+from relightnet.fit.body_model import FIT_BONES
+from relightnet.fit.prior import JOINT_LIMITS, limit_bounds, limit_penalty, rest_penalty
 
 
 def _sub(rotations: dict) -> torch.Tensor:

@@ -3,7 +3,9 @@ import math
 import torch
 
 from relightnet.body.base import matrix_to_rotvec, rotvec_to_matrix
-from relightnet.fit import FIT_BONES, default_intrinsics, project_points
+from relightnet.fit import default_intrinsics
+from relightnet.fit.body_model import FIT_BONES
+from relightnet.fit.camera import project_points
 from relightnet.fit.smooth import FOOT_SLOTS, gaussian_weights, place_in_world, smooth_motion, smooth_rotations
 from relightnet.fit.solve import FitResult
 

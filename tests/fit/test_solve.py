@@ -28,8 +28,9 @@ def test_fit_recovers_a_known_pose(fit_body):
 
 def test_a_window_beyond_the_pixel_budget_is_refused_before_any_work(fit_body):
     """At the 12.5 MP limit 8 frames' distance maps (400 MB) are fitted together, not 9."""
-    from relightnet.fit import MAX_WINDOW_PIXELS, Observations, default_intrinsics, fit_observations
+    from relightnet.fit import Observations, default_intrinsics, fit_observations
     from relightnet.fit.masks import PackedMasks
+    from relightnet.fit.solve import MAX_WINDOW_PIXELS
 
     T, size = 9, (3120, 4000)
     masks = PackedMasks(size)
@@ -77,7 +78,8 @@ def test_more_frames_than_the_fit_holds_are_refused_before_any_work(fit_body, tm
     import numpy as np
 
     import relightnet.fit.job as job
-    from relightnet.fit import MAX_FIT_FRAMES, FitOptions, Observations, default_intrinsics, fit_file
+    from relightnet.fit import FitOptions, Observations, default_intrinsics, fit_file
+    from relightnet.fit.job import MAX_FIT_FRAMES
     from relightnet.io import VideoWriter
 
     T = MAX_FIT_FRAMES + 1

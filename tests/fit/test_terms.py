@@ -4,7 +4,8 @@ import numpy as np
 import torch
 from scipy import ndimage
 
-from relightnet.fit import SILHOUETTE_HEIGHT, outline_matches, silhouette_targets, silhouette_term
+from relightnet.fit.masks import SILHOUETTE_HEIGHT
+from relightnet.fit.terms import outline_matches, silhouette_targets, silhouette_term
 
 
 def _person(size=(720, 1280), box=(100, 600, 500, 700)) -> torch.Tensor:

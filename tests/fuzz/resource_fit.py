@@ -31,12 +31,12 @@ def person_clip(path: Path, n: int, small: tuple[int, int] = SMALL, up: int = UP
     from relightnet.body import AnnyBody, make_motion
     from relightnet.color import linear_to_srgb
     from relightnet.io import VideoWriter
+    from relightnet.light import ambient_light, directional_light
     from relightnet.pipeline.scene import avatar_albedo
     from relightnet.pipeline.walk_target import _background
     from relightnet.prt import PrtSettings
     from relightnet.raster import default_camera
     from relightnet.render.jobs import render_body_frames
-    from relightnet.sh import ambient_light, directional_light
 
     body = AnnyBody()
     motion = make_motion("walk", n, fps=fps, seed=0, heading=math.pi / 6)

@@ -57,13 +57,14 @@ def _onnx(path):
 
 def readers(tmp: Path) -> dict:
     """name → (suffix, seeds {suffix: bytes}, structured case generator, read function, payload kind)."""
-    from relightnet.body import load_motion, load_smpl_file
+    from relightnet.body import load_motion
+    from relightnet.body.smpl_model import load_smpl_file
     from relightnet.data import load_config
     from relightnet.data.shards import read_shard
     from relightnet.io import read_envmap, read_image_alpha, read_mask
+    from relightnet.light import load_light
     from relightnet.model import load_model
     from relightnet.model.train_config import load_train_config
-    from relightnet.sh import load_light
 
     light = cd.light_seeds()
     smpl = cd.smpl_arrays()

@@ -8,7 +8,7 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.io import read_envmap, write_envmap
-from relightnet.sh import preset_path
+from relightnet.light.presets import preset_path
 
 
 def _write_uncompressed_exr(path, rgb: np.ndarray) -> None:

@@ -7,7 +7,8 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.color import linear_to_srgb, srgb_to_linear, srgb_to_linear_np
-from relightnet.io import read_alpha, read_image, read_image_alpha, read_mask, to_uint8, write_image
+from relightnet.io import read_image, read_image_alpha, read_mask, to_uint8, write_image
+from relightnet.io.image import read_alpha
 
 
 def test_srgb_known_values_and_inverse():

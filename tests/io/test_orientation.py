@@ -8,8 +8,9 @@ import pytest
 import torch
 
 from relightnet._cli.inputs import read_photo
-from relightnet.io import VideoWriter, read_alpha, read_image, read_mask, read_masks, read_video, video_info
-from relightnet.io.image import _encode
+from relightnet.io import VideoWriter, read_image, read_mask, read_video, video_info
+from relightnet.io.image import _encode, read_alpha
+from relightnet.io.video_masks import read_masks
 
 
 def _half_white(h=40, w=60):

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from relightnet.io import VideoWriter, read_video, write_side_by_side
+from relightnet.io import VideoWriter, read_video
+from relightnet.io.side_by_side import write_side_by_side
 
 
 def test_side_by_side_scales_to_the_first_height(tmp_path):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from relightnet.checks import InputError
-from relightnet.io import frame_times
 from relightnet.io.timestamps import MKV_CLOCK, MP4_CLOCK, PtsClock, timeline_origin
+from relightnet.io.video import frame_times
 from tests.io.timed_media import LATE_TIMES, VFR_TIMES, decoded_frame_times, write_timed_clip
 
 

@@ -77,7 +77,7 @@ def test_bad_inputs(tmp_path):
 
 
 def test_frames_with_masks_from_a_mask_video_and_its_checks(tmp_path):
-    from relightnet.io import frames_with_masks
+    from relightnet.io.video_masks import frames_with_masks
 
     frames = _frames(3, 16, 16)
     masks = [np.zeros((16, 16, 3), np.uint8) for _ in range(3)]
@@ -122,7 +122,8 @@ def _write_webm(path, frames, fps=5):
                                                  (".webm", ".mp4"), (".mkv", ".webm"), (".webm", ".mkv")])
 def test_mask_videos_pair_across_containers(tmp_path, video_ext, mask_ext):
     """mkv and webm store no frame count: counted by decoding, so they pair with an mp4 both ways."""
-    from relightnet.io import count_frames, frames_with_masks
+    from relightnet.io import count_frames
+    from relightnet.io.video_masks import frames_with_masks
 
     frames = [f.copy() for f in _frames(4, 32, 32)]
     masks = [np.zeros((32, 32, 3), np.uint8) for _ in range(4)]
@@ -218,7 +219,7 @@ def _packet_pts(path) -> tuple[object, list[int]]:
 def test_frames_with_times_keep_them_on_the_writers_clock(tmp_path, caplog, suffix, tick):
     from fractions import Fraction
 
-    from relightnet.io import frame_times
+    from relightnet.io.video import frame_times
     from tests.io.timed_media import VFR_TIMES
 
     times = [*VFR_TIMES[:31], VFR_TIMES[30], *VFR_TIMES[31:]]  # frame 31 repeats frame 30's time
@@ -242,7 +243,7 @@ def test_frames_with_times_keep_them_on_the_writers_clock(tmp_path, caplog, suff
                                                          ("in.mkv", "pcm_s16le", "matroska")])
 @pytest.mark.parametrize("out_name", ["out.mp4", "out.mkv"])
 def test_writer_keeps_vfr_and_a_late_start_in_sync_with_the_sound(tmp_path, clip, src_name, acodec, fmt, out_name):
-    from relightnet.io import frame_times
+    from relightnet.io.video import frame_times
     from tests.io import timed_media as media
 
     late = media.LATE_TIMES

@@ -5,7 +5,7 @@ from relightnet.checks import ShapeError
 from relightnet.color import luminance
 from relightnet.model import Prediction, shading_map
 from relightnet.model.exposure import exposure_level, exposure_scale, match_exposure, transport_level
-from relightnet.pipeline import match_exposure as pipeline_match_exposure
+from relightnet.pipeline.relight_image import match_exposure as pipeline_match_exposure
 
 
 def _prediction(b=3, k=9, s=12, seed=0):

@@ -2,8 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.model import NetConfig, RelightNet, estimate_light, mask_crop_box, predict_image
-from relightnet.model.inference import _check_predicted_mask, check_predicted_person
+from relightnet.model import NetConfig, RelightNet, estimate_light, predict_image
+from relightnet.model.inference import _check_predicted_mask, check_predicted_person, mask_crop_box
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +75,7 @@ def test_paste_rows_are_the_rows_of_the_whole_paste(box, h, w):
 
 
 def test_crop_maps_paste_as_predict_image(net):
-    from relightnet.model import predict_crop
+    from relightnet.model.inference import predict_crop
 
     img, m = torch.rand(3, 90, 70), torch.zeros(90, 70)
     m[10:80, 20:50] = 1

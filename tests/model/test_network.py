@@ -74,8 +74,9 @@ def test_sizes_not_multiple_of_16_are_rejected_or_padded():
 
 
 def test_cone_head_predicts_the_transport_of_a_cone():
-    from relightnet.model import cone_maps
-    from relightnet.sh import cone_band_factors, cone_transport
+    from relightnet.model.network import cone_maps
+    from relightnet.sh import cone_transport
+    from relightnet.sh.irradiance import cone_band_factors
 
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32, transport_head="cone", light_mode="hybrid"))
     x = normalize_input(torch.rand(2, 3, 32, 32), torch.ones(2, 1, 32, 32))

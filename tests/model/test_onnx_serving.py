@@ -162,7 +162,7 @@ def test_input_size_and_step_photo(exported):
 
 def test_run_video_streams_every_frame(exported, masked_clip, tmp_path):
     from relightnet.io.video import count_frames, video_info
-    from relightnet.sh import load_light
+    from relightnet.light import load_light
 
     _, path = exported
     video, masks = masked_clip(tmp_path, n=4, h=48, w=64)

@@ -5,8 +5,14 @@ import torch
 
 from relightnet.checks import ShapeError
 from relightnet.color import LUMA
-from relightnet.model import Prediction, photo_albedo, photo_albedo_rows, shading_map
-from relightnet.model.photo_albedo import ALBEDO_FLOOR, CHROMA_FULL, CHROMA_RANGE, person_mean_shading
+from relightnet.model import Prediction, photo_albedo, shading_map
+from relightnet.model.photo_albedo import (
+    ALBEDO_FLOOR,
+    CHROMA_FULL,
+    CHROMA_RANGE,
+    person_mean_shading,
+    photo_albedo_rows,
+)
 
 LUMA_T = torch.tensor(LUMA)
 

@@ -3,9 +3,10 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.color import linear_to_srgb, luminance, srgb_to_linear
+from relightnet.light import directional_light
 from relightnet.model import Prediction, normalize_input, shading_map
 from relightnet.model.round_trip import novel_lights, relit_input, round_trip_loss
-from relightnet.sh import directional_light, scale_invariant_light_error
+from relightnet.sh import scale_invariant_light_error
 
 
 def _scene(b=3, k=9, s=16, seed=0):

@@ -248,7 +248,7 @@ def test_smpl_motion_longer_or_shorter_than_the_video(target, tmp_path, extra):
 
 
 def test_antialias_changes_only_the_silhouette(target, anny_body, tmp_path):
-    from relightnet.raster import silhouette_pixels
+    from relightnet.raster.antialias import silhouette_pixels
 
     video, _, true = target
     kw = dict(light=true[0], motion="idle", prt=PrtSettings(n_dirs=8), progress=False)
@@ -284,9 +284,9 @@ def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
     from relightnet.body import make_motion
     from relightnet.color import linear_to_srgb
     from relightnet.io.image import to_uint8
+    from relightnet.light import preset_light
     from relightnet.pipeline.avatar import _composite_covered
     from relightnet.pipeline.scene import avatar_albedo
-    from relightnet.sh import preset_light
 
     light = preset_light("studio") * 3  # bright: some pixels above 1 (clamped)
     fr = next(render_body_frames(anny_body, make_motion("walk", 1), light, avatar_albedo(anny_body), camera=(40, 32),
@@ -304,7 +304,7 @@ def test_8bit_composite_of_the_covered_pixels_is_the_float_composite(anny_body):
 def test_avatar_light_from_the_plate_and_both(target, tmp_path, capsys):
     """--light-from plate: the target's first frame read as a plate (no CNN); both: the person's
     smoothed light combined with it."""
-    from relightnet.sh import combine_person_plate, load_light, load_plate
+    from relightnet.light import combine_person_plate, load_light, load_plate
 
     video, masks, _ = target
     base = ["-q", "avatar", "--target", str(video), "--target-masks", str(masks), "--n-dirs", "8", "--motion", "idle"]
@@ -326,10 +326,10 @@ def test_composite_of_the_box_render_is_the_frames(anny_body, target_at):
     frame, antialiased or not, the same bytes as the whole frame's render (body inside the frame, cut by
     its left and top borders, wholly off-screen)."""
     from relightnet.body import make_motion
+    from relightnet.light import preset_light
     from relightnet.pipeline.avatar import _composite_frame
     from relightnet.pipeline.scene import avatar_albedo
     from relightnet.raster import default_camera
-    from relightnet.sh import preset_light
 
     cam = default_camera((40, 32), target=target_at)
     kw = dict(camera=cam, prt=PrtSettings(n_dirs=8, occlusion=False), n_frames=2, visible_only=True)

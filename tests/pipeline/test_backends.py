@@ -84,7 +84,7 @@ def test_predictors_follow_the_protocol_and_take_their_size_from_the_config(tmp_
 
 
 def test_crop_and_paste_are_public_and_inverse():
-    from relightnet.model import CropBox, crop_to_box, paste_from_box
+    from relightnet.model.inference import CropBox, crop_to_box, paste_from_box
 
     x = torch.rand(1, 2, 20, 30)
     box = CropBox(-3, 5, 16)

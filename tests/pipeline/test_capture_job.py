@@ -4,7 +4,7 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.fit import PackedMasks
+from relightnet.fit.masks import PackedMasks
 from relightnet.pipeline.capture_job import frame_masks, source_lights
 
 

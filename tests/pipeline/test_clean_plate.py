@@ -9,6 +9,7 @@ import torch
 from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import VideoWriter, read_video
+from relightnet.light import ambient_light
 from relightnet.pipeline.clean_plate import (
     WARN_SHARE,
     Placement,
@@ -23,7 +24,6 @@ from relightnet.pipeline.clean_plate import (
     stand_in,
 )
 from relightnet.pipeline.walk_target import walking_target
-from relightnet.sh import ambient_light
 
 SIZE, N = (144, 192), 20
 

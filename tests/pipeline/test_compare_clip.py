@@ -99,7 +99,7 @@ def test_clip_metrics_are_exact_for_a_perfect_output(clip0):
 
 def test_source_light_is_exposed_at_its_level():
     from relightnet.data.lights import light_level
-    from relightnet.sh import preset_light
+    from relightnet.light import preset_light
 
     L = source_light("studio", 2, level=0.5)
     assert L.shape == (9, 3) and L.dtype == torch.float32

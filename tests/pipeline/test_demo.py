@@ -4,7 +4,7 @@ import pytest
 
 from relightnet.cli import main
 from relightnet.io import read_video, video_info
-from relightnet.sh import preset_names
+from relightnet.light import preset_names
 
 
 @pytest.mark.slow

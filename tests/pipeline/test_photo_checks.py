@@ -17,6 +17,8 @@ from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.color import linear_to_srgb, srgb_to_linear
 from relightnet.io import write_image
+from relightnet.light import render_sphere, side_light
+from relightnet.light.visualize import sphere_normals
 from relightnet.pipeline.photo_checks import (
     SIDE_LEFT,
     check_lights,
@@ -26,7 +28,7 @@ from relightnet.pipeline.photo_checks import (
     side_contrast,
     side_means,
 )
-from relightnet.sh import render_sphere, scale_invariant_light_error, side_light, sphere_normals
+from relightnet.sh import scale_invariant_light_error
 
 
 @pytest.fixture(scope="module")

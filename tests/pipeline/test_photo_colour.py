@@ -3,8 +3,8 @@ import torch
 
 from relightnet.checks import InputError
 from relightnet.color import linear_to_srgb, srgb_to_linear
+from relightnet.light import light_from_words
 from relightnet.pipeline.photo_colour import COLOUR_LIGHTS, chromaticity, colour_figures
-from relightnet.sh import light_from_words
 
 
 def _photo(h=90, w=60, seed=0):

@@ -6,7 +6,8 @@ import torch
 
 from relightnet.color import linear_to_srgb, luminance, srgb_to_linear
 from relightnet.io import to_uint8
-from relightnet.model import NetConfig, RelightNet, match_exposure, photo_albedo, shading_map
+from relightnet.model import NetConfig, RelightNet, photo_albedo, shading_map
+from relightnet.model.exposure import match_exposure
 from relightnet.model.photo_albedo import ALBEDO_FLOOR
 from relightnet.pipeline import TorchPredictor, relight_over_photo
 from relightnet.raster import to_channels_last
@@ -99,8 +100,8 @@ def test_bands_relight_as_the_whole_photo(predict, photo, detail, keep_exposure,
 
 
 def test_a_gray_photo_gives_a_gray_person_under_a_coloured_light(predict, photo):
+    from relightnet.light import preset_light
     from relightnet.pipeline.relight_bands import is_gray
-    from relightnet.sh import preset_light
 
     img, mask = photo
     gray = img.mean(0, keepdim=True).expand(3, -1, -1).contiguous()

@@ -5,10 +5,10 @@ import torch
 from relightnet.cli import main
 from relightnet.data import SynthConfig, generate_sample
 from relightnet.io import read_image, write_image
+from relightnet.light import load_light, preset_light
 from relightnet.model import load_model
 from relightnet.pipeline import relight_image
 from relightnet.segment.matte import band_radius, border_band
-from relightnet.sh import load_light, preset_light
 
 pytestmark = pytest.mark.slow  # the CNN on real photos, relighting, the CLI; 8-17 s each on a loaded machine
 
@@ -117,7 +117,7 @@ def test_relighting_with_the_estimated_light_gives_the_photo_back(photo):
 def test_cutouts_stay_cutouts_and_odd_lights_are_flagged(photo, tmp_path, capsys):
     import av
 
-    from relightnet.io import read_alpha
+    from relightnet.io.image import read_alpha
 
     img, mask = photo
     rgba = np.concatenate([img.permute(1, 2, 0).numpy(), (mask.numpy()[..., None] * 255).astype(np.uint8)], -1)

@@ -98,8 +98,8 @@ def test_relight_video_smoothing_is_a_method_name(tmp_path, masked_clip, capsys)
     import pytest
 
     from relightnet.checks import InputError
+    from relightnet.light import preset_light
     from relightnet.pipeline import make_predictor, relight_video
-    from relightnet.sh import preset_light
 
     video, masks = masked_clip(tmp_path)
     from relightnet.model import load_model

@@ -4,12 +4,13 @@ import numpy as np
 import pytest
 import torch
 
-from relightnet.body import REGIONS, default_albedo, region_labels
+from relightnet.body import default_albedo
+from relightnet.body.albedo import REGIONS, region_labels
+from relightnet.light import ambient_light
 from relightnet.pipeline.scene import avatar_albedo
 from relightnet.pipeline.smooth_albedo import boundary_jaggedness, smooth_default_albedo
 from relightnet.raster import look_at, perspective_camera
 from relightnet.render.frame import TexturedAlbedo, render_mesh
-from relightnet.sh import ambient_light
 
 TOP, SKIN, BOTTOM = REGIONS.index("top"), REGIONS.index("skin"), REGIONS.index("bottom")
 

@@ -6,17 +6,9 @@ import torch
 import trimesh
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.prt import (
-    BounceOperator,
-    PrtSettings,
-    bounce_operator,
-    check_albedo,
-    interreflect,
-    make_engine,
-    transport_directions,
-    vertex_rays,
-    vertex_transport,
-)
+from relightnet.prt import PrtSettings, interreflect, make_engine, transport_directions, vertex_transport
+from relightnet.prt.interreflection import BounceOperator, bounce_operator, check_albedo
+from relightnet.prt.visibility import vertex_rays
 from relightnet.sh import light_to_world, sh_basis
 
 Y0 = 0.5 / math.sqrt(math.pi)

@@ -8,7 +8,8 @@ import torch
 import trimesh
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.prt import MeshWarning, check_mesh, check_normals, mesh_scale, nonmanifold_edge_count
+from relightnet.prt import check_mesh
+from relightnet.prt.mesh_checks import MeshWarning, check_normals, mesh_scale, nonmanifold_edge_count
 
 
 def _box():

@@ -7,9 +7,10 @@ import pytest
 import torch
 import trimesh
 
-from relightnet.body import midpoint_values, subdivide_faces
+from relightnet.body.subdivide import midpoint_values, subdivide_faces
 from relightnet.checks import InputError, ShapeError
-from relightnet.prt import SHADOW_EDGE, PrtSettings, refined_transport, transport_directions, vertex_transport
+from relightnet.prt import PrtSettings, refined_transport, transport_directions, vertex_transport
+from relightnet.prt.refine import SHADOW_EDGE
 from relightnet.sh import light_to_world, sh_basis
 
 Y0 = 0.5 / math.sqrt(math.pi)

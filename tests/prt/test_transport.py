@@ -6,7 +6,8 @@ import trimesh
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.prt import PrtSettings, transport_directions, vertex_transport
-from relightnet.sh import cosine_lobe_per_coeff, fibonacci_sphere, sh_basis, world_to_light
+from relightnet.sh import fibonacci_sphere, sh_basis, world_to_light
+from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
 Y0 = 0.5 / math.sqrt(math.pi)
 C1 = math.sqrt(3 / (4 * math.pi))
@@ -149,7 +150,7 @@ def test_manifold_option_passes_to_the_mesh_check():
     """A caller that renders one topology in many poses checks it once and then passes "ignore"."""
     import warnings
 
-    from relightnet.prt import MeshWarning
+    from relightnet.prt.mesh_checks import MeshWarning
 
     v, f, n = sphere(1)
     f3 = torch.cat([f, f[:1]])  # a duplicated face: three faces on its edges
@@ -166,8 +167,9 @@ def test_manifold_option_passes_to_the_mesh_check():
 def test_cast_lit_writes_into_a_given_array():
     import numpy as np
 
-    from relightnet.prt import make_engine, vertex_rays
+    from relightnet.prt import make_engine
     from relightnet.prt.transport import cast_lit
+    from relightnet.prt.visibility import vertex_rays
 
     v, f, n, _ = plane_under_sphere()
     dirs, _ = fibonacci_sphere(32)

@@ -5,16 +5,9 @@ import torch
 import trimesh
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.prt import (
-    EmbreeEngine,
-    MeshWarning,
-    RayEngine,
-    available_engines,
-    check_mesh,
-    make_engine,
-    vertex_rays,
-    vertex_visibility,
-)
+from relightnet.prt import RayEngine, available_engines, check_mesh, make_engine, vertex_visibility
+from relightnet.prt.mesh_checks import MeshWarning
+from relightnet.prt.visibility import EmbreeEngine, vertex_rays
 from relightnet.sh import fibonacci_sphere
 
 

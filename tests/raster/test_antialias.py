@@ -52,7 +52,7 @@ def _random_scene(B=2, H=48, W=64, seed=0):
 
 def test_antialias_at_some_pixels_is_antialias_there():
     """antialias_pixels gives exactly antialias's values at the pixels asked for, from their colours only."""
-    from relightnet.raster import antialias_pixels, silhouette_pixels
+    from relightnet.raster.antialias import antialias_pixels, silhouette_pixels
 
     vc, faces, frags = _random_scene()
     color = torch.rand(*frags.shape, 3)
@@ -75,7 +75,7 @@ def test_antialias_at_some_pixels_is_antialias_there():
 
 
 def test_silhouette_pixels_are_those_with_a_neighbour_across():
-    from relightnet.raster import silhouette_pixels
+    from relightnet.raster.antialias import silhouette_pixels
 
     g = torch.Generator().manual_seed(1)
     for shape in [(1, 1), (1, 6), (6, 1), (9, 11)]:

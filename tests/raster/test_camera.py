@@ -4,17 +4,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.raster import (
-    Camera,
-    default_camera,
-    fov_projection,
-    look_at,
-    ndc_to_pixel,
-    orthographic_camera,
-    perspective_camera,
-    perspective_projection,
-    pixel_to_ndc,
-)
+from relightnet.raster import Camera, default_camera, look_at, orthographic_camera, perspective_camera
+from relightnet.raster.camera import fov_projection, ndc_to_pixel, perspective_projection, pixel_to_ndc
 
 
 def test_look_at_is_a_rigid_transform_facing_the_target():

@@ -2,16 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import ShapeError
-from relightnet.raster import (
-    Interpolate,
-    interpolate,
-    interpolate_pixels,
-    look_at,
-    perspective_camera,
-    rasterize,
-    to_channels_first,
-    to_channels_last,
-)
+from relightnet.raster import interpolate, look_at, perspective_camera, rasterize, to_channels_first, to_channels_last
+from relightnet.raster.interpolate import Interpolate, interpolate_pixels
 
 SIZE = (24, 32)
 

@@ -2,7 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.raster import texture, texture_pixels
+from relightnet.raster import texture
+from relightnet.raster.texture import texture_pixels
 
 # 2×2 texture, channel 0; row 0 is the TOP of the image (v = 1), row 1 the bottom (v = 0)
 TEX = torch.tensor([[[[1.0, 2.0], [3.0, 4.0]]]])

@@ -11,17 +11,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.raster import (
-    Window,
-    antialias,
-    antialias_pixels,
-    look_at,
-    orthographic_camera,
-    perspective_camera,
-    rasterize,
-    screen_box,
-    silhouette_pixels,
-)
+from relightnet.raster import Window, antialias, look_at, orthographic_camera, perspective_camera, rasterize, screen_box
+from relightnet.raster.antialias import antialias_pixels, silhouette_pixels
 
 H, W = 40, 56
 

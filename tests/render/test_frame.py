@@ -7,7 +7,8 @@ import trimesh
 from relightnet.checks import InputError, ShapeError
 from relightnet.raster import default_camera, look_at, perspective_camera
 from relightnet.render.frame import TexturedAlbedo, light_in_world, render_mesh
-from relightnet.sh import cosine_lobe_per_coeff, irradiance, sh_basis, world_to_light
+from relightnet.sh import irradiance, sh_basis, world_to_light
+from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
 
 def _sphere(subdiv=3):

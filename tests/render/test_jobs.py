@@ -5,10 +5,10 @@ import trimesh
 
 from relightnet.body import default_albedo, make_motion
 from relightnet.checks import InputError
+from relightnet.light import ambient_light, directional_light
 from relightnet.prt import PrtSettings
 from relightnet.render.frame import TexturedAlbedo
 from relightnet.render.jobs import fit_camera, load_mesh, render_body_frames, render_mesh_file
-from relightnet.sh import ambient_light, directional_light
 
 
 def sphere_over_plane(path, n=31):

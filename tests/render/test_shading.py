@@ -119,7 +119,7 @@ def test_shade_with_shading_returns_both():
 
 
 def test_composite_covered_equals_composite_with_binary_alpha():
-    from relightnet.render import composite_covered
+    from relightnet.render.shading import composite_covered
 
     g = torch.Generator().manual_seed(2)
     bg = torch.randint(0, 256, (5, 4, 3), generator=g, dtype=torch.uint8)

@@ -8,7 +8,8 @@ import torch
 from people import background, iou
 
 from relightnet.cli import main
-from relightnet.io import VideoWriter, read_mask, read_masks, write_image
+from relightnet.io import VideoWriter, read_mask, write_image
+from relightnet.io.video_masks import read_masks
 
 pytestmark = pytest.mark.slow  # segmentation of photos and a video through the CLI
 

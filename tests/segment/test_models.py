@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from relightnet.checks import ShapeError
-from relightnet.segment import POSE_FILE, SELFIE_FILE
-from relightnet.segment.models import WEIGHTS_DIR
+from relightnet.segment.models import POSE_FILE, SELFIE_FILE, WEIGHTS_DIR
 
 FIXTURE = Path(__file__).with_name("reference_outputs.npz")
 

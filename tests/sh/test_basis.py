@@ -4,7 +4,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import SHBasis, fibonacci_sphere, sh_basis, sh_count, sh_index
+from relightnet.sh import fibonacci_sphere, sh_basis, sh_count, sh_index
+from relightnet.sh.basis import SHBasis
 
 
 def _rand_dirs(n, dtype=torch.float64, seed=0):

@@ -3,13 +3,8 @@ import math
 import pytest
 import torch
 
-from relightnet.sh import (
-    directions_to_latlong,
-    fibonacci_hemisphere,
-    fibonacci_sphere,
-    latlong_directions,
-    random_fibonacci_sphere,
-)
+from relightnet.sh import directions_to_latlong, fibonacci_sphere, latlong_directions
+from relightnet.sh.directions import fibonacci_hemisphere, random_fibonacci_sphere
 
 
 def test_fibonacci_sets():

@@ -2,15 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import ShapeError
-from relightnet.sh import (
-    WORLD_TO_LIGHT,
-    camera_normals_to_light,
-    light_to_world,
-    rotate_sh,
-    rotation_world_to_light,
-    sh_basis,
-    world_to_light,
-)
+from relightnet.sh import camera_normals_to_light, light_to_world, rotate_sh, sh_basis, world_to_light
+from relightnet.sh.frames import WORLD_TO_LIGHT, rotation_world_to_light
 
 
 def test_axes_as_design_md():

@@ -1,4 +1,5 @@
-"""Light files: formats, round trips, KE18 BGR columns, env-map projection, errors naming the file."""
+"""Light files (:func:`relightnet.sh.load_light_file`): formats, round trips, KE18 BGR columns, env-map projection,
+errors naming the file."""
 
 import json
 
@@ -8,7 +9,7 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.io import write_envmap
-from relightnet.sh import load_light, preset_names, project_envmap, resize_sh, save_light, sh_to_envmap
+from relightnet.sh import load_light_file, project_envmap, resize_sh, save_light, sh_to_envmap
 
 
 def _light(*shape, seed=0):
@@ -23,7 +24,7 @@ def test_ke18_npy_is_bgr_and_round_trips(tmp_path):
     assert raw.shape == (9, 3)
     np.testing.assert_array_equal(raw[:, 0], sh[:, 2].numpy())  # column 0 is blue
     np.testing.assert_array_equal(raw[:, 2], sh[:, 0].numpy())
-    back = load_light(path)
+    back = load_light_file(path)
     assert back.dtype == torch.float32
     torch.testing.assert_close(back, sh, rtol=0, atol=0)
 
@@ -32,7 +33,7 @@ def test_ke18_file_written_elsewhere_loads_as_rgb(tmp_path):
     bgr = np.zeros((9, 3), np.float64)
     bgr[0] = [0.1, 0.2, 0.9]  # B, G, R: a red light
     np.save(tmp_path / "red.npy", bgr)
-    sh = load_light(tmp_path / "red.npy")
+    sh = load_light_file(tmp_path / "red.npy")
     torch.testing.assert_close(sh[0], torch.tensor([0.9, 0.2, 0.1]))
 
 
@@ -41,7 +42,7 @@ def test_ke18_file_written_elsewhere_loads_as_rgb(tmp_path):
 def test_ours_round_trip(tmp_path, suffix, shape):
     sh = _light(*shape, seed=len(shape))
     path = save_light(tmp_path / f"l{suffix}", sh)
-    back = load_light(path)
+    back = load_light_file(path)
     assert back.shape == shape and back.dtype == torch.float32
     torch.testing.assert_close(back, sh, rtol=0, atol=0)
 
@@ -59,8 +60,8 @@ def test_npz_and_json_metadata(tmp_path):
 def test_lmax_truncates_or_pads_stored_lights(tmp_path):
     sh = _light(16, 3)
     path = save_light(tmp_path / "l.npz", sh)
-    torch.testing.assert_close(load_light(path, lmax=1), sh[:4])
-    padded = load_light(path, lmax=4)
+    torch.testing.assert_close(load_light_file(path, lmax=1), sh[:4])
+    padded = load_light_file(path, lmax=4)
     assert padded.shape == (25, 3)
     torch.testing.assert_close(padded[:16], sh)
     assert (padded[16:] == 0).all()
@@ -69,12 +70,12 @@ def test_lmax_truncates_or_pads_stored_lights(tmp_path):
 
 def test_arrays_pass_through_validated():
     sh = _light(9, 3)
-    out = load_light(sh.double().numpy())
+    out = load_light_file(sh.double().numpy())
     torch.testing.assert_close(out, sh)
     with pytest.raises(ShapeError):
-        load_light(torch.zeros(8, 3))
+        load_light_file(torch.zeros(8, 3))
     with pytest.raises(InputError, match="NaN"):
-        load_light(torch.full((9, 3), float("inf")))
+        load_light_file(torch.full((9, 3), float("inf")))
 
 
 def _positive_light(seed=0):
@@ -89,20 +90,14 @@ def test_envmap_projection_recovers_known_coefficients(tmp_path):
     assert env.min() > 0  # nothing for the loader's clamp to change
     torch.testing.assert_close(project_envmap(env, 2), sh, rtol=0, atol=2e-3)
     exr = write_envmap(tmp_path / "syn.exr", env)
-    torch.testing.assert_close(load_light(exr), sh, rtol=0, atol=2e-3)
+    torch.testing.assert_close(load_light_file(exr), sh, rtol=0, atol=2e-3)
     hdr = write_envmap(tmp_path / "syn.hdr", env)
-    torch.testing.assert_close(load_light(hdr), sh, rtol=0, atol=3e-2)
+    torch.testing.assert_close(load_light_file(hdr), sh, rtol=0, atol=3e-2)
     # A higher-order projection keeps the order-2 part and finds (almost) nothing above it.
-    sh4 = load_light(exr, lmax=4)
+    sh4 = load_light_file(exr, lmax=4)
     assert sh4.shape == (25, 3)
     torch.testing.assert_close(sh4[:9], sh, rtol=0, atol=2e-3)
     assert sh4[9:].abs().max() < 5e-3
-
-
-def test_preset_names_load():
-    sh = load_light("studio")
-    assert sh.shape == (9, 3) and (sh[0] > 0).all()
-    assert load_light("night", lmax=1).shape == (4, 3)
 
 
 # --- bad inputs: the right error type, the file in the message -------------------------------
@@ -112,10 +107,10 @@ def test_wrong_npy_shape(tmp_path):
     p = tmp_path / "bad_shape.npy"
     np.save(p, np.zeros((4, 3)))
     with pytest.raises(ShapeError, match="bad_shape.npy"):
-        load_light(p)
+        load_light_file(p)
     np.save(p, np.zeros((9, 3, 1)))
     with pytest.raises(ShapeError, match="bad_shape.npy"):
-        load_light(p)
+        load_light_file(p)
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".json", ".npy"])
@@ -130,24 +125,24 @@ def test_nan_coefficients(tmp_path, suffix):
     else:
         p.write_text('{"sh": ' + json.dumps(bad.tolist()) + "}")
     with pytest.raises(InputError, match=f"nan_light\\{suffix}.*NaN"):
-        load_light(p)
+        load_light_file(p)
 
 
 def test_wrong_coefficient_count(tmp_path):
     p = tmp_path / "k10.npz"
     np.savez(p, sh=np.zeros((10, 3), np.float32))
     with pytest.raises(ShapeError, match="k10.npz"):
-        load_light(p)
+        load_light_file(p)
     np.savez(p, sh=np.zeros((9, 4), np.float32))
     with pytest.raises(ShapeError, match="k10.npz"):
-        load_light(p)
+        load_light_file(p)
     np.savez(p, sh=np.zeros((9, 3), np.float32), lmax=3)
     with pytest.raises(ShapeError, match="k10.npz.*lmax"):
-        load_light(p)
+        load_light_file(p)
     p2 = tmp_path / "k.json"
     p2.write_text('{"sh": [[1, 2, 3], [4, 5]]}')
     with pytest.raises(ShapeError, match="k.json"):
-        load_light(p2)
+        load_light_file(p2)
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".json", ".npy", ".exr", ".hdr"])
@@ -155,29 +150,25 @@ def test_garbage_files(tmp_path, suffix):
     p = tmp_path / f"garbage{suffix}"
     p.write_bytes(b"\x00\x01not a light at all\xff" * 20)
     with pytest.raises(InputError, match=f"garbage\\{suffix}"):
-        load_light(p)
+        load_light_file(p)
 
 
-def test_missing_file_unknown_preset_and_other_inputs(tmp_path):
+def test_missing_file_and_other_inputs(tmp_path):
     with pytest.raises(InputError, match="missing.npz"):
-        load_light(tmp_path / "missing.npz")
+        load_light_file(tmp_path / "missing.npz")
     with pytest.raises(InputError, match="missing.json"):
-        load_light(str(tmp_path / "missing.json"))
-    with pytest.raises(InputError, match="sunnyday") as e:
-        load_light("sunnyday")
-    for name in preset_names():
-        assert name in str(e.value)
+        load_light_file(str(tmp_path / "missing.json"))
     p = tmp_path / "light.txt"
     p.write_text("1 2 3")
     with pytest.raises(InputError, match="light.txt.*unsupported"):
-        load_light(p)
+        load_light_file(p)
     p = tmp_path / "other.npz"
     np.savez(p, coeffs=np.zeros((9, 3)))
     with pytest.raises(InputError, match="other.npz.*'sh'"):
-        load_light(p)
+        load_light_file(p)
     np.savez(p, sh=np.zeros((9, 3)), frame="world")
     with pytest.raises(InputError, match="other.npz.*frame"):
-        load_light(p)
+        load_light_file(p)
 
 
 def test_save_errors_leave_nothing(tmp_path):
@@ -202,7 +193,7 @@ def test_light_sequence_round_trip_with_side_arrays(tmp_path):
     flags = torch.tensor([False, True, False, False, True])
     path = save_light_sequence(tmp_path / "seq.npz", sh, raw=raw, outliers=flags, smoothing="hermite",
                                evidence_M=np.zeros((5, 3, 9, 9), np.float32))
-    assert torch.equal(load_light(path), sh)  # every light reader sees the sequence
+    assert torch.equal(load_light_file(path), sh)  # every light reader sees the sequence
     got, side = load_light_sequence(path)
     assert torch.equal(got, sh) and set(side) == {"raw", "outliers", "smoothing", "evidence_M"}
     assert np.array_equal(side["raw"], raw.numpy()) and side["outliers"].tolist() == flags.tolist()
@@ -239,6 +230,7 @@ def test_light_sequence_errors_name_the_file(tmp_path):
 
 
 def test_lights_no_scene_has_are_refused_and_ringing_is_not(caplog):
+    from relightnet.light import load_light
     from relightnet.sh.io import MAX_IRRADIANCE, check_light_physics
 
     huge = torch.zeros(9, 3)

@@ -4,13 +4,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import (
-    Irradiance,
-    cosine_lobe,
-    fibonacci_sphere,
-    irradiance,
-    sh_basis,
-)
+from relightnet.sh import cosine_lobe, fibonacci_sphere, irradiance, sh_basis
+from relightnet.sh.irradiance import Irradiance
 
 
 def _dirs(n, seed=0):
@@ -107,7 +102,7 @@ def test_irradiance_gradcheck(device):
 # The cone transport: the clamped cosine seen through a cone of visibility (closed form).
 
 def test_cone_band_factors_open_and_closed():
-    from relightnet.sh import cone_band_factors
+    from relightnet.sh.irradiance import cone_band_factors
 
     g = cone_band_factors(torch.tensor([0.0, 1.0], dtype=torch.float64), 6)
     torch.testing.assert_close(g[0], torch.tensor([cosine_lobe(l) for l in range(7)], dtype=torch.float64))
@@ -131,7 +126,8 @@ def test_cone_transport_by_quadrature(c):
 
 
 def test_cone_transport_open_cone_is_unoccluded_transport():
-    from relightnet.sh import cone_transport, cosine_lobe_per_coeff
+    from relightnet.sh import cone_transport
+    from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
     n = _dirs(50)
     T = cone_transport(n, torch.zeros(50, dtype=torch.float64), 2)

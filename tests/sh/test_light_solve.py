@@ -3,8 +3,9 @@
 import pytest
 import torch
 
+from relightnet.light import directional_light
 from relightnet.model.network import NetConfig, RelightNet, normalize_input
-from relightnet.sh import directional_light, irradiance
+from relightnet.sh import irradiance
 from relightnet.sh.light_solve import Evidence, light_evidence, pool_evidence, solve_light, spd_solve
 
 
@@ -106,7 +107,8 @@ def front_of_sphere(h=32, max_angle_deg=None):
     Returns:
         ``(image (1, 3, h, h), albedo (1, 3, h, h), transport (1, 9, h, h), inside (1, 1, h, h), light (9, 3))``.
     """
-    from relightnet.sh import cosine_lobe_per_coeff, sh_basis
+    from relightnet.sh import sh_basis
+    from relightnet.sh.irradiance import cosine_lobe_per_coeff
 
     ys, xs = torch.meshgrid(torch.linspace(-0.9, 0.9, h), torch.linspace(-0.9, 0.9, h), indexing="ij")
     inside = (xs**2 + ys**2 < 0.8).float()[None, None]

@@ -5,7 +5,7 @@ import math
 import pytest
 import torch
 
-from relightnet.sh import ambient_light, directional_light
+from relightnet.light import ambient_light, directional_light
 from relightnet.sh.metrics import (
     chromaticity_error,
     direction_error,

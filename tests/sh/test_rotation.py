@@ -3,14 +3,8 @@ import math
 import pytest
 import torch
 
-from relightnet.sh import (
-    RotateSH,
-    rotate_sh,
-    rotate_sh_up,
-    rotation_about_up,
-    sh_basis,
-    sh_rotation_matrix,
-)
+from relightnet.sh import rotate_sh, rotate_sh_up, sh_basis
+from relightnet.sh.rotation import RotateSH, rotation_about_up, sh_rotation_matrix
 
 
 def _rot(seed, n=None):

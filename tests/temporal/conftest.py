@@ -3,7 +3,7 @@
 import pytest
 import torch
 
-from relightnet.sh import preset_light
+from relightnet.light import preset_light
 
 
 def step_seq(t_len=40, step=10, noise=0.0, seed=0):

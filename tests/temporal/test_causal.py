@@ -6,20 +6,9 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import preset_light
-from relightnet.temporal import (
-    EMAFilter,
-    FIRFilter,
-    OneEuroFilter,
-    OutlierGate,
-    ema_matrix,
-    ema_sequence,
-    fir_sequence,
-    fir_taps,
-    jitter,
-    run_causal,
-    step_lag,
-)
+from relightnet.light import preset_light
+from relightnet.temporal import EMAFilter, FIRFilter, OneEuroFilter, OutlierGate, jitter, run_causal, step_lag
+from relightnet.temporal.causal import ema_matrix, ema_sequence, fir_sequence, fir_taps
 
 from .conftest import step_seq
 

@@ -6,8 +6,10 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import fibonacci_sphere, irradiance, preset_light
-from relightnet.temporal import light_distance, light_norm, light_weights, outlier_threshold, parse_eps, robust_scale
+from relightnet.light import preset_light
+from relightnet.sh import fibonacci_sphere, irradiance
+from relightnet.temporal import light_distance
+from relightnet.temporal.distance import light_norm, light_weights, outlier_threshold, parse_eps, robust_scale
 
 
 @pytest.mark.parametrize("lmax", [1, 2, 3])

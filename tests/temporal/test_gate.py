@@ -4,17 +4,10 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.sh import preset_light
-from relightnet.temporal import (
-    EMAFilter,
-    OneEuroFilter,
-    OutlierGate,
-    gate_step,
-    light_distance,
-    outlier_scores,
-    run_causal,
-    step_lag,
-)
+from relightnet.light import preset_light
+from relightnet.temporal import EMAFilter, OneEuroFilter, OutlierGate, light_distance, run_causal, step_lag
+from relightnet.temporal.gate import gate_step
+from relightnet.temporal.metrics import outlier_scores
 
 from .conftest import step_seq
 

@@ -6,8 +6,10 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import preset_light
-from relightnet.temporal import jitter, light_distance, light_error, light_norm, outlier_scores, step_lag
+from relightnet.light import preset_light
+from relightnet.temporal import jitter, light_distance, light_error, step_lag
+from relightnet.temporal.distance import light_norm
+from relightnet.temporal.metrics import outlier_scores
 
 
 def test_jitter_zero_on_ramps_and_exact_on_a_single_kick():

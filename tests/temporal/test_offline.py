@@ -6,18 +6,11 @@ import pytest
 import torch
 
 from relightnet.checks import InputError, ShapeError
-from relightnet.sh import preset_light, rotate_sh_up
-from relightnet.temporal import (
-    detect_switches,
-    light_distance,
-    light_error,
-    outlier_scores,
-    smooth_hermite,
-    smooth_lights,
-    smooth_poly,
-    smooth_savgol,
-    step_lag,
-)
+from relightnet.light import preset_light
+from relightnet.sh import rotate_sh_up
+from relightnet.temporal import detect_switches, light_distance, light_error, smooth_lights, step_lag
+from relightnet.temporal.metrics import outlier_scores
+from relightnet.temporal.offline import smooth_hermite, smooth_poly, smooth_savgol
 
 METHOD_OPTS = {
     "hermite": {"knot_spacing": 8},
@@ -159,7 +152,7 @@ def test_bad_inputs():
 
 
 def test_frame_noise_scales_with_the_noise_and_ignores_a_step():
-    from relightnet.temporal import frame_noise
+    from relightnet.temporal.offline import frame_noise
 
     truth, quiet = rotating(t_len=60, step=30, noise=0.02, seed=4)
     _, loud = rotating(t_len=60, step=30, noise=0.08, seed=4)

@@ -2,8 +2,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
+from relightnet.light import preset_light
 from relightnet.names import SEQUENCE_SMOOTHING, SMOOTHING_METHODS, STREAMING_SMOOTHING, VIDEO_SMOOTHING
-from relightnet.sh import preset_light
 from relightnet.temporal import (
     EMAFilter,
     OneEuroFilter,

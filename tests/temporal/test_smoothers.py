@@ -6,7 +6,8 @@ import scipy.signal
 import torch
 
 from relightnet.checks import InputError
-from relightnet.temporal import hermite_basis, hermite_matrix, poly_matrix, savgol_matrix, smoothing_matrix
+from relightnet.temporal import smoothing_matrix
+from relightnet.temporal.smoothers import hermite_basis, hermite_matrix, poly_matrix, savgol_matrix
 
 EIN = "ts,skc->tkc"
 

@@ -4,7 +4,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.temporal import COLOUR_STEP, colour_switches, frame_colour, merge_switches
+from relightnet.temporal import colour_switches, frame_colour
+from relightnet.temporal.switches import COLOUR_STEP, merge_switches
 
 
 def _colours(n=60, noise=0.002, seed=0):

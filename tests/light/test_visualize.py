@@ -5,15 +5,15 @@ import torch
 
 from relightnet.checks import InputError, ShapeError
 from relightnet.io import read_image
-from relightnet.sh import (
+from relightnet.light import (
     ambient_light,
     directional_light,
     light_preview,
     preset_names,
     render_presets,
     render_sphere,
-    sphere_normals,
 )
+from relightnet.light.visualize import sphere_normals
 
 S = 64
 

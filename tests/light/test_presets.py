@@ -6,18 +6,8 @@ import pytest
 import torch
 
 from relightnet.checks import InputError
-from relightnet.sh import (
-    ambient_light,
-    directional_light,
-    fibonacci_sphere,
-    irradiance,
-    preset_light,
-    preset_names,
-    project,
-    radiance,
-    rotate_sh,
-    sh_basis,
-)
+from relightnet.light import ambient_light, directional_light, preset_light, preset_names
+from relightnet.sh import fibonacci_sphere, irradiance, project, radiance, rotate_sh, sh_basis
 
 EIGHT = ["city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"]
 
@@ -110,7 +100,8 @@ def test_analytic_errors():
 
 
 def test_side_light_is_power_times_the_basis_plus_ambient():
-    from relightnet.sh import sh_basis, side_light
+    from relightnet.light import side_light
+    from relightnet.sh import sh_basis
 
     d = torch.tensor((0.5, -0.85, 0.2), dtype=torch.float64)
     expected = 3 * sh_basis(d / d.norm(), 2)[:, None].expand(9, 3).clone()

@@ -1,6 +1,6 @@
 """Lights written in words, in camera terms: ``key:az=-40,el=30,size=20 + fill:az=60 + ambient:0.2``.
 
-The grammar (accepted wherever a light is: ``--light``, :func:`relightnet.sh.load_light`)::
+The grammar (accepted wherever a light is: ``--light``, :func:`relightnet.light.load_light`)::
 
     light  := term ( "+" term )*
     term   := kind [ ":" value | ":" param ( "," param )* ]
@@ -15,17 +15,17 @@ Parameters of a disc light (all optional):
   the image's left, positive = from its right, ±180 = from behind the person (default 0);
 - ``el`` elevation in degrees: positive = from above, negative = from below (default 0);
 - ``size`` the angular diameter of the source in degrees, 0 to 180 (default 0: a point
-  light, band-limited like :func:`relightnet.sh.directional_light`);
+  light, band-limited like :func:`relightnet.light.directional_light`);
 - ``color`` (or ``colour``) linear RGB, ``r/g/b`` or one grey value (default 1);
 - ``power`` a scalar multiplier (default 1).
 
 ``ambient:V`` is ``ambient:power=V``; ``ambient`` takes ``color`` and ``power`` too.
 
 Units: ``power · color`` is the irradiance the source delivers to a surface facing it (what
-:func:`relightnet.sh.directional_light` calls colour), whatever its size: a disc of
+:func:`relightnet.light.directional_light` calls colour), whatever its size: a disc of
 half-angle α has radiance ``power · color / Ω`` over its solid angle ``Ω = 2π(1 − cos α)``.
 ``ambient:V`` is a constant radiance V (a white surface under it shows ``π V``,
-:func:`relightnet.sh.ambient_light`).
+:func:`relightnet.light.ambient_light`).
 
 Projection is exact (no sampling): the indicator of a cap of half-angle α is zonal, with
 Legendre moments ``∫_{cos α}^1 P_l(t) dt = (P_{l−1}(cos α) − P_{l+1}(cos α)) / (2l + 1)``; turned
@@ -41,7 +41,7 @@ import torch
 
 from ..checks import InputError
 from ..names import LIGHT_WORD_KINDS
-from .basis import sh_basis, sh_count, sh_degrees
+from ..sh.basis import sh_basis, sh_count, sh_degrees
 
 __all__ = ["LightTerm", "is_light_words", "parse_light_words", "disc_band_factors", "disc_light",
            "light_from_words", "camera_direction", "words_envmap"]
@@ -222,8 +222,8 @@ def words_envmap(text: str, h: int = 128) -> torch.Tensor:
     Returns:
         (H, 2H, 3) float32 linear radiance.
     """
-    from .directions import latlong_directions
-    from .frames import world_to_light
+    from ..sh.directions import latlong_directions
+    from ..sh.frames import world_to_light
 
     dirs, sa = latlong_directions(h, 2 * h, dtype=torch.float64)
     dirs = world_to_light(dirs)

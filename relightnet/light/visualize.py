@@ -19,9 +19,9 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError, check_finite, check_sh_count, check_shape
-from .frames import world_to_light
-from .irradiance import irradiance
-from .projection import sh_to_envmap
+from ..sh.frames import world_to_light
+from ..sh.irradiance import irradiance
+from ..sh.projection import sh_to_envmap
 
 __all__ = ["sphere_normals", "render_sphere", "auto_exposure", "light_preview", "render_presets"]
 
@@ -201,7 +201,7 @@ def render_presets(out_dir: str | os.PathLike, size: int = 256, lmax: int = 2) -
         lmax: SH order of the projected lights.
 
     Returns:
-        The paths written, in :func:`relightnet.sh.preset_names` order.
+        The paths written, in :func:`relightnet.light.preset_names` order.
     """
     from ..io.image import write_image
     from .presets import preset_envmap, preset_light, preset_names

@@ -11,21 +11,20 @@ import torch.nn.functional as F
 from relightnet.checks import InputError
 from relightnet.data.backgrounds import envmap_background
 from relightnet.io import write_image
-from relightnet.sh import (
-    SEEN_FADE_DEG,
-    PlateView,
+from relightnet.light import (
     ambient_light,
     combine_person_plate,
-    dominant_direction,
-    fibonacci_sphere,
-    latlong_directions,
     light_from_words,
-    load_plate_light,
     plate_envmap,
     plate_light,
     plate_seen,
-    plate_view,
     preset_envmap,
+)
+from relightnet.light.plate import SEEN_FADE_DEG, PlateView, load_plate_light, plate_view
+from relightnet.sh import (
+    dominant_direction,
+    fibonacci_sphere,
+    latlong_directions,
     project,
     radiance,
     sh_basis,

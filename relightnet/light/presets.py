@@ -21,8 +21,8 @@ import torch
 
 from ..checks import InputError, check_finite
 from ..names import envmap_dir, light_presets
-from .basis import sh_basis, sh_count, sh_degrees
-from .projection import project_envmap
+from ..sh.basis import sh_basis, sh_count, sh_degrees
+from ..sh.projection import project_envmap
 
 __all__ = [
     "preset_names",

@@ -37,8 +37,8 @@ import torch
 import torch.nn.functional as F
 
 from ..checks import InputError, check_finite, check_shape, sh_order_from_count
-from .directions import latlong_directions
-from .projection import project_envmap
+from ..sh.directions import latlong_directions
+from ..sh.projection import project_envmap
 
 __all__ = ["plate_envmap", "plate_light", "load_plate_light", "load_plate", "combine_person_plate", "plate_view",
            "plate_seen", "Plate", "PlateView", "DEFAULT_HFOV", "SEEN_FADE_DEG"]
@@ -207,7 +207,7 @@ def plate_seen(dirs: torch.Tensor, view: PlateView, fade_deg: float = SEEN_FADE_
     Returns:
         (N,) weights in [0, 1], dtype of ``dirs``.
     """
-    from .frames import light_to_world
+    from ..sh.frames import light_to_world
 
     check_shape(dirs, ["N", 3], name="dirs")
     if not fade_deg > 0:
@@ -244,8 +244,8 @@ def combine_person_plate(person: torch.Tensor, plate: torch.Tensor, view: PlateV
     Returns:
         Like ``person``: float32.
     """
-    from .basis import sh_basis
-    from .directions import fibonacci_sphere
+    from ..sh.basis import sh_basis
+    from ..sh.directions import fibonacci_sphere
 
     check_shape(plate, ["K", 3], name="plate")
     check_shape(person, ["...", plate.shape[0], 3], name="person")

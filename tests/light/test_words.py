@@ -9,20 +9,9 @@ import torch
 from relightnet.checks import InputError
 from relightnet.cli import main
 from relightnet.io import read_image
-from relightnet.sh import (
-    ambient_light,
-    camera_direction,
-    directional_light,
-    disc_band_factors,
-    disc_light,
-    dominant_direction,
-    irradiance,
-    light_from_words,
-    load_light,
-    parse_light_words,
-    sh_basis,
-    words_envmap,
-)
+from relightnet.light import ambient_light, directional_light, light_from_words, load_light, words_envmap
+from relightnet.light.words import camera_direction, disc_band_factors, disc_light, parse_light_words
+from relightnet.sh import dominant_direction, irradiance, sh_basis
 
 ISSUE = "key:az=-40,el=30,size=20,color=1.0/0.9/0.8,power=3 + fill:az=60,el=10,power=0.5 + ambient:0.2"
 

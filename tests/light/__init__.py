@@ -1,0 +1,1 @@
+"""Test package (module names may repeat across folders: tests/<subpackage>/test_<module>.py mirrors relightnet)."""
