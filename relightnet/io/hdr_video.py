@@ -42,10 +42,10 @@ from .hdr import (
     REFERENCE_WHITE,
     _affine,
     frame_to_linear,
-    row_bands,
     hdr_metadata,
     hlg_oetf,
     pq_inverse_eotf,
+    row_bands,
 )
 from .video import VideoWriter, _count_checked, _open
 

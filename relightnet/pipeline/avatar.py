@@ -185,8 +185,8 @@ def _light_stages(model, target, target_masks, lights: VideoLightSettings, light
 
 def _composite_frame(r, bg, antialias: bool, camera: Camera, verts: torch.Tensor, faces: torch.Tensor):
     """Stage 4, composite: the render's sRGB-encoded pixels over the uint8 (H, W, 3) background →
-    ((H, W, 3) uint8 (:func:`_composite_covered`), (H, W) bool the pixels drawn); with ``antialias``, the silhouette's pixels then
-    get what analytic edge antialiasing of the whole composited frame gives there
+    ((H, W, 3) uint8 (:func:`_composite_covered`), (H, W) bool the pixels drawn); with ``antialias``, the
+    silhouette's pixels then get what analytic edge antialiasing of the whole composited frame gives there
     (:func:`relightnet.raster.antialias.antialias_pixels`: the colours of the pixels along the silhouette
     only, no float copy of the frame; a frame at the pixel limit is 150 MB in float). The render may
     be of a window of the frame (``render_body_frames(box=True)``, holding every pixel next to a

@@ -19,7 +19,7 @@ Texture coordinates have v = 0 at the bottom of the image (:mod:`.texture`).
 from .antialias import antialias
 from .camera import Camera, default_camera, look_at, orthographic_camera, perspective_camera
 from .fragments import Fragments
-from .interpolate import interpolate, to_channels_first, to_channels_last
+from .interpolate import Interpolate, interpolate, to_channels_first, to_channels_last
 from .morphology import dilate, erode
 from .rasterize import rasterize, screen_box
 from .texture import texture
@@ -27,6 +27,6 @@ from .window import Window
 
 __all__ = [
     "Camera", "default_camera", "look_at", "perspective_camera", "orthographic_camera", "Fragments", "rasterize",
-    "Window", "screen_box", "interpolate", "to_channels_first", "to_channels_last", "texture", "antialias", "erode",
-    "dilate",
+    "Window", "screen_box", "interpolate", "Interpolate", "to_channels_first", "to_channels_last", "texture",
+    "antialias", "erode", "dilate",
 ]

@@ -145,7 +145,7 @@ class SHBasis(nn.Module):
 
     Example:
         >>> import torch
-        >>> from relightnet.sh.basis import SHBasis
+        >>> from relightnet.sh import SHBasis
         >>> SHBasis(lmax=3)(torch.tensor([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])).shape
         torch.Size([2, 16])
     """

@@ -164,7 +164,7 @@ class Irradiance(nn.Module):
 
     Example:
         >>> import torch
-        >>> from relightnet.sh.irradiance import Irradiance
+        >>> from relightnet.sh import Irradiance
         >>> Irradiance(torch.zeros(9, 3))(torch.tensor([[1.0, 0.0, 0.0]])).shape
         torch.Size([1, 3])
     """

@@ -369,8 +369,14 @@ def test_avatar_keeps_an_hdr_target_hdr(target, anny_body, tmp_path, capsys):
     """--hdr: the avatar over the target's own HLG frames; every pixel it does not draw keeps the target's
     HDR codes (highlights past the tone mapping's knee included); an SDR target, or a plate, is refused."""
     from relightnet.color import srgb_to_linear
-    from relightnet.io.hdr_video import HdrFormat, HdrVideoWriter, hdr_format, linear_to_signal, read_linear_video
-    from relightnet.io.hdr_video import ycbcr_codes
+    from relightnet.io.hdr_video import (
+        HdrFormat,
+        HdrVideoWriter,
+        hdr_format,
+        linear_to_signal,
+        read_linear_video,
+        ycbcr_codes,
+    )
 
     video, _, true = target
     kw = dict(light=true, look=AvatarLook(body=anny_body), motion="walk", prt=PrtSettings(n_dirs=8), progress=False)
