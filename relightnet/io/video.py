@@ -41,6 +41,10 @@ _CODECS = {".mp4": ("libx264", "yuv420p", {"crf": "18", "preset": "veryfast"}), 
 #: B-frames) are what its memory grows with (module docstring).
 X264_LARGE = {"rc-lookahead": "2", "bf": "0"}
 X264_LARGE_PIXELS = 1920 * 1080
+#: Frames above this many pixels into a lossless ffv1 .mkv get a warning: FFmpeg's ffv1 encoder holds
+#: about 60-75 bytes a pixel for one frame (0.7-0.9 GiB at 12.5 MP, SECURITY.md), past the memory budget
+#: at the pixel limit with a job's own work.
+FFV1_LARGE_PIXELS = 8_000_000
 
 
 @dataclass(frozen=True)
@@ -291,6 +295,10 @@ class VideoWriter:
                            " and ".join(n for n, odd in (("column", w % 2), ("row", h % 2)) if odd))
         if codec == "libx264" and h * w > X264_LARGE_PIXELS:
             opts = {**opts, **X264_LARGE}
+        if codec == "ffv1" and h * w > FFV1_LARGE_PIXELS:
+            logger.warning("%s: a lossless .mkv of %dx%d frames: FFmpeg's ffv1 encoder holds about %.1f GiB for one "
+                           "frame (an .mp4 output stays within the memory budget)", self.path, w, h,
+                           h * w * 70 / 2**30)
         fmt = "mp4" if self.path.suffix.lower() == ".mp4" else "matroska"
         rate = Fraction(self.fps).limit_denominator(1001)
         self._clock = PtsClock(MP4_CLOCK if fmt == "mp4" else MKV_CLOCK, rate, f"{self.path}")

@@ -187,6 +187,22 @@ def test_frames_above_1080p_are_encoded_without_b_frames(tmp_path):
         assert (3 in kinds) != big, kinds
 
 
+def test_a_large_lossless_mkv_is_warned_about(tmp_path, monkeypatch, caplog):
+    """ffv1's memory for one frame grows with its pixels (~70 bytes each): frames above FFV1_LARGE_PIXELS
+    into an .mkv are written with a warning that says so; an .mp4 or a smaller frame gets none."""
+    import logging
+
+    from relightnet.io import video
+
+    monkeypatch.setattr(video, "FFV1_LARGE_PIXELS", 200)
+    with caplog.at_level(logging.WARNING, logger="relightnet.io.video"):
+        for name, side in (("big.mkv", 16), ("small.mkv", 12), ("big.mp4", 16)):
+            with VideoWriter(tmp_path / name, fps=5) as w:
+                w.write(np.zeros((side, side, 3), np.uint8))
+    warned = [r.getMessage() for r in caplog.records if "ffv1" in r.getMessage()]
+    assert len(warned) == 1 and "big.mkv" in warned[0] and "16x16" in warned[0], warned
+
+
 def test_gray_mkv_keeps_every_grey_level_in_one_plane(tmp_path):
     """Masks written with ``gray=True``: one 8-bit plane in the .mkv (ffv1 ``gray``), read back as (H, W, 3)
     frames equal to what was written, every level 0-255; an .mp4 is written as usual."""
