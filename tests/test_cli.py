@@ -209,6 +209,7 @@ def test_sigterm_is_as_clean_as_ctrl_c(tmp_path, masked_clip):
     assert not (tmp_path / "new").exists()
 
 
+@pytest.mark.slow
 def test_commands_leave_nothing_in_the_temp_folder(tmp_path):
     """ONNX Runtime's telemetry (``.ses``) and torch's kernel cache (``torchinductor_<user>/``, made by
     ``import torch._dynamo``) are kept out of a fresh temp folder."""

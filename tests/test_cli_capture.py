@@ -48,6 +48,7 @@ def photo_capture(tmp_path_factory, anny_body):
     return d, code, out
 
 
+@pytest.mark.slow
 def test_a_photo_is_captured_front_only(photo_capture, anny_body):
     from relightnet.capture import load_avatar
 
@@ -63,6 +64,7 @@ def test_a_photo_is_captured_front_only(photo_capture, anny_body):
     assert (d / "reproj.png").is_file()
 
 
+@pytest.mark.slow
 def test_render_body_and_avatar_take_the_capture(photo_capture, tmp_path, capsys):
     d, code, out = photo_capture
     assert main(["-q", "render-body", "--avatar", str(out), "--pose", "apose", "--light", "studio", "--res", "64",

@@ -53,6 +53,7 @@ def test_a_submodule_never_hides_the_export_of_its_name(package):
     assert sys.modules["lazypkg.tool"].tool is lazypkg.tool
 
 
+@pytest.mark.slow
 def test_relighting_a_photo_loads_neither_the_renderer_nor_the_ray_tracer():
     code = ("import sys, relightnet.pipeline.relight_image, relightnet.pipeline.backends; "
             "print(sorted(m for m in ('relightnet.prt', 'relightnet.render.jobs', 'relightnet.pipeline.avatar', "

@@ -20,6 +20,7 @@ def session(predictor, person_photo):
     return RelightSession(predictor, load_photo(person_photo))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("words", LIGHTS)
 def test_same_picture_as_relight_image(session, predictor, words):
     light = load_light(words)

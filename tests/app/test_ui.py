@@ -7,6 +7,7 @@ import urllib.request
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 
@@ -54,6 +55,7 @@ def _sides(img: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     return float(lum[ys[xs < mid], xs[xs < mid]].mean()), float(lum[ys[xs > mid], xs[xs > mid]].mean())
 
 
+@pytest.mark.slow
 def test_relight_in_the_browser(running_app, browser, person_photo, tmp_path, monkeypatch):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By

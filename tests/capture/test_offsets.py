@@ -42,6 +42,7 @@ def _silhouettes(res, fb, offsets):
     return rasterize(cam.transform(apply_offsets(out.verts, out.normals, offsets)), out.faces, res.size).mask.float()
 
 
+@pytest.mark.slow
 def test_a_grown_torso_is_grown_back(fit_body, turning):
     res, torso = turning
     masks = _silhouettes(res, fit_body, torch.where(torso, 0.04, 0.0))
@@ -61,6 +62,7 @@ def test_a_grown_torso_is_grown_back(fit_body, turning):
     assert float(d.min()) >= -0.01 - 1e-6 and float(d.max()) <= 0.12 + 1e-6
 
 
+@pytest.mark.slow
 def test_the_body_s_own_silhouettes_give_small_offsets(fit_body, turning):
     res, _ = turning
     masks = PackedMasks.from_masks(_silhouettes(res, fit_body, torch.zeros(fit_body.body.num_verts)))

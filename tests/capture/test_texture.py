@@ -55,6 +55,7 @@ def _rel_rmse(a, b):
     return float((s * a - b).square().mean().sqrt() / b.square().mean().sqrt()), float(s)
 
 
+@pytest.mark.slow
 def test_a_known_light_gives_the_albedo_back(turning):
     """De-lit by the light it was rendered under, the texture is the true albedo over the texels seen: the
     typical texel within a few percent, the RMSE left at the texture's edges (hairline, stripes, hands: a

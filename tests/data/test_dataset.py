@@ -27,6 +27,7 @@ def _residual(s):
     return float((s["image"] - s["albedo"] * shading).abs().max() / s["image"].abs().max())
 
 
+@pytest.mark.slow
 def test_items_layout_and_identity(root):
     ds = SynthDataset(root, fields=ALL)
     assert len(ds) == 6 and len(SynthDataset(root, "val")) == 0 and len(SynthDataset(root, "test")) == 3

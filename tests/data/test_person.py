@@ -137,6 +137,7 @@ def test_person_transport_skips_only_hidden_vertices(assets):
     assert (T[:, 0] <= p.transport_unoccluded[0, :, 0] + 1e-5).all()
 
 
+@pytest.mark.slow
 def test_casting_only_the_seen_vertices_changes_no_array(assets):
     # The PRT of a group casts the vertices its views show; a vertex's row is that of the full
     # computation bit for bit, so every array equals the one rendered from the full PRT.
@@ -168,6 +169,7 @@ def test_casting_only_the_seen_vertices_changes_no_array(assets):
     assert torch.equal(seen_vertices(f, V, views).nonzero().flatten(), f[[0, 3]].flatten().unique())
 
 
+@pytest.mark.slow
 def test_clothed_clips_move_with_the_body(assets):
     cfg = CFG.replace(res=32, n_dirs=8)
     geo = clip_geometry(cfg, "train", 2, 12, assets)

@@ -49,6 +49,7 @@ def test_hostile_file_is_bounded(tmp_path, name):
         case.check(tmp_path)
 
 
+@pytest.mark.slow
 def test_the_caps_and_the_peak_are_real(tmp_path):
     """The child the cases run in cannot allocate beyond its cap, and its peak RSS is its own: a
     gigabyte more in this process does not change what the same command measures."""

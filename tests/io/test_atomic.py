@@ -106,6 +106,7 @@ def test_a_long_output_name_gets_a_temporary_name_that_fits(tmp_path):
     assert remove_stale(tmp_path / name) == [dead]
 
 
+@pytest.mark.slow
 def test_a_full_disk_names_the_file(tmp_path):
     """ENOSPC / EFBIG while writing: the error names the output (here: a file-size limit in a child)."""
     import subprocess

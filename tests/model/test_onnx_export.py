@@ -114,6 +114,7 @@ def test_pose_encoder_and_cone_head_export_into_one_graph(tmp_path):
         assert np.abs(o - e.numpy()).max() <= 1e-4 * scale
 
 
+@pytest.mark.slow
 def test_half_resolution_network_exports_and_ort_agrees(tmp_path):
     """work_scale 2 (pose encoder, cone head, hybrid solve, guided upsampling) in one graph, at multiples of 32.
     Float32 rounding (2⁻²⁴ ≈ 6e-8 per operation) over a few hundred dependent operations: 1e-4 of the

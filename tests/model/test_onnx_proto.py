@@ -89,6 +89,7 @@ def test_bytes_that_are_not_a_model_name_the_file():
         model_from_bytes(b"\x0a\xff\xff\xff\xff\xff", "clip.onnx")
 
 
+@pytest.mark.slow
 def test_building_the_pose_encoder_does_not_import_onnx():
     code = ("import sys; from relightnet.model import pose_encoder; pose_encoder(); "
             "print('onnx' in sys.modules, 'ml_dtypes' in sys.modules)")

@@ -179,6 +179,7 @@ def test_run_video_streams_every_frame(exported, masked_clip, tmp_path):
     assert not (tmp_path / "o2").exists()
 
 
+@pytest.mark.slow
 def test_int8_of_a_model_that_solves_its_light_opens(tmp_path):
     """A hybrid network's float64 light solve leaves the quantiser shape records of tensors it replaced;
     they are dropped, so the int8 file passes the every-shape-known check and runs (the shipped model is hybrid)."""

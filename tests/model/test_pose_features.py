@@ -31,6 +31,7 @@ def test_pose_encoder_network_starts_as_the_plain_network_and_saves_only_what_tr
     assert all(q.grad is None for q in net.pose.encoder.parameters())
 
 
+@pytest.mark.slow
 def test_pose_encoder_can_train_its_last_stage():
     net = RelightNet(NetConfig(width=8, max_width=32, light_hidden=32, encoder="pose", encoder_train_after=8))
     trained = {k for k, p in net.named_parameters() if p.requires_grad and k.startswith("pose.encoder.")}

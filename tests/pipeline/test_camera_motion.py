@@ -128,6 +128,7 @@ def _write(folder, name, pairs):
     return video, masks
 
 
+@pytest.mark.slow
 def test_replace_person_refuses_a_moving_camera_early_and_over_the_samples(tmp_path, anny_body, capsys):
     """The avatar job's early check (the first frames) refuses a pan at once, with one line naming the
     video; a camera that starts panning after them is refused by the plate's samples, before the median."""

@@ -110,6 +110,7 @@ def test_person_placement_is_the_median_of_the_masks():
     assert person_placement([np.zeros((5, 5), bool)]) is None
 
 
+@pytest.mark.slow
 def test_plate_of_a_walking_person_is_within_30_db_of_the_true_background(walk, anny_body, tmp_path):
     """Target: masks from the person segmentation, PSNR over the pixels the person covered and
     later uncovered (the inpainted ones excluded and reported)."""
@@ -154,6 +155,7 @@ def test_the_avatar_follows_the_walking_person(walk, anny_body, tmp_path):
     assert fixed[:, 0].mean() > 5 * err[:, 0].mean()
 
 
+@pytest.mark.slow
 def test_replace_person_end_to_end_and_refusals(walk, tmp_path, capsys):
     out = tmp_path / "a.mkv"
     args = ["avatar", "--target", str(walk.video), "--n-dirs", "8", "--out", str(out)]

@@ -48,6 +48,7 @@ def _covered_foot(dressed: DressedBody) -> torch.Tensor:
     return foot & (rest.verts[0, :, 1] < ankle + SHOE_KINDS[dressed.shoes.kind]["collar"] - 0.015)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["casual", "coat"])
 def test_shoes_hide_the_feet_through_a_walk(anny_body, name):
     """No pixel of a foot under a shoe shows in side and front close-ups of the feet through a walk, and the
@@ -97,6 +98,7 @@ def _hem_labels(d: DressedBody, verts: torch.Tensor, eye, target) -> np.ndarray:
     return np.where(fid >= 0, lab, -1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", OUTFITS)
 def test_no_stair_stepped_hem_in_any_outfit(anny_body, name):
     """Target: the hems of every named outfit, rendered at 512² in close-ups, stray from their own

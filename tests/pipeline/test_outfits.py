@@ -54,6 +54,7 @@ def test_dressed_mesh_is_the_body_then_its_garments_every_frame(coat, anny_body)
     assert float(d.max()) < 0.25
 
 
+@pytest.mark.slow
 def test_dressed_body_at_rest_is_the_generators_clothed_mesh(coat, anny_body):
     from relightnet.data.clothed import clothed_mesh
     from relightnet.data.sample import prepare_assets
@@ -99,6 +100,7 @@ def test_cloth_shadows_the_body_in_the_one_prt(coat, anny_body):
     assert out.verts.shape[1] > V
 
 
+@pytest.mark.slow
 def test_render_body_outfit_cli(tmp_path, capsys):
     out = tmp_path / "d.png"
     base = ["-q", "render-body", "--light", "studio", "--res", "96", "--n-dirs", "8", "--out", str(out)]

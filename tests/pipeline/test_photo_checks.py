@@ -150,6 +150,7 @@ def test_a_folder_without_readable_photos_or_people_is_refused(tmp_path, person_
         check(tmp_path)
 
 
+@pytest.mark.slow
 def test_evaluate_photos_prints_and_writes_the_table(photos, tmp_path, capsys):
     out = tmp_path / "rep"
     assert main(["-q", "evaluate", "photos", str(photos), "--out", str(out)]) == 0
