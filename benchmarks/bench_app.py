@@ -69,16 +69,16 @@ def main() -> None:
         write_image(path, big, srgb=False)
         photo = load_photo(path)
     predict = make_predictor()
-    session = RelightSession(predict, photo)
+    relighter = RelightSession(predict, photo)
     first = _median_ms(lambda i: RelightSession(predict, photo), 3)
     words = [f"key:az={-80 + 20 * i},el=30,size=20,power=3 + ambient:0.2" for i in range(9)]
-    change = _median_ms(lambda i: session.relight_u8(load_light(words[i])), 9)
-    exact = _median_ms(lambda i: session.relight(load_light(words[i])), 9)
+    change = _median_ms(lambda i: relighter.relight_u8(load_light(words[i])), 9)
+    exact = _median_ms(lambda i: relighter.relight(load_light(words[i])), 9)
 
     def with_png(i):
         import PIL.Image
 
-        PIL.Image.fromarray(session.relight_u8(load_light(words[i])).numpy()).save(io.BytesIO(), format="png")
+        PIL.Image.fromarray(relighter.relight_u8(load_light(words[i])).numpy()).save(io.BytesIO(), format="png")
 
     png = _median_ms(with_png, 9)
     light = load_light(words[0])

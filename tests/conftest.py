@@ -50,7 +50,7 @@ def _cpu_line() -> str:
 _CPU_LINE: list[str] = []  # taken at the start: tests change torch's thread count on the way
 
 
-def pytest_sessionstart(session):
+def pytest_sessionstart():
     _CPU_LINE.append(_cpu_line())
 
 
@@ -98,7 +98,7 @@ def dtype(request):
 
 @pytest.fixture(scope="session")
 def anny_body():
-    """The default AnnyBody (float32, feet on y = 0), built once per test session."""
+    """The default AnnyBody (float32, feet on y = 0), built once per test run."""
     from relightnet.body import AnnyBody
 
     return AnnyBody()

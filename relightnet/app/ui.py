@@ -91,17 +91,17 @@ class _Handlers:
         if not path:
             return None, None, None
         try:
-            session = RelightSession(self._predictor(), load_photo(path))
+            relighter = RelightSession(self._predictor(), load_photo(path))
         except (RelightError, ValueError, OSError) as e:
             self._fail(e)
-        return session, _to_u8(session.photo.image.permute(1, 2, 0)), _to_u8(session.mask_overlay())
+        return relighter, _to_u8(relighter.photo.image.permute(1, 2, 0)), _to_u8(relighter.mask_overlay())
 
     def example_photo(self):
         from .examples import example_person
 
         return str(example_person(self.workdir / "examples"))
 
-    def relight(self, session, source, az, el, size, power, color, ambient, preset, hdri, plate, fov):
+    def relight(self, relighter, source, az, el, size, power, color, ambient, preset, hdri, plate, fov):
         from ..errors import RelightError
         from .controls import light_of, sphere_preview, words_of
 
@@ -112,19 +112,19 @@ class _Handlers:
             self._fail(e)
         marker = (az, el) if source == "direction" else (None, None)
         sphere = sphere_preview(light, SPHERE_SIZE, *marker)
-        if session is None:
+        if relighter is None:
             return None, sphere, words, light
-        return session.relight_u8(light).numpy(), sphere, words, light
+        return relighter.relight_u8(light).numpy(), sphere, words, light
 
-    def download(self, session, light, source):
+    def download(self, relighter, light, source):
         from ..errors import RelightError
         from ..io import write_image
         from ..sh import save_light
 
-        if session is None or light is None:
+        if relighter is None or light is None:
             self._fail(RelightError("open a photo first"))
         png = self._new_path("relit", ".png")
-        write_image(png, session.relight(light), srgb=False, alpha=session.photo.alpha)
+        write_image(png, relighter.relight(light), srgb=False, alpha=relighter.photo.alpha)
         npz = save_light(self._new_path(f"light_{source.replace(' ', '_')}", ".npz"), light)
         return [str(png), str(npz)]
 
@@ -231,7 +231,7 @@ def build_app(workdir, predictor=None):
 
     with gr.Blocks(title="relightnet") as app:
         gr.Markdown("## relightnet — relight a person with any light")
-        session, light = gr.State(None), gr.State(None)
+        relighter, light = gr.State(None), gr.State(None)
         with gr.Tab("Photo"):
             c = _photo_tab(gr)
         with gr.Tab("Video"):
@@ -240,11 +240,11 @@ def build_app(workdir, predictor=None):
             vpreset = gr.Dropdown([""] + light_presets(), value="", label="or a preset")
             go = gr.Button("Relight the video")
             vout = gr.Video(label="Relit video")
-        controls = [session] + [c[k] for k in ("source", "az", "el", "size", "power", "color", "ambient", "preset",
+        controls = [relighter] + [c[k] for k in ("source", "az", "el", "size", "power", "color", "ambient", "preset",
                                                "hdri", "plate", "fov")]
         shown = [c["relit"], c["sphere"], c["words"], light]
         opts = {"trigger_mode": "always_last", "show_progress": "hidden"}
-        c["upload"].change(h.open_photo, c["upload"], [session, c["original"], c["mask"]]).then(
+        c["upload"].change(h.open_photo, c["upload"], [relighter, c["original"], c["mask"]]).then(
             h.relight, controls, shown)
         c["example"].click(h.example_photo, None, c["upload"])
         for k in ("az", "el", "size", "power", "ambient", "source", "color", "preset", "hdri", "plate", "fov"):
@@ -252,7 +252,7 @@ def build_app(workdir, predictor=None):
         c["sphere"].select(click_sphere, None, [c["az"], c["el"], c["source"]])
         c["pad"].input(drag_pad, c["pad"], [c["az"], c["el"], c["source"]], trigger_mode="always_last",
                        show_progress="hidden")
-        c["save"].click(h.download, [session, light, c["source"]], c["files"])
+        c["save"].click(h.download, [relighter, light, c["source"]], c["files"])
         go.click(run_video, [video, vwords, vpreset], vout)
         app.load(h.relight, controls, shown)
     return app

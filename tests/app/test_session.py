@@ -16,32 +16,32 @@ LIGHTS = ["key:az=-40,el=30,size=20,color=1/0.9/0.8,power=3 + fill:az=60,el=10,p
 
 
 @pytest.fixture(scope="module")
-def session(predictor, person_photo):
+def relighter(predictor, person_photo):
     return RelightSession(predictor, load_photo(person_photo))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("words", LIGHTS)
-def test_same_picture_as_relight_image(session, predictor, words):
+def test_same_picture_as_relight_image(relighter, predictor, words):
     light = load_light(words)
-    cli = relight_image(predictor, session.photo.image, light, session.photo.mask).image
-    got = session.relight(light)
+    cli = relight_image(predictor, relighter.photo.image, light, relighter.photo.mask).image
+    got = relighter.relight(light)
     # the same formulas in another order: float32 rounding, far below one 8-bit level
     torch.testing.assert_close(got, cli, rtol=0, atol=1e-4)
-    live = session.relight_u8(light).float()
+    live = relighter.relight_u8(light).float()
     assert float((live - (cli * 255).round()).abs().max()) <= 1  # the live view's sRGB table
-    mask = session.prediction.mask[0, 0]
+    mask = relighter.prediction.mask[0, 0]
     outside = (mask == 0) & ~border_band(mask, band_radius(*mask.shape))  # the soft edge stays in its band
-    assert torch.equal(got[outside], session.photo.image.permute(1, 2, 0)[outside])
+    assert torch.equal(got[outside], relighter.photo.image.permute(1, 2, 0)[outside])
 
 
-def test_the_cnn_runs_once(session, predictor, monkeypatch):
+def test_the_cnn_runs_once(relighter, predictor, monkeypatch):
     def boom(*a, **k):
         raise AssertionError("the CNN ran again")
 
     monkeypatch.setattr(type(predictor), "__call__", boom)
-    a = session.relight(load_light("key:az=-60,el=20"))
-    b = session.relight(load_light("key:az=60,el=20"))
+    a = relighter.relight(load_light("key:az=-60,el=20"))
+    b = relighter.relight(load_light("key:az=60,el=20"))
     assert float((a - b).abs().max()) > 0.05
 
 

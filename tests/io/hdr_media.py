@@ -38,3 +38,25 @@ def write_hevc10(path, frames: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray
                 c.mux(p)
         for p in s.encode():
             c.mux(p)
+
+
+def write_hlg_copy(video, path, fps: float, gain: float):
+    """An SDR clip's frames as a lossless HLG clip (ffv1): their linear light times ``gain`` (above 1.6 or so,
+    their bright parts lie past the tone mapping's knee). Returns ``path``."""
+    import torch
+
+    from relightnet.color import srgb_to_linear
+    from relightnet.io import read_video
+    from relightnet.io.hdr_video import HdrFormat, HdrVideoWriter
+
+    with HdrVideoWriter(path, HdrFormat("hlg"), fps=fps) as w:
+        for f in read_video(video):
+            w.write(srgb_to_linear(torch.from_numpy(f).permute(2, 0, 1).float() / 255) * gain)
+    return path
+
+
+def hlg_codes(light):
+    """(3, H, W) linear light → its 10-bit HLG Y'CbCr codes, as the HDR writer stores them."""
+    from relightnet.io.hdr_video import linear_to_signal, ycbcr_codes
+
+    return ycbcr_codes(linear_to_signal(light, "hlg"))

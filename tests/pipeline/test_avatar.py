@@ -369,23 +369,15 @@ def test_avatar_keeps_an_hdr_target_hdr(target, anny_body, tmp_path, capsys):
     """--hdr: the avatar over the target's own HLG frames; every pixel it does not draw keeps the target's
     HDR codes (highlights past the tone mapping's knee included); an SDR target, or a plate, is refused."""
     from relightnet.color import srgb_to_linear
-    from relightnet.io.hdr_video import (
-        HdrFormat,
-        HdrVideoWriter,
-        hdr_format,
-        linear_to_signal,
-        read_linear_video,
-        ycbcr_codes,
-    )
+    from relightnet.io.hdr_video import HdrFormat, hdr_format, read_linear_video
+    from tests.io.hdr_media import hlg_codes as codes
+    from tests.io.hdr_media import write_hlg_copy
 
     video, _, true = target
     kw = dict(light=true, look=AvatarLook(body=anny_body), motion="walk", prt=PrtSettings(n_dirs=8), progress=False)
     with pytest.raises(InputError, match="not an HDR video"):
         avatar(video, tmp_path / "sdr.mkv", hdr=True, **kw)
-    hlg = tmp_path / "hlg.mkv"  # the target as HLG at 3x reference white: its bright parts past the knee
-    with HdrVideoWriter(hlg, HdrFormat("hlg"), fps=15) as w:
-        for f in read_video(video):
-            w.write(srgb_to_linear(torch.from_numpy(f).permute(2, 0, 1).float() / 255) * 3)
+    hlg = write_hlg_copy(video, tmp_path / "hlg.mkv", fps=15, gain=3)  # its bright parts past the knee
     with pytest.raises(InputError, match="--plate"):
         avatar(hlg, tmp_path / "p.mkv", hdr=True, placement=AvatarPlacement(plate=video), **kw)
     assert not (tmp_path / "sdr.mkv").exists() and not (tmp_path / "p.mkv").exists()
@@ -394,9 +386,6 @@ def test_avatar_keeps_an_hdr_target_hdr(target, anny_body, tmp_path, capsys):
     assert hdr_format(out) == HdrFormat("hlg") and hdr_format(sdr) is None
     src, got = list(read_linear_video(hlg)), list(read_linear_video(out))
     assert len(got) == N and max(float(a.amax()) for a in src) > 1.5
-
-    def codes(x):
-        return ycbcr_codes(linear_to_signal(x, "hlg"))
 
     for a, b, s, bg in zip(src, got, read_video(sdr), read_video(hlg), strict=True):
         drawn = torch.from_numpy((s != bg).any(-1))

@@ -198,33 +198,22 @@ def test_the_carry_along_the_flow_steadies_a_still_person(tmp_path, masked_clip)
 def test_hdr_is_kept_when_asked_and_refused_for_an_sdr_clip(tmp_path, masked_clip, capsys):
     import torch
 
-    from relightnet.color import srgb_to_linear
-    from relightnet.io.hdr_video import (
-        HdrFormat,
-        HdrVideoWriter,
-        hdr_format,
-        linear_to_signal,
-        read_linear_video,
-        ycbcr_codes,
-    )
+    from relightnet.io.hdr_video import HdrFormat, hdr_format, read_linear_video
+    from tests.io.hdr_media import hlg_codes as codes
+    from tests.io.hdr_media import write_hlg_copy
 
     video, masks = masked_clip(tmp_path)
     out = tmp_path / "relit.mkv"
     assert main(["relight-video", str(video), "--masks", str(masks), "--light", "sunset", "--hdr",
                  "--out", str(out)]) == 1
     assert "not an HDR video" in capsys.readouterr().err and not out.exists()
-    hlg = tmp_path / "hlg.mkv"  # the clip as HLG, its bright block 1.8x reference white: past the tone-mapping knee
-    with HdrVideoWriter(hlg, HdrFormat("hlg"), fps=12) as w:
-        for f in read_video(video):
-            w.write(srgb_to_linear(torch.from_numpy(f).permute(2, 0, 1).float() / 255) * 4)
+    # the clip as HLG, its bright block 1.8x reference white: past the tone-mapping knee
+    hlg = write_hlg_copy(video, tmp_path / "hlg.mkv", fps=12, gain=4)
     assert main(["-q", "relight-video", str(hlg), "--masks", str(masks), "--light", "sunset", "--hdr",
                  "--out", str(out)]) == 0
     assert hdr_format(out) == HdrFormat("hlg")
     src, relit = list(read_linear_video(hlg)), list(read_linear_video(out))
     assert len(relit) == 3 and float(src[0].amax()) > 1.5
-
-    def codes(x):
-        return ycbcr_codes(linear_to_signal(x, "hlg"))
 
     for t, (a, b) in enumerate(zip(src, relit, strict=True)):
         person = torch.zeros(a.shape[1:], dtype=torch.bool)
